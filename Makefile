@@ -1,0 +1,49 @@
+# Set-up and everyday targets. Every target creates .venv when it is missing.
+PY ?= python3.11
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+export DRAKE_ALLOW_NETWORK := meshcat
+export MPLBACKEND := Agg
+
+.PHONY: demo test bench lint fmt clean system-deps
+
+$(BIN)/python:
+	@command -v $(PY) >/dev/null 2>&1 || { echo "need $(PY)"; exit 2; }
+	$(PY) -m venv $(VENV)
+
+$(STAMP): pyproject.toml | $(BIN)/python system-deps
+	$(BIN)/pip install -q --upgrade pip
+	$(BIN)/pip install -q -e '.[dev]'
+	touch $(STAMP)
+
+# Graphviz (for rendering DOT exports) and EGL (headless Drake cameras) come from Debian.
+system-deps:
+	@if ! command -v dot >/dev/null 2>&1 || ! ldconfig -p | grep -q libEGL.so.1; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq graphviz libegl1 >/dev/null) \
+	      || echo "warning: could not install graphviz/libegl1"; \
+	  else echo "warning: install graphviz and libegl1 (apt-get install -y graphviz libegl1)"; fi; \
+	fi
+
+demo: $(STAMP)
+	$(BIN)/tamp plan tamp/scenarios/case2.yaml
+
+test: $(STAMP)
+	$(BIN)/ruff check tamp verification tests benchmarks
+	$(BIN)/ruff format --check tamp verification tests benchmarks
+	$(BIN)/pytest -q
+
+bench: $(STAMP)
+	$(BIN)/pip install -q -e '.[dev,bench]'
+	$(BIN)/python benchmarks/rg_vs_planner.py
+
+lint: $(STAMP)
+	$(BIN)/ruff check tamp verification tests benchmarks
+
+fmt: $(STAMP)
+	$(BIN)/ruff format tamp verification tests benchmarks
+	$(BIN)/ruff check --fix tamp verification tests benchmarks
+
+clean:
+	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -1,0 +1,1 @@
+"""CLI subcommands of `tamp`; one module per subcommand, each with ``register(subparsers)``."""

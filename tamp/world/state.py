@@ -1,0 +1,100 @@
+"""The symbolic world every layer shares (SMP-MRO §V-A1 state variables r, h, o_uid, l_uid)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+
+from tamp.world.geometry import Area, Point, Pose
+
+
+@dataclass(frozen=True, slots=True)
+class ObjectState:
+    """A known object: its uid and pose (the paper's ``Object``)."""
+
+    uid: str
+    pose: Pose
+
+    @property
+    def pos(self) -> Point:
+        return self.pose.pos
+
+
+@dataclass(frozen=True)
+class WorldState:
+    """Robot pose ``r``, held object ``h`` (None when the hand is free), objects and areas.
+
+    Immutable: actions return a new state (`with_robot_at`, `with_held`, `with_object_at`),
+    so planners can keep states in sets and executors can compare before/after.
+    """
+
+    robot: Pose
+    held: str | None = None
+    objects: Mapping[str, ObjectState] = field(default_factory=dict)
+    areas: Mapping[str, Area] = field(default_factory=dict)
+
+    # -- lookups --------------------------------------------------------------------------
+    def object_pos(self, uid: str) -> Point:
+        try:
+            return self.objects[uid].pos
+        except KeyError:
+            raise KeyError(f"unknown object {uid!r}") from None
+
+    def area(self, name: str) -> Area:
+        try:
+            return self.areas[name]
+        except KeyError:
+            raise KeyError(f"unknown area {name!r}") from None
+
+    def position_of(self, ref: str) -> Point:
+        """Position of a named object or area (objects first)."""
+        if ref in self.objects:
+            return self.objects[ref].pos
+        if ref in self.areas:
+            return self.areas[ref].pos
+        raise KeyError(f"unknown object or area {ref!r}")
+
+    def objects_in(self, area: Area, *, ignore_held: bool = True) -> list[str]:
+        """Objects whose position lies in ``area`` (the held one is carried, not placed)."""
+        return [
+            uid
+            for uid, o in self.objects.items()
+            if area.contains(o.pos) and not (ignore_held and uid == self.held)
+        ]
+
+    # -- updates --------------------------------------------------------------------------
+    def with_robot_at(self, pose: Pose) -> WorldState:
+        return replace(self, robot=pose)
+
+    def with_held(self, uid: str | None) -> WorldState:
+        return replace(self, held=uid)
+
+    def with_object_at(self, uid: str, pose: Pose) -> WorldState:
+        objects = dict(self.objects)
+        objects[uid] = ObjectState(uid, pose)
+        return replace(self, objects=objects)
+
+    def without_object(self, uid: str) -> WorldState:
+        objects = dict(self.objects)
+        objects.pop(uid, None)
+        return replace(self, objects=objects, held=None if self.held == uid else self.held)
+
+    def with_area(self, area: Area) -> WorldState:
+        areas = dict(self.areas)
+        areas[area.name] = area
+        return replace(self, areas=areas)
+
+    def summary(self) -> dict:
+        """JSON-friendly view: robot xy+yaw, held object, object positions."""
+        return {
+            "robot": [
+                round(self.robot.pos.x, 4),
+                round(self.robot.pos.y, 4),
+                round(self.robot.orientation.yaw(), 4),
+            ],
+            "held": self.held,
+            "objects": {
+                uid: [round(v, 4) for v in o.pos.as_tuple()]
+                for uid, o in sorted(self.objects.items())
+            },
+        }
