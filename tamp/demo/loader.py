@@ -1,0 +1,159 @@
+"""Load a demonstration file (YAML, ``version: 1``) into a `Demonstration` (§IV-A).
+
+Format (positions of objects, steps and free areas are in the user's MR frame)::
+
+    version: 1
+    frame:
+      robot_position: [x, y, z]      # uP_r, the robot in the user frame (eq. 1)
+      rotation: [[..],[..],[..]]     # optional R of eq. (1); default identity (paper's case)
+      handedness: [[..],[..],[..]]   # optional A of eq. (4)-(5); default Unity->ROS
+    area_radius: 0.15                # radius of every goal / free area (m)
+    object_height: 0.2               # optional, for the simulator (m)
+    robot:
+      start: [x, y, yaw]             # robot frame; default [0, 0, 0]
+      domain: path/to/domain.yaml    # optional; default: the packaged youBot domain
+    objects:
+      - {id: O0, position: [x, y, z]}
+    steps:                           # the person's illustrated moves, in order
+      - {object: O0, to: [x, y, z]}
+    free_areas:                      # optional places that do not affect the task
+      - {id: free1, position: [x, y, z]}
+    constraints: [[G0, G1]]          # optional explicit order specifications G_i <= G_j
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from tamp.demo.constraints import derive_constraints
+from tamp.demo.frames import IDENTITY, UNITY_TO_ROS, MRFrame, check_rotation
+from tamp.demo.model import Demonstration, Goal
+from tamp.errors import InputError
+from tamp.fileio import Fields, check_vector, load_yaml
+from tamp.world.geometry import Area, Point, Pose, Quaternion
+
+_KEYS = {
+    "version",
+    "name",
+    "description",
+    "frame",
+    "area_radius",
+    "object_height",
+    "robot",
+    "objects",
+    "steps",
+    "free_areas",
+    "constraints",
+}
+
+
+def _matrix(f: Fields, key: str, default, *, proper: bool) -> tuple[tuple[float, ...], ...]:
+    raw = f.raw(key, default)
+    if not isinstance(raw, list | tuple) or len(raw) != 3:
+        raise f.error(key, "expected a 3x3 matrix (three rows of three numbers)")
+    rows = tuple(check_vector(r, 3, f.file, f"{f.path}.{key}[{i}]") for i, r in enumerate(raw))
+    why = check_rotation(np.array(rows), proper=proper)
+    if why:
+        raise f.error(key, why)
+    return rows
+
+
+def load_demonstration(path: str | Path) -> Demonstration:
+    """Read, validate and transform a demonstration; bad input raises `InputError`."""
+    data, file = load_yaml(path, kind="demonstration")
+    f = Fields(data, file)
+    f.check_keys(_KEYS)
+
+    fr = f.sub("frame")
+    fr.check_keys({"robot_position", "rotation", "handedness"})
+    frame = MRFrame(
+        robot_position=fr.vector("robot_position", 3),
+        rotation=_matrix(fr, "rotation", IDENTITY, proper=True),
+        handedness=_matrix(fr, "handedness", UNITY_TO_ROS, proper=False),
+    )
+    radius = f.float("area_radius", min=0.0, strict_min=True)
+    height = f.float("object_height", 0.2, min=0.0, strict_min=True)
+
+    robot = f.sub("robot", {})
+    robot.check_keys({"start", "domain"})
+    sx, sy, syaw = robot.vector("start", 3, [0.0, 0.0, 0.0])
+    start = Pose(Point(sx, sy, 0.0), Quaternion.from_yaw(syaw))
+    domain_file = None
+    if robot.has("domain"):
+        d = Path(robot.str("domain"))
+        if not d.is_absolute():
+            d = Path(file).parent / d
+        if not d.is_file():
+            raise robot.error("domain", f"domain file not found: {d}")
+        domain_file = str(d)
+
+    objects: dict[str, Point] = {}
+    labels: dict[str, str] = {}
+    for i, item in enumerate(f.items("objects")):
+        if not isinstance(item, Fields):
+            raise InputError("expected a mapping {id, position}", file=file, field=f"objects[{i}]")
+        item.check_keys({"id", "position"})
+        uid = item.str("id")
+        if uid in objects:
+            raise item.error("id", f"duplicate object id {uid!r}")
+        objects[uid] = frame.to_robot(item.vector("position", 3))
+        labels[uid] = f"objects[{i}]"
+    if not objects:
+        raise f.error("objects", "a demonstration needs at least one object")
+
+    steps: list[tuple[str, Point]] = []
+    where = dict(objects)
+    for i, item in enumerate(f.items("steps")):
+        if not isinstance(item, Fields):
+            raise InputError("expected a mapping {object, to}", file=file, field=f"steps[{i}]")
+        item.check_keys({"object", "to"})
+        obj = item.str("object")
+        if obj not in objects:
+            raise item.error("object", f"unknown object {obj!r} (known: {', '.join(objects)})")
+        to = frame.to_robot(item.vector("to", 3))
+        if where[obj].planar_distance(to) <= 1e-9:
+            raise item.error("to", f"{obj} is already there: a step must move the object")
+        where[obj] = to
+        steps.append((obj, to))
+    if not steps:
+        raise f.error("steps", "a demonstration needs at least one step")
+
+    free: list[Area] = []
+    for i, item in enumerate(f.items("free_areas", [])):
+        if not isinstance(item, Fields):
+            raise InputError(
+                "expected a mapping {id, position}", file=file, field=f"free_areas[{i}]"
+            )
+        item.check_keys({"id", "position", "radius"})
+        name = item.str("id")
+        if name in {a.name for a in free} or name in {f"L{k}" for k in range(len(steps))}:
+            raise item.error("id", f"duplicate area name {name!r}")
+        r = item.float("radius", radius, min=0.0, strict_min=True)
+        free.append(Area(name, frame.to_robot(item.vector("position", 3)), r))
+
+    explicit = []
+    for i, pair in enumerate(f.items("constraints", [])):
+        if not (
+            isinstance(pair, list) and len(pair) == 2 and all(isinstance(g, str) for g in pair)
+        ):
+            raise InputError("expected [Gi, Gj]", file=file, field=f"constraints[{i}]")
+        explicit.append((pair[0], pair[1]))
+
+    constraints, reasons = derive_constraints(objects, labels, steps, radius, explicit, file)
+    goals = [
+        Goal(f"G{k}", obj, to, Area(f"L{k}", to, radius), k) for k, (obj, to) in enumerate(steps)
+    ]
+    return Demonstration(
+        objects=objects,
+        goals=goals,
+        constraints=constraints,
+        free_areas=free,
+        robot_start=start,
+        area_radius=radius,
+        object_height=height,
+        domain_file=domain_file,
+        source=file,
+        constraint_reasons=reasons,
+    )

@@ -1,0 +1,76 @@
+"""Data of a demonstration after the transforms: places P, goals G, constraints C (§IV-A)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from tamp.world.geometry import Area, Point, Pose
+from tamp.world.state import ObjectState, WorldState
+
+
+@dataclass(frozen=True)
+class Goal:
+    """One illustrated step: object ``object`` must reach area ``area`` (centre ``pos``).
+
+    ``step`` is the index of the step in the person's order; goal ids are ``G<step>`` and
+    their areas ``L<step>`` (the paper's L_i centred on G_i).
+    """
+
+    id: str
+    object: str
+    pos: Point
+    area: Area
+    step: int
+
+
+@dataclass(frozen=True)
+class Demonstration:
+    """What the person showed, in the robot frame: the input of the RG layer (Alg. 1)."""
+
+    objects: dict[str, Point]
+    goals: list[Goal]
+    constraints: frozenset[tuple[str, str]]
+    free_areas: list[Area]
+    robot_start: Pose
+    area_radius: float
+    object_height: float = 0.2
+    domain_file: str | None = None
+    source: str = "<memory>"
+    constraint_reasons: dict[tuple[str, str], str] = field(default_factory=dict)
+
+    def goal(self, gid: str) -> Goal:
+        for g in self.goals:
+            if g.id == gid:
+                return g
+        raise KeyError(f"unknown goal {gid!r}")
+
+    @property
+    def goal_ids(self) -> list[str]:
+        return [g.id for g in self.goals]
+
+    def goal_chain(self, obj: str) -> list[Goal]:
+        """The goals of one object in demonstrated order (intent constraints chain them)."""
+        return [g for g in self.goals if g.object == obj]
+
+    def pick_point(self, goal: Goal) -> Point:
+        """Where the object of ``goal`` is just before it: its previous goal, or its P."""
+        prev = None
+        for g in self.goals:
+            if g.id == goal.id:
+                break
+            if g.object == goal.object:
+                prev = g
+        return prev.pos if prev is not None else self.objects[goal.object]
+
+    def initial_world(self) -> WorldState:
+        """Robot at its start, hand free, objects at P; areas L_k and the free areas."""
+        areas = {g.area.name: g.area for g in self.goals}
+        areas.update({a.name: a for a in self.free_areas})
+        objects = {uid: ObjectState(uid, Pose(p)) for uid, p in self.objects.items()}
+        return WorldState(robot=self.robot_start, held=None, objects=objects, areas=areas)
+
+    def domain(self):
+        """The robot's action templates (the file named in the demonstration, or youBot)."""
+        from tamp.world.actions import default_domain, load_domain
+
+        return load_domain(self.domain_file) if self.domain_file else default_domain()
