@@ -1,0 +1,128 @@
+"""SMP-MRO plans (§IV-B): the chosen goal order, and the whole reachability graph.
+
+Encoding (ARCHITECTURE "Verification gate"): one proposition ``g_k`` per goal ``G_k``,
+true once the goal has been reached (labels are cumulative: an RG node is the *set* of
+achieved goals, and a node is labelled with all of them). The demonstration's
+constraints become ``!g_j U g_i`` for every ``G_i ≤ G_j`` (G_j is not reached before G_i)
+and ``F g_i`` for every goal. An order ``[G_a, G_b, …]`` is the lasso
+``{} ; {g_a} ; {g_a, g_b} ; … ; cycle{all reached}``: the robot stays done, as the RG's
+final node does (the Kripke structure repeats dead ends).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+
+import networkx as nx
+import spot
+
+from tamp.errors import InputError
+from verification.kripke import TransitionSystem, model_check
+from verification.traces import check_trace
+from verification.verdict import Report, Verdict
+from verification.words import Word
+
+
+def goal_prop(gid: str) -> str:
+    """Proposition "goal ``gid`` reached": ``G3`` → ``g3`` (other ids: ``reached_<id>``)."""
+    return gid.lower() if re.fullmatch(r"G\d+", gid) else f"reached_{gid}"
+
+
+def constraint_formula(goal_ids: Sequence[str], constraints) -> spot.formula:
+    """``∧ (!g_j U g_i)`` over ``G_i ≤ G_j`` in C, ``∧ F g_i`` over the goals."""
+    parts = [f"(!{goal_prop(j)} U {goal_prop(i)})" for i, j in sorted(constraints)] + [
+        f"F {goal_prop(g)}" for g in goal_ids
+    ]
+    return spot.formula(" & ".join(parts) if parts else "1")
+
+
+def order_word(order: Sequence[str]) -> Word:
+    """The lasso of cumulative "goal reached" letters for an execution order."""
+    letters = [frozenset()]
+    for g in order:
+        letters.append(letters[-1] | {goal_prop(g)})
+    return Word.lasso(letters, [letters[-1]])
+
+
+def check_order_ids(goal_ids: Sequence[str], order: Sequence[str], source: str = "--order") -> None:
+    known = set(goal_ids)
+    for g in order:
+        if g not in known:
+            raise InputError(f"unknown goal {g!r} (known: {', '.join(goal_ids)})", field=source)
+    dup = sorted({g for g in order if list(order).count(g) > 1})
+    if dup:
+        raise InputError(f"goal(s) {', '.join(dup)} listed more than once", field=source)
+
+
+def reference_order(goal_ids: Sequence[str], constraints) -> list[str] | None:
+    """Some order respecting C (demonstrated order as tie-break), or None when C is cyclic."""
+    g = nx.DiGraph()
+    g.add_nodes_from(goal_ids)
+    g.add_edges_from(constraints)
+    rank = {gid: k for k, gid in enumerate(goal_ids)}
+    try:
+        return list(nx.lexicographical_topological_sort(g, key=lambda x: rank[x]))
+    except nx.NetworkXUnfeasible:
+        return None
+
+
+def check_order(demo, order: Sequence[str], *, source: str = "--order") -> Verdict:
+    """Verdict of the order trace against the constraint encoding of ``demo``."""
+    ids = demo.goal_ids
+    check_order_ids(ids, order, source)
+    f = constraint_formula(ids, demo.constraints)
+    ref = reference_order(ids, demo.constraints)
+    steps = ["start"] + [f"reach {g}" for g in order] + ["done (stays)"]
+    return check_trace(
+        f,
+        order_word(order),
+        finite=False,
+        accepting_word=order_word(ref) if ref is not None else None,
+        subject=f"order {', '.join(order) if order else '(empty)'}",
+        steps=steps,
+    )
+
+
+def rg_system(rg: nx.DiGraph) -> TransitionSystem:
+    """The RG as a transition system: node = achieved set, labelled with its g_k."""
+    ts = TransitionSystem()
+    index: dict[frozenset, int] = {}
+    root = frozenset()
+    nodes = sorted(rg.nodes, key=lambda n: (len(n), sorted(n)))
+    if root not in rg:
+        raise ValueError("the RG has no root node (the empty set of achieved goals)")
+    for n in nodes:
+        name = "{" + ", ".join(sorted(n)) + "}"
+        index[n] = ts.add_state(frozenset(goal_prop(g) for g in n), name)
+    for a, b in rg.edges:
+        ts.add_edge(index[a], index[b])
+    ts.init = index[root]
+    return ts
+
+
+def check_graph(demo, rg: nx.DiGraph | None = None) -> Verdict:
+    """Every path of the RG (``build_rg(demo)`` unless given) satisfies the encoding."""
+    if rg is None:
+        from tamp.rg import build_rg
+
+        rg = build_rg(demo)
+    ids = demo.goal_ids
+    f = constraint_formula(ids, demo.constraints)
+    ts = rg_system(rg)
+    ref = reference_order(ids, demo.constraints)
+    return model_check(
+        ts,
+        f,
+        subject=f"RG ({ts.num_states} states, {ts.num_edges} edges)",
+        accepting_word=order_word(ref) if ref is not None else None,
+    )
+
+
+def check_plan(result, *, graph: bool = True, rg: nx.DiGraph | None = None) -> Report:
+    """The RG planner's result (``tamp.rg.PlanResult``): its order, and the whole RG."""
+    demo = result.demo
+    verdicts = [check_order(demo, list(result.order), source="order")]
+    if graph:
+        verdicts.append(check_graph(demo, rg))
+    return Report(verdicts)

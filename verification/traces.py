@@ -1,0 +1,184 @@
+"""Checking one trace against an LTL formula, with a shortest-bad-prefix explanation.
+
+Two semantics:
+- infinite words (a lasso ``prefix · cycle^ω``): the verdict is Spot's product emptiness
+  ``L(A_f) ∩ {w} ≠ ∅`` with ``A_f`` the Büchi automaton of ``f`` and ``{w}`` the word
+  automaton of ``spot.parse_word`` (sharing the automaton's BDD dictionary);
+- finite words (LTLf): the NFA of ``from_ltlf``/``to_finite`` is run on the letters.
+
+Every letter is a full valuation over the formula's propositions: a proposition the
+letter does not name is false. Propositions the trace names but the formula does not
+mention are ignored, as a runtime monitor would.
+
+When the formula is violated, the explanation reads the trace on the automaton while
+keeping only *live* states (those with an accepting continuation): the first position at
+which no live state remains ends the shortest bad prefix. An accepted word that agrees
+with the trace before that position is built from one live state reached there, for
+comparison. For formulas with many top-level conjuncts the whole-formula automaton can be
+exponential, so the verdict is computed conjunct by conjunct (sound: a word satisfies a
+conjunction iff it satisfies every conjunct) and the explanation comes from the violated
+conjunct whose bad prefix is shortest.
+"""
+
+from __future__ import annotations
+
+import spot
+
+from tamp.errors import InputError
+from verification import ltl
+from verification.verdict import Counterexample, Verdict
+from verification.words import Word
+
+
+def as_formula(formula: str | spot.formula, *, field: str = "formula") -> spot.formula:
+    if isinstance(formula, spot.formula):
+        return formula
+    return ltl.parse_formula(formula, field=field)
+
+
+def check_trace(
+    formula: str | spot.formula,
+    word: Word,
+    *,
+    finite: bool | None = None,
+    accepting_word: Word | None = None,
+    subject: str = "trace",
+    steps: list[str] | None = None,
+) -> Verdict:
+    """Verdict of ``word`` against ``formula``.
+
+    ``finite`` selects LTLf semantics; ``None`` means "finite iff the word has no cycle".
+    A lasso cannot be read finitely and a finite word has no infinite reading: both are
+    `InputError` (exit 2). ``accepting_word`` (optional) replaces the computed comparison
+    word, for callers that know a better one (the RG check passes the optimal order).
+    ``steps`` labels the positions of ``word`` in the counterexample.
+    """
+    f = as_formula(formula)
+    if finite is None:
+        finite = not word.is_lasso
+    if finite and word.is_lasso:
+        raise InputError("a trace with a cycle is infinite: drop --finite", field="trace")
+    if not finite and not word.is_lasso:
+        raise InputError(
+            "a finite trace has no infinite-word reading: add a cycle{…} or use --finite",
+            field="trace",
+        )
+    parts = ltl.conjuncts(f)
+    explored = 0
+    violated = []
+    for c in parts:
+        ok, n = _holds_finite(c, word) if finite else _holds_lasso(c, word)
+        explored += n
+        if not ok:
+            violated.append(c)
+    semantics = "finite" if finite else "infinite"
+    if not violated:
+        return Verdict(subject, str(f), semantics, True, explored)
+    whole = len(parts) <= ltl.MAX_CONJUNCTS_FOR_WHOLE
+    if whole:
+        ce = explain(f, word, finite=finite)
+    else:
+        candidates = [explain(c, word, finite=finite) for c in violated]
+        ce = min(candidates, key=lambda x: (x.position is None, x.position or 0))
+        ce.accepting_word = None
+    if accepting_word is not None:
+        ce.accepting_word = accepting_word
+    ce.violated = [str(c) for c in violated] if len(parts) > 1 else []
+    ce.aps = ltl.ap_names(f)
+    ce.steps = steps
+    return Verdict(subject, str(f), semantics, False, explored, ce)
+
+
+def _holds_finite(f: spot.formula, word: Word) -> tuple[bool, int]:
+    aut = ltl.finite_automaton(f)
+    st = ltl.Stepper(aut, finite=True)
+    cur = st.initial()
+    explored = len(cur)
+    for letter in word.prefix:
+        if not cur:
+            break
+        cur = st.step(cur, letter)
+    explored += st.visited
+    return any(aut.state_is_accepting(s) for s in cur), explored
+
+
+def word_automaton(word: Word, aut: spot.twa_graph) -> spot.twa_graph:
+    """Spot's automaton of a lasso, letters as full valuations over ``aut``'s propositions."""
+    aps = [ap.ap_name() for ap in aut.ap()]
+    text = "; ".join(ltl.formula_letter_text(x, aps) for x in word.prefix)
+    cyc = "cycle{" + "; ".join(ltl.formula_letter_text(x, aps) for x in word.cycle) + "}"
+    text = f"{text}; {cyc}" if text else cyc
+    return spot.parse_word(text, aut.get_dict()).as_automaton()
+
+
+def _holds_lasso(f: spot.formula, word: Word) -> tuple[bool, int]:
+    aut = ltl.buchi(f)
+    prod = spot.product(aut, word_automaton(word, aut))
+    return prod.is_empty() is False, prod.num_states()
+
+
+def explain(f: spot.formula, word: Word, *, finite: bool) -> Counterexample:
+    """Shortest bad prefix of ``word`` for ``f`` and an accepted word for comparison.
+
+    Assumes ``word`` violates ``f`` (the caller checked).
+    """
+    aut = ltl.finite_automaton(f) if finite else ltl.buchi(f)
+    st = ltl.Stepper(aut, finite=finite)
+    cur = st.initial()
+    if not cur:
+        what = "no non-empty finite trace" if finite else "no infinite word"
+        return Counterexample(word, f"the formula is unsatisfiable: {what} satisfies it")
+
+    def compare(prefix: tuple, states: frozenset[int]) -> Word:
+        q = min(states)
+        letters, cycle = ltl.accepting_continuation(aut, q, finite=finite)
+        if finite:
+            return Word.finite(list(prefix) + letters)
+        return Word.lasso(list(prefix) + letters, cycle)
+
+    before = cur
+    for i, letter in enumerate(word.prefix):
+        cur = st.step(before, letter)
+        if not cur:
+            return Counterexample(
+                word,
+                f"after position {i} no continuation can satisfy the formula",
+                position=i,
+                accepting_word=compare(word.prefix[:i], before),
+            )
+        before = cur
+    if finite:
+        if not word.prefix:
+            reason = "the empty trace satisfies no LTLf formula (LTLf traces are non-empty)"
+        else:
+            reason = "the trace ends before the formula is satisfied (it could still be extended)"
+        return Counterexample(word, reason, None, compare(word.prefix, cur))
+    # Unroll the cycle until the live set dies or repeats (at most |2^Q| · |cycle| steps,
+    # in practice a handful of rounds).
+    after_prefix = cur
+    seen: set[tuple[frozenset[int], int]] = set()
+    i = len(word.prefix)
+    k = 0
+    unrolled: list = []
+    while (cur, k) not in seen:
+        seen.add((cur, k))
+        letter = word.cycle[k]
+        nxt = st.step(cur, letter)
+        if not nxt:
+            return Counterexample(
+                word,
+                f"after position {i} (cycle letter {k}) no continuation can satisfy the formula",
+                position=i,
+                accepting_word=compare(word.prefix + tuple(unrolled), cur),
+            )
+        unrolled.append(letter)
+        cur = nxt
+        i += 1
+        k = (k + 1) % len(word.cycle)
+    return Counterexample(
+        word,
+        "every finite prefix can still be extended, but repeating the cycle forever never "
+        "satisfies the formula",
+        None,
+        compare(word.prefix, after_prefix),
+    )

@@ -1,0 +1,161 @@
+"""Results of a check: a verdict, its counterexample, and the error the gate raises.
+
+A `Verdict` is what every checker returns; a `Report` groups the verdicts of one plan
+(e.g. the chosen order *and* the whole reachability graph). `VerificationError` is an
+`InfeasibleError`, so the CLIs turn it into exit status 1 with its counterexample.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from tamp.errors import InfeasibleError
+from verification.words import Word
+
+
+@dataclass
+class Counterexample:
+    """Why a check failed.
+
+    ``word`` is the violating behaviour: the checked trace, or a run of the checked system
+    (``steps`` then describes each position: the system state or action behind it).
+    ``position`` is the first position after which no accepting continuation exists (the
+    end of the shortest bad prefix); ``None`` when every finite prefix can still be
+    extended, i.e. only the infinite repetition of the cycle (or, for a finite trace, its
+    end) fails. ``accepting_word`` agrees with ``word`` before ``position`` and is
+    accepted: the comparison a user needs to see what should have happened instead.
+    """
+
+    word: Word
+    reason: str
+    position: int | None = None
+    accepting_word: Word | None = None
+    violated: list[str] = field(default_factory=list)
+    steps: list[str] | None = None
+    aps: list[str] = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        out = {
+            "reason": self.reason,
+            "position": self.position,
+            "violated": list(self.violated),
+            "word": self.word.to_json(),
+            "word_text": self.word.format(self.aps),
+            "accepting_word": self.accepting_word.to_json() if self.accepting_word else None,
+            "accepting_word_text": (
+                self.accepting_word.format(self.aps) if self.accepting_word else None
+            ),
+        }
+        if self.steps is not None:
+            out["steps"] = list(self.steps)
+        return out
+
+    def text(self) -> str:
+        lines = [f"counterexample: {self.reason}"]
+        if self.violated:
+            lines.append("  violated: " + "; ".join(self.violated))
+        if self.steps is not None:
+            n = len(self.word.prefix)
+            for i, s in enumerate(self.steps):
+                mark = "  cycle " if i >= n else "  "
+                letter = self.word.letter(i)
+                props = ", ".join(sorted(letter & set(self.aps))) if self.aps else ""
+                lines.append(f"{mark}[{i}] {s}" + (f"  {{{props}}}" if props or self.aps else ""))
+        else:
+            lines.append(f"  word:      {self.word.format(self.aps)}")
+        if self.position is not None:
+            lines.append(f"  no accepting continuation after position {self.position}")
+        if self.accepting_word is not None:
+            lines.append(f"  accepted:  {self.accepting_word.format(self.aps)}")
+        return "\n".join(lines)
+
+
+@dataclass
+class Verdict:
+    """Outcome of one check of ``subject`` against ``formula``."""
+
+    subject: str
+    formula: str
+    semantics: str  # "finite", "infinite" (lasso) or "all paths" (model checking)
+    holds: bool
+    states_explored: int
+    counterexample: Counterexample | None = None
+
+    def to_json(self) -> dict:
+        return {
+            "subject": self.subject,
+            "formula": self.formula,
+            "semantics": self.semantics,
+            "holds": self.holds,
+            "states_explored": self.states_explored,
+            "counterexample": self.counterexample.to_json() if self.counterexample else None,
+        }
+
+    def text(self) -> str:
+        head = (
+            f"{self.subject}: {'holds' if self.holds else 'VIOLATED'} "
+            f"({self.semantics}; {self.states_explored} states explored)\n  formula: {self.formula}"
+        )
+        if self.counterexample is None:
+            return head
+        return head + "\n" + self.counterexample.text()
+
+
+@dataclass
+class Report:
+    """The verdicts of one plan; holds when all hold."""
+
+    verdicts: list[Verdict]
+
+    @property
+    def holds(self) -> bool:
+        return all(v.holds for v in self.verdicts)
+
+    @property
+    def states_explored(self) -> int:
+        return sum(v.states_explored for v in self.verdicts)
+
+    @property
+    def failed(self) -> list[Verdict]:
+        return [v for v in self.verdicts if not v.holds]
+
+    @property
+    def counterexample(self) -> Counterexample | None:
+        bad = self.failed
+        return bad[0].counterexample if bad else None
+
+    def to_json(self) -> dict:
+        ce = self.counterexample
+        return {
+            "holds": self.holds,
+            "counterexample": ce.to_json() if ce else None,
+            "states_explored": self.states_explored,
+            "checks": [v.to_json() for v in self.verdicts],
+        }
+
+    def text(self) -> str:
+        return "\n".join(v.text() for v in self.verdicts)
+
+
+class VerificationError(InfeasibleError):
+    """A plan failed verification; carries the `Report` and its counterexample (exit 1)."""
+
+    def __init__(self, report: Report | Verdict):
+        if isinstance(report, Verdict):
+            report = Report([report])
+        self.report = report
+        bad = report.failed
+        first = bad[0] if bad else None
+        summary = (
+            f"verification failed: {first.subject} violates {first.formula}"
+            if first
+            else "verification failed"
+        )
+        self.summary = summary
+        super().__init__(
+            summary + ("\n" + first.counterexample.text() if first and first.counterexample else "")
+        )
+
+    @property
+    def counterexample(self) -> Counterexample | None:
+        return self.report.counterexample
