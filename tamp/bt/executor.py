@@ -1,0 +1,487 @@
+"""The PA-BT executor of SMP-MRO Alg. 2: build from C_goal, tick, grow between ticks.
+
+``PaBtExecutor(c_goal, domain, free_areas=...)`` builds the initial tree (Alg. 2 l. 1-3: a
+SequenceWithMemory of the goal conditions, so a goal reached earlier stays done when a
+later goal moves the same object again). ``tick(world)`` observes the world, ticks the tree
+once, and when the tree fails grows it before returning (l. 8-10):
+
+- GetFailedNode: breadth-first, the first Condition that failed in this tick and has not
+  been expanded yet; it is replaced by its expansion (`tamp.bt.expand`).
+- No such condition but an action failed in this tick (a skill failure): the tree is
+  ticked again next time, which restarts that action, at most ``max_retries`` times per
+  action node.
+- Otherwise, or when growth is impossible (no template, unresolvable conflict, more than
+  ``max_expansions`` expansions, the same action started again from the same state after
+  it had already succeeded from it ``max_repeats`` times — a livelock), the executor stops
+  with FAILURE and ``reason`` says why. It never loops.
+
+``tick`` returns RUNNING while work remains (also right after a growth step), SUCCESS when
+the root succeeded, FAILURE when stopped. The executor keeps no reference to the world
+between ticks: it is a plain object graph that ``copy.deepcopy`` copies cheaply (the
+predicates and actions are shared), as Drake's abstract state requires.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections import Counter, deque
+from collections.abc import Iterable, Sequence
+from dataclasses import asdict, dataclass, field
+
+from tamp.bt.expand import (
+    ExpansionError,
+    PriorityFn,
+    expand,
+    success_rate_priority,
+)
+from tamp.bt.free_area import choose_free_area
+from tamp.bt.nodes import (
+    FAILURE,
+    RUNNING,
+    SUCCESS,
+    ActionNode,
+    Condition,
+    Node,
+    PriorityFallback,
+    guard_of,
+)
+from tamp.bt.nodes import (
+    Sequence as SequenceNode,
+)
+from tamp.world.actions import Action, Domain, default_domain
+from tamp.world.geometry import Area
+from tamp.world.interface import Status, World
+from tamp.world.predicates import IsObjectAt, Predicate
+from tamp.world.state import WorldState
+
+
+@dataclass
+class GrowthEvent:
+    """One logged tree edit or executor decision."""
+
+    tick: int
+    kind: str  # expand | recovery | conflict | retry | priority | preempt | stop
+    condition: str
+    why: str
+    detail: str = ""
+    subtree: int | None = None  # uid of the subtree root involved
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+    def __str__(self) -> str:
+        text = f"[tick {self.tick}] {self.kind} {self.condition}: {self.why}"
+        return text + (f" -> {self.detail}" if self.detail else "")
+
+
+@dataclass
+class ActionRecord:
+    """An action attempt: when it started, how it ended (None while it runs)."""
+
+    action: Action
+    started: int
+    ended: int | None = None
+    status: str | None = None  # SUCCESS | FAILURE | CANCELLED
+
+    def to_json(self) -> dict:
+        return {
+            "action": self.action.name,
+            "args": list(self.action.args),
+            "started": self.started,
+            "ended": self.ended,
+            "status": self.status,
+        }
+
+
+@dataclass
+class ExecutorStats:
+    ticks: int = 0
+    expansions: int = 0
+    recoveries: int = 0
+    conflicts: int = 0
+    conflict_moves: int = 0
+    retries: int = 0
+    implicit_preemptions: int = 0
+    free_areas_found: list[str] = field(default_factory=list)
+
+
+class PaBtExecutor:
+    """Grows and ticks a behavior tree for C_goal against any `World` (Alg. 2)."""
+
+    def __init__(
+        self,
+        c_goal: Sequence[Predicate],
+        domain: Domain | None = None,
+        *,
+        free_areas: Iterable[str | Area] = (),
+        priority: PriorityFn = success_rate_priority,
+        max_expansions: int = 200,
+        max_retries: int = 3,
+        max_repeats: int = 2,
+        max_fruitless: int = 50,
+    ) -> None:
+        if not c_goal:
+            raise ValueError("C_goal is empty: nothing to execute")
+        self.domain = domain or default_domain()
+        self.priority = priority
+        self.max_expansions = max_expansions
+        self.max_retries = max_retries
+        self.max_repeats = max_repeats
+        self.max_fruitless = max_fruitless
+        self.c_goal = list(c_goal)
+        self.free_areas: list[str] = []
+        self.extra_areas: dict[str, Area] = {}
+        for a in free_areas:
+            if isinstance(a, Area):
+                self.free_areas.append(a.name)
+                self.extra_areas[a.name] = a
+            else:
+                self.free_areas.append(str(a))
+        self.goal_areas = sorted({c.area for c in self.c_goal if isinstance(c, IsObjectAt)})
+        self.reserved: list[str] = []
+        # Alg. 2 l. 1-3: T <- Sequence(c for c in C_goal), with memory.
+        self.root: Node = SequenceNode([Condition(c) for c in self.c_goal], memory=True)
+        # Tick context (read by the nodes).
+        self.state: WorldState | None = None
+        self.world: World | None = None
+        self.cache: dict[int, bool] = {}
+        self.tick_id = 0
+        self.preempt: list[Node] = []
+        self.running: ActionNode | None = None
+        # Results.
+        self.log: list[GrowthEvent] = []
+        self.attempts: list[ActionRecord] = []
+        self.stats = ExecutorStats()
+        self.result: Status | None = None
+        self.reason = ""
+        self._abort: str | None = None
+        self._completed_from: Counter = Counter()
+        self._start_key: tuple | None = None
+        self._pending_areas: list[Area] = []
+        self._fruitless = 0
+
+    # -- Alg. 2 main loop body -------------------------------------------------------------
+    def tick(self, world: World) -> Status:
+        """Tick the tree once against ``world``; grow it if it failed (between ticks)."""
+        if self.result is not None:
+            return self.result
+        self.tick_id += 1
+        self.stats.ticks += 1
+        state = world.observe()
+        if self.extra_areas:
+            state = self._with_extra_areas(world, state)
+        self.state = state
+        self.world = world
+        self.cache.clear()
+        try:
+            st = self.root.tick(self)
+        finally:
+            self.world = None
+            del self.preempt[:]
+        if self._abort is not None:
+            return self._stop(self._abort, world)
+        if st is SUCCESS:
+            self.result = SUCCESS
+            self.reason = "every goal condition reached"
+            return SUCCESS
+        if st is FAILURE:
+            # Grow on the state after this tick's effects (a skill may have just finished).
+            state = world.observe()
+            if self.extra_areas:
+                state = self._with_extra_areas(world, state)
+            return self._grow(state, world)
+        return RUNNING
+
+    def run(self, world: World, *, max_ticks: int = 10_000, step=None) -> Status:
+        """Tick until SUCCESS or FAILURE (``step()`` is called before each tick if given)."""
+        for _ in range(max_ticks):
+            if step is not None:
+                step()
+            st = self.tick(world)
+            if st is not RUNNING:
+                return st
+        return self._stop(f"no result after {max_ticks} ticks", world)
+
+    def halt(self, world: World) -> None:
+        """Stop everything (cancels a running skill)."""
+        self.world = world
+        try:
+            self.root.halt(self)
+        finally:
+            self.world = None
+
+    # -- growth (Alg. 2 l. 8-10) -----------------------------------------------------------
+    def failed_condition(self) -> Condition | None:
+        """GetFailedNode: breadth-first, the first unexpanded Condition that failed this tick."""
+        queue: deque[Node] = deque([self.root])
+        tick = self.tick_id
+        while queue:
+            n = queue.popleft()
+            if n.tick_id != tick:
+                continue
+            if n.__class__ is Condition:
+                if n.status is FAILURE and not n.expanded:
+                    return n
+                continue
+            queue.extend(n.children)
+        return None
+
+    def _grow(self, state: WorldState, world: World) -> Status:
+        self._fruitless += 1
+        if self._fruitless > self.max_fruitless:
+            return self._stop(
+                f"the tree failed {self._fruitless} times in a row without any action "
+                "succeeding in between",
+                world,
+            )
+        node = self.failed_condition()
+        if node is not None and node.pred.holds(state):
+            return RUNNING  # it failed on an older observation; tick again
+        if node is not None:
+            try:
+                self.state = state
+                expand(self, node, why=f"{node.pred} failed")
+            except ExpansionError as exc:
+                return self._stop(str(exc), world)
+            if self.stats.expansions > self.max_expansions:
+                return self._stop(
+                    f"more than {self.max_expansions} expansions; the tree stops growing", world
+                )
+            self._register_new_areas(world)
+            return RUNNING
+        failed = [
+            n
+            for n in self.root.walk()
+            if n.__class__ is ActionNode and n.tick_id == self.tick_id and n.status is FAILURE
+        ]
+        if failed:
+            for n in failed:
+                if n.failures > self.max_retries:
+                    return self._stop(
+                        f"{n.action} failed {n.failures} times (max_retries={self.max_retries})",
+                        world,
+                    )
+            names = ", ".join(str(n.action) for n in failed)
+            self.stats.retries += 1
+            self.log_event("retry", names, "skill failed", "ticked again", failed[0])
+            return RUNNING
+        guards = [
+            str(n.pred)
+            for n in self.root.walk()
+            if n.__class__ is Condition and n.tick_id == self.tick_id and n.status is FAILURE
+        ]
+        return self._stop(
+            "the tree failed and no failed condition can be grown further"
+            + (f" (failed: {', '.join(guards)})" if guards else ""),
+            world,
+        )
+
+    def _stop(self, reason: str, world: World | None) -> Status:
+        if world is not None and self.running is not None:
+            self.halt(world)
+        self.result = FAILURE
+        self.reason = reason
+        self.log_event("stop", "", reason)
+        return FAILURE
+
+    # -- services used by the nodes (TickContext) ------------------------------------------
+    def start_action(self, node: ActionNode) -> bool:
+        """Halt whatever must stop first (halt before start), then ``world.start``."""
+        if self.preempt:
+            pending = list(self.preempt)
+            del self.preempt[:]
+            for other in pending:
+                other.halt(self)
+        if self.running is not None and self.running is not node:
+            # Not reachable through the reactive nodes; kept as a safety net and counted.
+            self.stats.implicit_preemptions += 1
+            self.log_event("preempt", str(self.running.action), "implicit", str(node.action))
+            self.running.halt(self)
+        key = (str(node.action), _fingerprint(self.state), _cursor(self.root))
+        if self._completed_from[key] >= self.max_repeats:
+            self._abort = (
+                f"livelock: {node.action} would start again from a state it already "
+                f"succeeded from {self._completed_from[key]} times"
+            )
+            return False
+        node.handle = self.world.start(node.action)
+        self.running = node
+        self._start_key = key
+        self.attempts.append(ActionRecord(node.action, self.tick_id))
+        return True
+
+    def action_finished(self, node: ActionNode, status: Status) -> None:
+        node.handle = None
+        if self.running is node:
+            self.running = None
+        rec = self._open_record(node.action)
+        if rec is not None:
+            rec.ended = self.tick_id
+            rec.status = status.value
+        if status is FAILURE:
+            node.failures += 1
+            return
+        if self._start_key is not None:
+            self._completed_from[self._start_key] += 1
+        self._fruitless = 0
+        # The rest of this tick must see the action's effects: observe again.
+        world = self.world
+        if world is not None:
+            state = world.observe()
+            if self.extra_areas:
+                state = self._with_extra_areas(world, state)
+            self.state = state
+            self.cache.clear()
+
+    def cancel_action(self, node: ActionNode) -> None:
+        if node.handle is not None and self.world is not None:
+            self.world.cancel(node.handle)
+        node.handle = None
+        if self.running is node:
+            self.running = None
+        rec = self._open_record(node.action)
+        if rec is not None:
+            rec.ended = self.tick_id
+            rec.status = "CANCELLED"
+
+    def note_priority_switch(self, node: PriorityFallback, old: int, new: int) -> None:
+        self.log_event("priority", node.describe(), f"child {old} -> child {new}", "", node)
+
+    def set_priority(self, node: PriorityFallback, index: int, priority: float) -> None:
+        """Change an alternative's priority between ticks (logged)."""
+        node.set_priority(index, priority)
+        self.log_event("priority", node.describe(), f"child {index} := {priority:g}", "", node)
+
+    # -- services used by ExpandTree -------------------------------------------------------
+    def reserve_free_area(self, state: WorldState, *, freeing: str | None) -> Area | None:
+        area = choose_free_area(
+            state,
+            candidates=self.free_areas,
+            goal_areas=self.goal_areas,
+            freeing=freeing,
+            reserved=self.reserved,
+            auto_index=len(self.stats.free_areas_found) + 1,
+        )
+        if area is None:
+            return None
+        self.reserved.append(area.name)
+        if area.name not in state.areas:
+            self.extra_areas[area.name] = area
+            self._pending_areas.append(area)
+            self.stats.free_areas_found.append(area.name)
+            # Later expansions in this growth step must see the new area.
+            self.state = self.state.with_area(area) if self.state is not None else None
+        return area
+
+    def count_expansion(self) -> None:
+        self.stats.expansions += 1
+
+    def count_conflict(self, moves: int) -> None:
+        self.stats.conflicts += 1
+        self.stats.conflict_moves += moves
+
+    def log_event(
+        self,
+        kind: str,
+        condition: Predicate | str | None,
+        why: str,
+        detail: str = "",
+        subtree: Node | None = None,
+    ) -> None:
+        if kind == "recovery":
+            self.stats.recoveries += 1
+        self.log.append(
+            GrowthEvent(
+                self.tick_id,
+                kind,
+                "" if condition is None else str(condition),
+                why,
+                detail,
+                None if subtree is None else subtree.uid,
+            )
+        )
+
+    # -- inspection ------------------------------------------------------------------------
+    @property
+    def executed(self) -> list[Action]:
+        """Actions that finished with SUCCESS, in order."""
+        return [r.action for r in self.attempts if r.status == "SUCCESS"]
+
+    def size(self) -> int:
+        return self.root.size()
+
+    def goals_done(self) -> int:
+        """How many goal conditions the root has passed (its memory cursor)."""
+        root = self.root
+        if self.result is SUCCESS:
+            return len(self.c_goal)
+        return root.cursor if isinstance(root, SequenceNode) else 0
+
+    def describe(self) -> str:
+        """Indented text view of the tree with last statuses."""
+        lines: list[str] = []
+
+        def rec(n: Node, depth: int) -> None:
+            st = "" if n.status is None else f"  [{n.status.value}@{n.tick_id}]"
+            lines.append("  " * depth + n.describe() + st)
+            for c in n.children:
+                rec(c, depth + 1)
+
+        rec(self.root, 0)
+        return "\n".join(lines)
+
+    def to_dot(self) -> str:
+        from tamp.bt.export import to_dot
+
+        return to_dot(self.root)
+
+    def to_btcpp_xml(self) -> str:
+        from tamp.bt.export import to_btcpp_xml
+
+        return to_btcpp_xml(self.root)
+
+    def __deepcopy__(self, memo: dict) -> PaBtExecutor:
+        new = PaBtExecutor.__new__(PaBtExecutor)
+        memo[id(self)] = new
+        shared = {"domain", "priority", "state", "world", "c_goal"}
+        for k, v in self.__dict__.items():
+            setattr(new, k, v if k in shared else copy.deepcopy(v, memo))
+        return new
+
+    # -- helpers ---------------------------------------------------------------------------
+    def _open_record(self, action: Action) -> ActionRecord | None:
+        for rec in reversed(self.attempts):
+            if rec.status is None and rec.action == action:
+                return rec
+        return None
+
+    def _with_extra_areas(self, world: World, state: WorldState) -> WorldState:
+        self._register_new_areas(world)
+        for name, area in self.extra_areas.items():
+            if name not in state.areas:
+                state = state.with_area(area)
+        return state
+
+    def _register_new_areas(self, world: World) -> None:
+        """Areas found by the ring search are announced to worlds that accept them."""
+        if not self._pending_areas:
+            return
+        add = getattr(world, "add_area", None)
+        if add is not None:
+            for area in self._pending_areas:
+                add(area)
+        self._pending_areas.clear()
+
+
+def _fingerprint(state: WorldState | None) -> tuple:
+    if state is None:
+        return ()
+    s = state.summary()
+    return (tuple(s["robot"]), s["held"], tuple((k, tuple(v)) for k, v in s["objects"].items()))
+
+
+def _cursor(root: Node) -> int:
+    return root.cursor if isinstance(root, SequenceNode) else 0
+
+
+__all__ = ["ActionRecord", "ExecutorStats", "GrowthEvent", "PaBtExecutor", "guard_of"]
