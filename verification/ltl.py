@@ -57,7 +57,9 @@ def parse_formula(text: str, *, field: str = "formula", file: str | None = None)
     except SyntaxError as exc:
         lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
         reason = next((ln for ln in lines if not ln.startswith((">>>", "^"))), "syntax error")
-        raise InputError(f"formula {text!r} does not parse: {reason}", file=file, field=field)
+        raise InputError(
+            f"formula {text!r} does not parse: {reason}", file=file, field=field
+        ) from None
 
 
 def ap_names(f: spot.formula) -> list[str]:
