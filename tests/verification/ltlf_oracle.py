@@ -8,7 +8,7 @@
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import spot
 
@@ -18,7 +18,7 @@ def ltlf_holds(f: spot.formula, trace: list[frozenset[str]]) -> bool:
     if n == 0:
         return False
 
-    @lru_cache(maxsize=None)
+    @cache
     def ev(g: spot.formula, i: int) -> bool:
         k = g.kindstr()
         if k == "tt":
