@@ -139,6 +139,7 @@ class PaBtExecutor:
                 self.free_areas.append(str(a))
         self.goal_areas = sorted({c.area for c in self.c_goal if isinstance(c, IsObjectAt)})
         self.reserved: list[str] = []
+        self.put_down_hint: dict[str, str] = {}
         # Alg. 2 l. 1-3: T <- Sequence(c for c in C_goal), with memory.
         self.root: Node = SequenceNode([Condition(c) for c in self.c_goal], memory=True)
         # Tick context (read by the nodes).

@@ -101,6 +101,12 @@ def _complete(
             if state.held is None:
                 return None
             binding[name] = state.held
+    for name, _kind in template.params:
+        if name in binding:
+            continue
+        held = state.held if state.held in binding.values() else None
+        if held is not None and held in ex.put_down_hint:
+            binding[name] = ex.put_down_hint.pop(held)
         else:
             area = ex.reserve_free_area(ex.state, freeing=None)
             if area is None:
@@ -186,6 +192,14 @@ def recovery(ex: PaBtExecutor, cond_node: Condition, *, why: str, depth: int = 0
         raise ExpansionError(f"{cond} failed but no object blocks {cond.area}")
     parent = cond_node.parent
     assert parent is not None
+    held = ex.state.held
+    if held is not None and held not in ex.put_down_hint:
+        # The robot must put down what it holds before it can pick a blocker: that object
+        # gets the free area nearest to the robot, the blockers the next ones (§V-D2:
+        # Place(O_1, l_free2) near l_1, then O_a to l_free1).
+        area = ex.reserve_free_area(ex.state, freeing=cond.area)
+        if area is not None:
+            ex.put_down_hint[held] = area.name
     stand_ins: list[Condition] = []
     for b in blockers:
         area = ex.reserve_free_area(ex.state, freeing=cond.area)

@@ -10,7 +10,10 @@ The rule (deterministic):
      the disc does not overlap any object's current place.
 2. Among the demonstration's free areas that are valid, take the one nearest to the robot
    (planar distance; ties broken by the order the areas were given).
-3. When none is left, search rings around the workspace: centre = mean of every known area
+3. In a recovery that needs the hand free first (the robot holds an object while the area
+   it must place it in is blocked), the held object's area is chosen first, then one per
+   blocker, each by rule 2 with the earlier choices reserved.
+4. When none is left, search rings around the workspace: centre = mean of every known area
    and object position; first ring radius = largest distance from the centre to any of
    them + 2·radius, then growing by 2·radius; 16 candidates per ring (every 22.5°, starting
    on +x). On the first ring that has valid candidates, take the one nearest to the robot
