@@ -1,0 +1,487 @@
+"""Planning on the automaton with the W^B counts carried along (Zhou et al. Alg. 2 and 3).
+
+* :func:`initial_lasso` — Dijkstra over the automaton from ``q_0`` for the cheapest accepting
+  lasso ``prefix · cycle^ω`` whose letters are executable; one *round* of the task is the
+  prefix followed by one traversal of the cycle, and its W^B counts are ``s^B_final``.
+* :meth:`Planner.plan_from` — Alg. 2 line 1, ``Dijkstra(q_s, s^B_s, B)``: the cheapest run from
+  the pair ``(q, s^B)`` to an accepting state with ``s^B = s^B_final`` (A* with an admissible
+  count heuristic; W^B stays inside Lemma 1's box). Steps are deliveries (one proposition
+  true), the empty letter, or removing an object from W^B (empty letter).
+* :class:`Table` — the table ``T`` (W^B state → action), built from a plan (Alg. 2 lines 2-8).
+* :class:`Tree` — the search tree ``TR`` of pairs ``(q, s^B)`` and its update (Alg. 3),
+  random (seedable) or breadth-first; both expand until a pair with the observed W^B state
+  that can still complete the task is found, or the reachable pairs are exhausted (verdict:
+  the state cannot lead to completion, Alg. 1 line 23).
+
+Pairs, tables and plans are the stable API that ``verification`` reads: ``Plan.prefix`` /
+``Plan.cycle`` (letters = frozensets of true propositions), ``Table.as_mapping()`` and
+:func:`follow_table`.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import random
+from collections import deque
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+from tamp.lots.automaton import EMPTY, Automaton, Letter
+from tamp.lots.lots import Counts, Lots
+from tamp.lots.task import Task
+
+Pair = tuple[int, Counts]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of a run: ``(q, b) --letter--> (q_next, b_next)``.
+
+    ``kind``: ``move`` (deliver one object for proposition ``prop``), ``remove`` (take one
+    object of class ``cls`` out of W^B — back to W^A when the rest of the run needs it, else
+    into the waste basket; letter ∅) or ``idle`` (letter ∅, nothing moves; only the automaton
+    state changes).
+    """
+
+    kind: str
+    q: int
+    b: Counts
+    q_next: int
+    b_next: Counts
+    prop: str | None = None
+    cls: int | None = None
+
+    @property
+    def letter(self) -> Letter:
+        return frozenset({self.prop}) if self.kind == "move" else EMPTY
+
+
+@dataclass
+class Plan:
+    """A run from ``start`` to a goal pair, and the accepting cycle that continues it.
+
+    ``prefix`` lists the letters of ``steps``; ``prefix · cycle^ω`` is accepted by the task
+    automaton (what ``verification`` checks).
+    """
+
+    start: Pair
+    steps: list[Step]
+    cycle: list[Letter]
+    cost: float
+
+    @property
+    def prefix(self) -> list[Letter]:
+        return [s.letter for s in self.steps]
+
+    @property
+    def end(self) -> Pair:
+        return (self.steps[-1].q_next, self.steps[-1].b_next) if self.steps else self.start
+
+
+# ---------------------------------------------------------------------------- initial lasso
+def initial_lasso(aut: Automaton, task: Task) -> tuple[list[Step], list[Letter], Counts]:
+    """Cheapest executable accepting lasso from ``q_0`` (Alg. 1 line 3 / Alg. 2 line 1).
+
+    Dijkstra on ``(phase, q, b, q_F)``: phase 0 walks to an accepting state ``q_F``; a free
+    switch starts phase 1, which must return to ``q_F`` with at least one letter. ``b`` counts
+    deliveries, bounded by the objects that exist. Ties: fewer steps, then letter order.
+    Returns (round steps = prefix then one cycle, the cycle letters, s^B_final).
+    """
+    classes = task.classes
+    idx = {c: i for i, c in enumerate(classes)}
+    prop_class = {p.name: idx[p.cls] for p in task.propositions}
+    cost_of = {p.name: p.cost for p in task.propositions}
+    avail = tuple(task.initial_a.get(c, 0) + task.initial_b.get(c, 0) for c in classes)
+    b0 = tuple(task.initial_b.get(c, 0) for c in classes)
+    box = Lots(classes, prop_class, avail)
+    start = (0, aut.initial, b0, -1, False)
+    tie = itertools.count()
+    heap = [((0.0, 0), next(tie), start)]
+    best: dict = {start: (0.0, 0)}
+    parent: dict = {start: None}
+    while heap:
+        key, _, node = heapq.heappop(heap)
+        if best.get(node) != key:
+            continue
+        phase, q, b, qf, moved = node
+        if phase == 1 and moved and q == qf:
+            return _lasso_from(parent, node, box)
+        succ: list = []
+        if phase == 0 and q in aut.live_accepting:
+            succ.append(((1, q, b, q, False), 0.0, None))
+        for letter in aut.letters:
+            nb = box.deliver(b, letter)
+            if nb is None:
+                continue
+            c = cost_of[next(iter(letter))] if letter else 0.0
+            for nq in aut.successors(q, letter):
+                succ.append(((phase, nq, nb, qf, moved or phase == 1), c, letter))
+        for nxt, c, letter in succ:
+            nkey = (key[0] + c, key[1] + (letter is not None))
+            if nxt not in best or nkey < best[nxt]:
+                best[nxt] = nkey
+                parent[nxt] = (node, letter)
+                heapq.heappush(heap, (nkey, next(tie), nxt))
+    raise_infeasible(
+        f"the formula {task.formula!r} has no accepting run that moves one object at a time "
+        f"with the objects available ({dict(zip(classes, avail, strict=True))})"
+    )
+    raise AssertionError  # unreachable
+
+
+def raise_infeasible(reason: str) -> None:
+    from tamp.errors import InfeasibleError
+
+    raise InfeasibleError(reason)
+
+
+def _lasso_from(parent: dict, node: tuple, box: Lots) -> tuple[list[Step], list[Letter], Counts]:
+    chain = []
+    while parent[node] is not None:
+        prev, letter = parent[node]
+        chain.append((prev, letter, node))
+        node = prev
+    chain.reverse()
+    steps: list[Step] = []
+    cycle: list[Letter] = []
+    for prev, letter, nxt in chain:
+        if letter is None:  # the phase switch
+            continue
+        steps.append(_step(prev[1], prev[2], letter, nxt[1], nxt[2], box))
+        if prev[0] == 1:
+            cycle.append(letter)
+    final = steps[-1].b_next if steps else chain[-1][2][2]
+    return steps, cycle, final
+
+
+def _step(q: int, b: Counts, letter: Letter, nq: int, nb: Counts, lots: Lots) -> Step:
+    if letter:
+        (p,) = letter
+        return Step("move", q, b, nq, nb, prop=p, cls=lots.prop_class[p])
+    return Step("idle", q, b, nq, nb)
+
+
+# ---------------------------------------------------------------------------- planner
+class Planner:
+    """Alg. 2's Dijkstra from any pair ``(q, s^B)``; remembers pairs proven dead."""
+
+    def __init__(self, aut: Automaton, lots: Lots, task: Task):
+        self.aut = aut
+        self.lots = lots
+        self.remove_cost = task.remove_cost
+        self.cost_of = {p.name: p.cost for p in task.propositions}
+        self._min_cost = [
+            min((p.cost for p in task.propositions if lots.prop_class[p.name] == i), default=0.0)
+            for i in range(len(lots.classes))
+        ]
+        self.dead: set[Pair] = set()
+        self._cycles: dict[int, list[Letter]] = {}
+        self.expanded = 0  # pairs expanded by plan_from (for the benchmark)
+
+    def heuristic(self, b: Counts) -> float:
+        """Admissible: every missing object needs one delivery of at least its cheapest cost."""
+        return sum(
+            (n - x) * c for x, n, c in zip(b, self.lots.final, self._min_cost, strict=True) if n > x
+        )
+
+    def moves(self, q: int, b: Counts) -> Iterator[Step]:
+        """Executable steps from a pair (deliveries, ∅, removals to the waste basket)."""
+        lots, aut = self.lots, self.aut
+        for letter in aut.letters:
+            nb = lots.deliver(b, letter)
+            if nb is None:
+                continue
+            for nq in aut.successors(q, letter):
+                yield _step(q, b, letter, nq, nb, lots)
+        empty = aut.successors(q, EMPTY)
+        for i in range(len(b)):
+            nb = lots.remove(b, i)
+            if nb is None:
+                continue
+            for nq in empty:
+                yield Step("remove", q, b, nq, nb, cls=i)
+
+    def step_cost(self, s: Step) -> float:
+        if s.kind == "move":
+            return self.cost_of[s.prop]
+        return self.remove_cost if s.kind == "remove" else 0.0
+
+    def is_goal(self, q: int, b: Counts) -> bool:
+        return q in self.aut.live_accepting and b == self.lots.final
+
+    def plan_from(self, q: int, b: Counts) -> Plan | None:
+        """Cheapest run from ``(q, b)`` to an accepting ``q_F`` with ``b = s^B_final``, or None.
+
+        A* on pairs with key (cost + h, cost, steps); an exhausted search marks every pair it
+        closed as dead (none of them can complete the task), so later calls prune them.
+        """
+        if not self.lots.in_box(b) or (q, b) in self.dead:
+            return None
+        start = (q, b)
+        tie = itertools.count()
+        g: dict[Pair, tuple[float, int]] = {start: (0.0, 0)}
+        parent: dict[Pair, Step | None] = {start: None}
+        heap = [(self.heuristic(b), 0.0, 0, next(tie), start)]
+        closed: set[Pair] = set()
+        while heap:
+            _, cost, nsteps, _, node = heapq.heappop(heap)
+            if node in closed or g[node] != (cost, nsteps):
+                continue
+            closed.add(node)
+            self.expanded += 1
+            if self.is_goal(*node):
+                steps: list[Step] = []
+                while parent[node] is not None:
+                    s = parent[node]
+                    steps.append(s)
+                    node = (s.q, s.b)
+                steps.reverse()
+                end_q = steps[-1].q_next if steps else q
+                return Plan(start, steps, self.cycle_from(end_q), cost)
+            for s in self.moves(*node):
+                nxt = (s.q_next, s.b_next)
+                if nxt in self.dead or nxt in closed:
+                    continue
+                nk = (cost + self.step_cost(s), nsteps + 1)
+                if nxt not in g or nk < g[nxt]:
+                    g[nxt] = nk
+                    parent[nxt] = s
+                    heapq.heappush(heap, (nk[0] + self.heuristic(s.b_next), *nk, next(tie), nxt))
+        self.dead |= closed
+        return None
+
+    def cycle_from(self, qf: int) -> list[Letter]:
+        """Cheapest non-empty accepting cycle ``q_F → q_F`` (letters only; the ω-continuation)."""
+        if qf in self._cycles:
+            return self._cycles[qf]
+        aut = self.aut
+        tie = itertools.count()
+        heap: list = []
+        best: dict[int, tuple[float, int]] = {}
+        parent: dict[int, tuple[int, Letter] | None] = {}
+        for letter in aut.letters:
+            c = self.cost_of[next(iter(letter))] if letter else 0.0
+            for nq in aut.successors(qf, letter):
+                key = (c, 1)
+                if nq not in best or key < best[nq]:
+                    best[nq], parent[nq] = key, (-1, letter)
+                    heapq.heappush(heap, (key, next(tie), nq))
+        done: set[int] = set()
+        while heap:
+            key, _, q = heapq.heappop(heap)
+            if q in done or best[q] != key:
+                continue
+            done.add(q)
+            if q == qf:
+                letters: list[Letter] = []
+                node = q
+                while True:
+                    prev, letter = parent[node]
+                    letters.append(letter)
+                    if prev == -1:
+                        break
+                    node = prev
+                letters.reverse()
+                self._cycles[qf] = letters
+                return letters
+            for letter in aut.letters:
+                c = self.cost_of[next(iter(letter))] if letter else 0.0
+                for nq in aut.successors(q, letter):
+                    nk = (key[0] + c, key[1] + 1)
+                    if nq != qf and nq in done:
+                        continue
+                    if nq not in best or nk < best[nq]:
+                        best[nq], parent[nq] = nk, (q, letter)
+                        heapq.heappush(heap, (nk, next(tie), nq))
+        raise ValueError(f"automaton state {qf} is not on an accepting cycle")
+
+
+# ---------------------------------------------------------------------------- table T
+@dataclass(frozen=True)
+class Entry:
+    """``T[s^B]``: the action to take in W^B state ``b`` and the automaton state it pairs with.
+
+    ``kind``: ``move`` (proposition ``prop`` delivers class ``cls``), ``remove`` (one object of
+    class ``cls`` out of W^B) or ``done`` (the round of the task is complete). ``index`` is the
+    entry's position in the planned run.
+    """
+
+    kind: str
+    q: int
+    b: Counts
+    index: int
+    prop: str | None = None
+    cls: int | None = None
+    q_next: int | None = None
+    b_next: Counts | None = None
+
+    def label(self, lots: Lots) -> str:
+        if self.kind == "move":
+            return self.prop or ""
+        if self.kind == "remove":
+            return f"remove:{lots.classes[self.cls]}"
+        return "done"
+
+    @property
+    def letter(self) -> Letter:
+        return frozenset({self.prop}) if self.kind == "move" else EMPTY
+
+
+@dataclass
+class Table:
+    """The knowledge base ``T``: W^B counts → :class:`Entry` (a plain dict on tuples).
+
+    ``run`` keeps the entries in plan order. A run may pass the same W^B state twice (take an
+    object out of W^B, deliver it again later, for the automaton's order); the dict keeps the
+    first visit, and the controller follows ``run`` while W^B is where the plan expects it.
+    """
+
+    lots: Lots
+    entries: dict[Counts, Entry] = field(default_factory=dict)
+    run: list[Entry] = field(default_factory=list)
+
+    @classmethod
+    def from_plan(cls, plan: Plan, lots: Lots) -> Table:
+        """Alg. 2 lines 2-8: ``(s^B_i, a_i)`` for each non-idle step, then ``done`` at the end.
+
+        Idle steps (letter ∅ with nothing moving) only advance the automaton; the next action
+        taken from the same W^B state is recorded with the automaton state it is taken in.
+        """
+        t = cls(lots)
+        for s in plan.steps:
+            if s.kind == "idle":
+                continue
+            e = Entry(s.kind, s.q, s.b, len(t.run), s.prop, s.cls, s.q_next, s.b_next)
+            t.run.append(e)
+            t.entries.setdefault(s.b, e)
+        q_end, b_end = plan.end
+        e = Entry("done", q_end, b_end, len(t.run))
+        t.run.append(e)
+        t.entries.setdefault(b_end, e)
+        return t
+
+    def get(self, b: Counts) -> Entry | None:
+        """The table hit of Alg. 1 line 12: one dict lookup."""
+        return self.entries.get(b)
+
+    def next_after(self, e: Entry, b: Counts) -> Entry | None:
+        """The plan's next entry after ``e`` when W^B is ``b`` as the plan expects, else None."""
+        i = e.index + 1
+        if i < len(self.run) and self.run[i].b == b:
+            return self.run[i]
+        return None
+
+    def __contains__(self, b: Counts) -> bool:
+        return b in self.entries
+
+    def __len__(self) -> int:
+        return len(self.entries)
+
+    def as_mapping(self) -> dict[Counts, str]:
+        """W^B state → proposition name, ``remove:<class>`` or ``done`` (for verification)."""
+        return {b: e.label(self.lots) for b, e in self.entries.items()}
+
+    def rows(self) -> list[dict]:
+        """JSON-ready rows in plan order: W^B counts by class, automaton state, action."""
+        return [
+            {"w_b": self.lots.named(e.b), "q": e.q, "action": e.label(self.lots)} for e in self.run
+        ]
+
+
+def follow_table(table: Table, b: Counts) -> list[Letter]:
+    """Follow ``T`` from W^B state ``b`` with no interference: the letters the robot produces.
+
+    Starts at ``T[b]`` and walks the planned run (each action leads to the W^B state of the
+    next entry); deliveries give ``{p}``, removals from W^B give ∅; stops at ``done``. Raises
+    ``KeyError`` when ``b`` is not in the table.
+    """
+    e = table.entries[b]
+    letters: list[Letter] = []
+    while e.kind != "done":
+        letters.append(e.letter)
+        e = table.run[e.index + 1]
+    return letters
+
+
+# ---------------------------------------------------------------------------- tree TR
+class Tree:
+    """The search tree ``TR`` of pairs ``(q, s^B)`` (Alg. 1 line 2, Alg. 2 line 7, Alg. 3).
+
+    Children of a pair: every executable letter (``(δ(q, σ), δ_t(s^B, a(σ)))``) and, because
+    dis_2 can take objects away, every single removal from W^B (letter ∅). ``mode``: ``random``
+    (Alg. 3 as written: pick a random unexpanded node; seedable) or ``bfs`` (deterministic).
+    """
+
+    def __init__(self, planner: Planner, root: Pair, *, mode: str = "bfs", seed: int = 0):
+        if mode not in ("bfs", "random"):
+            raise ValueError(f"unknown tree mode {mode!r}")
+        self.planner = planner
+        self.mode = mode
+        self.rng = random.Random(seed)
+        self.parent: dict[Pair, Pair | None] = {root: None}
+        self.by_b: dict[Counts, list[int]] = {root[1]: [root[0]]}
+        self._frontier: deque[Pair] | list[Pair] = deque([root]) if mode == "bfs" else [root]
+        self.expansions = 0
+
+    def __len__(self) -> int:
+        return len(self.parent)
+
+    def __contains__(self, pair: Pair) -> bool:
+        return pair in self.parent
+
+    def add(self, pair: Pair, parent: Pair | None) -> bool:
+        if pair in self.parent:
+            return False
+        self.parent[pair] = parent
+        self.by_b.setdefault(pair[1], []).append(pair[0])
+        self._frontier.append(pair)
+        return True
+
+    def add_plan(self, plan: Plan) -> None:
+        """Alg. 2 line 7: record the pairs ``(q_i, s^B_i)`` of a planned run."""
+        prev = plan.start
+        if prev not in self.parent:
+            self.add(prev, None)
+        for s in plan.steps:
+            nxt = (s.q_next, s.b_next)
+            self.add(nxt, prev)
+            prev = nxt
+
+    def _pop(self) -> Pair:
+        if self.mode == "bfs":
+            return self._frontier.popleft()  # type: ignore[union-attr]
+        f = self._frontier
+        i = self.rng.randrange(len(f))
+        f[i], f[-1] = f[-1], f[i]
+        return f.pop()
+
+    def _best(self, b: Counts) -> tuple[int, Plan] | None:
+        best: tuple[int, Plan] | None = None
+        for q in sorted(self.by_b.get(b, ())):
+            plan = self.planner.plan_from(q, b)
+            if plan is not None and (best is None or plan.cost < best[1].cost):
+                best = (q, plan)
+        return best
+
+    def update(self, b: Counts) -> tuple[int, Plan] | None:
+        """Alg. 3: grow TR until it holds a pair ``(q, b)`` that can complete the task.
+
+        Returns that automaton state and its plan (the cheapest among the pairs with ``b``
+        found so far), or None once every reachable pair has been generated without one —
+        the W^B state cannot lead to completion (Alg. 1 line 23: wait).
+        """
+        if not self.planner.lots.in_box(b):
+            return None
+        found = self._best(b)
+        while found is None and self._frontier:
+            node = self._pop()
+            self.expansions += 1
+            hit = False
+            for s in self.planner.moves(*node):
+                child = (s.q_next, s.b_next)
+                if self.add(child, node) and child[1] == b:
+                    hit = True
+            if hit:
+                found = self._best(b)
+        return found
