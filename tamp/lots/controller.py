@@ -136,7 +136,8 @@ class LotsController:
     """Alg. 1 for one task; independent of how observations are produced (`LocalWorld`).
 
     ``mode``: tree update variant (``bfs`` deterministic, ``random`` as in Alg. 3, seeded by
-    ``seed``). ``max_waits``: consecutive waits before declaring the task infeasible.
+    ``seed``). ``max_waits``: consecutive waits after which the task is declared infeasible
+    (at least 1).
     """
 
     def __init__(
@@ -164,7 +165,7 @@ class LotsController:
         self.tree.add_plan(self.plan)
         self.table = Table.from_plan(self.plan, self.lots)
         self.tables: list[tuple[str, list[dict]]] = [("initial", self.table.rows())]
-        self.max_waits = max_waits
+        self.max_waits = max(1, max_waits)
         self.replans = 0
         self.belief = Belief(self.lots.vector(task.initial_a), b0)
         self._last: Entry | None = None  # the entry whose action was executed last
@@ -211,11 +212,21 @@ class LotsController:
         return 2 * n + 6 + events * (2 * n + 4) + self.max_waits
 
     # ------------------------------------------------------------------ the loop
-    def run(self, world: LocalWorld, *, max_actions: int | None = None) -> Outcome:
-        """Run Alg. 1 until the round is complete; `InfeasibleError` when it cannot be."""
+    def run(
+        self,
+        world: LocalWorld,
+        *,
+        max_actions: int | None = None,
+        record_into: list[ActionRecord] | None = None,
+    ) -> Outcome:
+        """Run Alg. 1 until the round is complete; `InfeasibleError` when it cannot be.
+
+        ``record_into``: a list that receives the actions as they happen (kept when the run
+        ends in `InfeasibleError`).
+        """
         lots, names = self.lots, self.lots.classes
         limit = max_actions if max_actions is not None else self.default_limit(8)
-        actions: list[ActionRecord] = []
+        actions: list[ActionRecord] = record_into if record_into is not None else []
         waits = 0
         looks = 0  # consecutive cycles that only looked (guard against oscillation)
 
@@ -268,8 +279,8 @@ class LotsController:
                 record("wait", note=reason)
                 looks = 0
                 waits += 1
-                if waits > self.max_waits:
-                    raise InfeasibleError(f"{reason}; waited {self.max_waits} times")
+                if waits >= self.max_waits:
+                    raise InfeasibleError(f"{reason} (waited {waits} times)")
                 continue
             if entry.kind == "done":
                 b_obs = look_b()

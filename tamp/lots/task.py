@@ -12,7 +12,7 @@ Task file (what each proposition moves, the formula in Spot syntax, the initial 
     initial:
       A: {bottom: 1, body: 2, peak: 1}
       B: {}
-    remove_cost: 1.0              # optional: taking one object out of W^B (back to W^A or the waste basket)
+    remove_cost: 1.0   # optional: one object out of W^B (back to W^A or to the waste basket)
 
 Interference file (human actions, §III-B: dis_1 moves, dis_2 adds/removes)::
 
