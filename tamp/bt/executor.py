@@ -9,7 +9,8 @@ once, and when the tree fails grows it before returning (l. 8-10):
   been expanded yet; it is replaced by its expansion (`tamp.bt.expand`).
 - No such condition but an action failed in this tick (a skill failure): the tree is
   ticked again next time, which restarts that action, at most ``max_retries`` times per
-  action node.
+  action node. A failed alternative's priority in its PriorityFallback is multiplied by
+  ``failure_decay``, so another achieving action may rank first on the next attempt.
 - Otherwise, or when growth is impossible (no template, unresolvable conflict, more than
   ``max_expansions`` expansions, the same action started again from the same state after
   it had already succeeded from it ``max_repeats`` times — a livelock), the executor stops
@@ -119,6 +120,7 @@ class PaBtExecutor:
         max_retries: int = 3,
         max_repeats: int = 2,
         max_fruitless: int = 50,
+        failure_decay: float = 0.5,
     ) -> None:
         if not c_goal:
             raise ValueError("C_goal is empty: nothing to execute")
@@ -128,6 +130,7 @@ class PaBtExecutor:
         self.max_retries = max_retries
         self.max_repeats = max_repeats
         self.max_fruitless = max_fruitless
+        self.failure_decay = failure_decay
         self.c_goal = list(c_goal)
         self.free_areas: list[str] = []
         self.extra_areas: dict[str, Area] = {}
@@ -321,6 +324,7 @@ class PaBtExecutor:
             rec.status = status.value
         if status is FAILURE:
             node.failures += 1
+            self._demote(node)
             return
         if self._start_key is not None:
             self._completed_from[self._start_key] += 1
@@ -347,6 +351,21 @@ class PaBtExecutor:
 
     def note_priority_switch(self, node: PriorityFallback, old: int, new: int) -> None:
         self.log_event("priority", node.describe(), f"child {old} -> child {new}", "", node)
+
+    def _demote(self, node: ActionNode) -> None:
+        """A failed alternative loses priority (× ``failure_decay``) in its PriorityFallback,
+        so after a failure the next attempt starts with the alternative that now ranks
+        first (§IV-C3: "making the priority of actions variable")."""
+        child: Node = node
+        parent = node.parent
+        while parent is not None and not isinstance(parent, PriorityFallback):
+            child, parent = parent, parent.parent
+        if parent is None or len(parent.children) < 2:
+            return
+        index = parent.index_of(child)
+        new = parent.priorities[index] * self.failure_decay
+        parent.set_priority(index, new)
+        self.log_event("priority", str(node.action), "failed", f"priority {new:g}", parent)
 
     def set_priority(self, node: PriorityFallback, index: int, priority: float) -> None:
         """Change an alternative's priority between ticks (logged)."""
@@ -475,8 +494,8 @@ class PaBtExecutor:
 
 
 def _fingerprint(state: WorldState | None) -> tuple:
-    if state is None:
-        return ()
+    if not isinstance(state, WorldState):
+        return (repr(state),)
     s = state.summary()
     return (tuple(s["robot"]), s["held"], tuple((k, tuple(v)) for k, v in s["objects"].items()))
 

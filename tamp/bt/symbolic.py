@@ -10,8 +10,9 @@
   fail (e.g. a pick of O1 that fails once).
 - ``events``: `Appear` (an object that was not in the demonstration shows up — Case 3's O_a
   at l_1) and `Move` (a person moves an object). An event with ``at_tick`` fires when the
-  clock reaches it; an `Appear` without ``at_tick`` fires at the first `step` at which the
-  robot is within reach of its position (the robot discovers it when it gets there, §V-D2).
+  clock reaches it; an `Appear` without ``at_tick`` fires as soon as the robot is within
+  reach of its position (checked at each `step` and right after each finished skill: the
+  robot discovers it when it gets there, §V-D2).
 - ``step()`` advances the clock by one tick and fires due events; the run loop calls it
   before each executor tick.
 - Starting a skill while another runs raises RuntimeError (the protocol's rule) and is
@@ -139,7 +140,9 @@ class SymbolicWorld:
                 entry[1] -= 1
                 return self._finish(handle, Status.FAILURE, "scripted failure")
         self.state = skill.action.apply(self.state)
-        return self._finish(handle, Status.SUCCESS, "")
+        status = self._finish(handle, Status.SUCCESS, "")
+        self._fire_due(on_reach_only=True)  # discovered on arrival
+        return status
 
     def cancel(self, handle: int) -> None:
         skill = self._skills.get(handle)
@@ -159,9 +162,12 @@ class SymbolicWorld:
     def step(self) -> None:
         """Advance the clock one tick and fire the events that are due."""
         self.clock += 1
+        self._fire_due(on_reach_only=False)
+
+    def _fire_due(self, *, on_reach_only: bool) -> None:
         remaining = []
         for ev in self._events:
-            if self._due(ev):
+            if (not on_reach_only or ev.at_tick is None) and self._due(ev):
                 self._fire(ev)
             else:
                 remaining.append(ev)
