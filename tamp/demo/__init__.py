@@ -1,7 +1,16 @@
 """Demonstration layer (SMP-MRO §IV-A): MR frames, goals G and ordering constraints C."""
 
+from tamp.demo.build import cyclic_swap, make_demonstration
 from tamp.demo.frames import UNITY_TO_ROS, MRFrame
 from tamp.demo.loader import load_demonstration
 from tamp.demo.model import Demonstration, Goal
 
-__all__ = ["UNITY_TO_ROS", "Demonstration", "Goal", "MRFrame", "load_demonstration"]
+__all__ = [
+    "UNITY_TO_ROS",
+    "Demonstration",
+    "Goal",
+    "MRFrame",
+    "cyclic_swap",
+    "load_demonstration",
+    "make_demonstration",
+]

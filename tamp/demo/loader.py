@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from tamp.demo.constraints import derive_constraints
+from tamp.demo.build import make_demonstration
 from tamp.demo.frames import IDENTITY, UNITY_TO_ROS, MRFrame, check_rotation
-from tamp.demo.model import Demonstration, Goal
+from tamp.demo.model import Demonstration
 from tamp.errors import InputError
 from tamp.fileio import Fields, check_vector, load_yaml
 from tamp.world.geometry import Area, Point, Pose, Quaternion
@@ -141,19 +141,15 @@ def load_demonstration(path: str | Path) -> Demonstration:
             raise InputError("expected [Gi, Gj]", file=file, field=f"constraints[{i}]")
         explicit.append((pair[0], pair[1]))
 
-    constraints, reasons = derive_constraints(objects, labels, steps, radius, explicit, file)
-    goals = [
-        Goal(f"G{k}", obj, to, Area(f"L{k}", to, radius), k) for k, (obj, to) in enumerate(steps)
-    ]
-    return Demonstration(
-        objects=objects,
-        goals=goals,
-        constraints=constraints,
+    return make_demonstration(
+        objects,
+        steps,
+        radius,
         free_areas=free,
-        robot_start=start,
-        area_radius=radius,
+        start=start,
+        explicit=explicit,
         object_height=height,
         domain_file=domain_file,
         source=file,
-        constraint_reasons=reasons,
+        object_labels=labels,
     )
