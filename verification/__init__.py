@@ -1,0 +1,24 @@
+"""Verification of plans against LTL, on Spot: traces, RG orders and graphs, BTs, LOTS tables.
+
+The design card: "a verification module checks plans against the LTL automata before they
+are simulated". `gate` is what the planner front ends call; `check_trace` checks one finite
+(LTLf) or lasso trace; `VerificationError` (exit 1) carries the counterexample.
+Depends on the data types of the planning layers, never on `tamp.sim` or Drake.
+"""
+
+from verification.gate import gate
+from verification.traces import check_trace
+from verification.verdict import Counterexample, Report, Verdict, VerificationError
+from verification.words import Word, load_trace, parse_word
+
+__all__ = [
+    "Counterexample",
+    "Report",
+    "Verdict",
+    "VerificationError",
+    "Word",
+    "check_trace",
+    "gate",
+    "load_trace",
+    "parse_word",
+]

@@ -97,6 +97,135 @@ def _add_plan(sub) -> None:
     p.set_defaults(func=_cmd_plan)
 
 
+# -- bt -------------------------------------------------------------------------------------
+
+
+def _event_args(text: str, flag: str, state, *, need_tick: bool):
+    """``OBJ@AREA`` or ``OBJ@x,y``, optionally ``:TICK`` -> (obj, Point, tick)."""
+    from tamp.world.geometry import Point
+
+    obj, sep, rest = text.partition("@")
+    where, _, tick = rest.partition(":")
+    if not sep or not obj or not where:
+        raise InputError(f"expected OBJ@AREA or OBJ@x,y[:TICK], got {text!r}", field=flag)
+    if where in state.areas:
+        p = state.areas[where].pos
+        pos = Point(p.x, p.y, 0.0)
+    else:
+        try:
+            xy = [float(v) for v in where.split(",")]
+        except ValueError:
+            xy = []
+        if len(xy) != 2:
+            raise InputError(
+                f"{where!r} is neither an area ({', '.join(sorted(state.areas))}) nor x,y",
+                field=flag,
+            )
+        pos = Point(xy[0], xy[1], 0.0)
+    at = None
+    if tick:
+        try:
+            at = int(tick)
+        except ValueError:
+            raise InputError(f"tick {tick!r} is not an integer", field=flag) from None
+    if need_tick and at is None:
+        raise InputError(f"{flag} needs a tick: OBJ@AREA:TICK", field=flag)
+    return obj, pos, at
+
+
+def _cmd_bt(args) -> int:
+    from tamp.demo import load_demonstration
+    from verification.bt import (
+        DEFAULT_PROPERTIES,
+        appear_event,
+        check_executor,
+        executor_for,
+        move_event,
+    )
+    from verification.rg import check_order_ids
+
+    demo = load_demonstration(args.demo)
+    order = None
+    if args.order is not None:
+        order = [g.strip() for g in args.order.split(",") if g.strip()]
+        check_order_ids(demo.goal_ids, order)
+    state = demo.initial_world()
+    events = [
+        appear_event(*_event_args(t, "--appear", state, need_tick=False)) for t in args.appear
+    ]
+    events += [move_event(*_event_args(t, "--move", state, need_tick=True)) for t in args.move]
+    may_fail = None
+    if args.may_fail is not None:
+        may_fail = [a.strip() for a in args.may_fail.split(",") if a.strip()]
+        known = set(demo.domain().templates)
+        for a in may_fail:
+            if a not in known:
+                raise InputError(
+                    f"unknown action {a!r} (known: {', '.join(sorted(known))})", field="--may-fail"
+                )
+    report = check_executor(
+        executor_for(demo, order),
+        state,
+        args.property or list(DEFAULT_PROPERTIES),
+        events=events,
+        may_fail=may_fail,
+        max_failures=args.max_failures,
+        max_states=args.max_states,
+    )
+    return _emit(report, args)
+
+
+def _add_bt(sub) -> None:
+    p = sub.add_parser("bt", help="explore every execution of the grown BT and check properties")
+    p.add_argument("demo", metavar="DEMO.yaml", help="demonstration file")
+    p.add_argument(
+        "--property",
+        action="append",
+        default=[],
+        metavar="F",
+        help="LTL property (repeatable); default: G !placed_in_occupied, "
+        "G (holding_count <= 1), F goal",
+    )
+    p.add_argument("--order", help="goal order for C_goal (default: tamp plan's)")
+    p.add_argument(
+        "--appear",
+        action="append",
+        default=[],
+        metavar="OBJ@AREA[:TICK]",
+        help="an object appears there (when the robot reaches it, or at TICK)",
+    )
+    p.add_argument(
+        "--move",
+        action="append",
+        default=[],
+        metavar="OBJ@AREA:TICK",
+        help="a person moves an object there at TICK",
+    )
+    p.add_argument(
+        "--max-failures", type=int, default=1, help="skill failures per execution (default 1)"
+    )
+    p.add_argument("--may-fail", metavar="A,B", help="actions that may fail (default: all)")
+    p.add_argument("--max-states", type=int, default=50_000, help="exploration bound")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=_cmd_bt)
+
+
+# -- lots -------------------------------------------------------------------------------------
+
+
+def _cmd_lots(args) -> int:
+    from verification.lots import check_task_file
+
+    return _emit(check_task_file(args.task), args)
+
+
+def _add_lots(sub) -> None:
+    p = sub.add_parser("lots", help="check a LOTS planned run and every entry of its table T")
+    p.add_argument("task", metavar="TASK.yaml", help="LTL task file")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=_cmd_lots)
+
+
 def make_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tamp-verify",
@@ -105,6 +234,8 @@ def make_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     _add_trace(sub)
     _add_plan(sub)
+    _add_bt(sub)
+    _add_lots(sub)
     return parser
 
 

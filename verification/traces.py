@@ -123,6 +123,11 @@ def explain(f: spot.formula, word: Word, *, finite: bool) -> Counterexample:
     Assumes ``word`` violates ``f`` (the caller checked).
     """
     aut = ltl.finite_automaton(f) if finite else ltl.buchi(f)
+    return explain_on(aut, word, finite=finite)
+
+
+def explain_on(aut: spot.twa_graph, word: Word, *, finite: bool) -> Counterexample:
+    """`explain` on a given automaton (e.g. a task automaton started in some state)."""
     st = ltl.Stepper(aut, finite=finite)
     cur = st.initial()
     if not cur:
