@@ -1,0 +1,134 @@
+"""`tamp lots`: JSON fields, DOT output, exit codes 0 / 1 / 2."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from tamp.cli import main
+
+from .conftest import scenario
+
+
+def run_json(capsys, *argv):
+    code = main(["lots", *argv, "--json"])
+    out = capsys.readouterr().out
+    return code, json.loads(out) if out.strip() else None
+
+
+def test_json_has_the_promised_fields(capsys, tmp_path):
+    dot = tmp_path / "aut.dot"
+    code, data = run_json(
+        capsys,
+        str(scenario("tower.yaml")),
+        "--interference",
+        str(scenario("tower_interference.yaml")),
+        "--dot",
+        str(dot),
+    )
+    assert code == 0
+    assert data["automaton"]["states"] == 4 and len(data["automaton"]["edges"]) == 10
+    assert data["w_b_states"] == 8
+    assert [a["kind"] for a in data["actions"]] == [
+        "move",
+        "discard_held",
+        "return_held",
+        "move",
+        "move",
+        "move",
+    ]
+    assert data["replans"] == 0
+    assert data["final"]["B"] == {"body": 1, "bottom": 1, "peak": 1}
+    assert data["final"]["A"] == {"toy_car": 1}
+    assert data["satisfied"] is True
+    assert data["plan"]["prefix"][:3] == [["p1"], ["p2"], ["p3"]]
+    assert dot.read_text().startswith("digraph automaton")
+
+
+def test_packaged_names_resolve(capsys):
+    code, data = run_json(capsys, "example1.yaml", "--interference", "example1_interference.yaml")
+    assert code == 0 and data["replans"] == 1 and data["w_b_states"] == 12
+
+
+def test_human_readable_output(capsys):
+    assert main(["lots", "model_building.yaml", "--interference", "model_building_fig8.yaml"]) == 0
+    out = capsys.readouterr().out
+    assert "drop held scissors into the waste basket" in out
+    assert "W^B states (Lemma 1): 8" in out
+
+
+def write(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(text)
+    return str(p)
+
+
+def test_infeasible_exits_1_with_the_reason(capsys, tmp_path):
+    ev = write(
+        tmp_path,
+        "ev.yaml",
+        "version: 1\nevents:\n  - {after: 0, kind: remove, class: hammer, side: A}\n",
+    )
+    code = main(["lots", "model_building.yaml", "--interference", ev, "--json"])
+    captured = capsys.readouterr()
+    assert code == 1
+    assert json.loads(captured.out)["satisfied"] is False
+    assert "no hammer left" in captured.err
+
+
+TASK = """version: 1
+formula: "F(p1 & F p2)"
+propositions:
+  p1: {class: cup}
+  p2: {class: plate}
+initial:
+  A: {cup: 1, plate: 1}
+"""
+
+
+@pytest.mark.parametrize(
+    "task, where",
+    [
+        (TASK.replace("F p2", "F p3"), "formula"),
+        (TASK.replace('"F(p1 & F p2)"', '"F(p1 & "'), "formula"),
+        (TASK.replace("cup: 1,", "cup: -1,"), "initial.A.cup"),
+        (TASK.replace("cup: 1,", "cup: one,"), "initial.A.cup"),
+        (TASK + "colour: red\n", "colour"),
+        (TASK.replace("version: 1", "version: 2"), "version"),
+        (TASK.replace("  p2: {class: plate}\n", "  p2: {klass: plate}\n"), "propositions.p2"),
+        (TASK.replace('formula: "F(p1 & F p2)"\n', ""), "formula"),
+    ],
+)
+def test_bad_task_exits_2_naming_the_field(capsys, tmp_path, task, where):
+    code = main(["lots", write(tmp_path, "task.yaml", task)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "task.yaml" in err and where in err
+
+
+@pytest.mark.parametrize(
+    "events, where",
+    [
+        ("  - {after: -1, kind: add, class: cup, side: A}\n", "events[0].after"),
+        ("  - {after: 0, kind: teleport, class: cup, side: A}\n", "events[0].kind"),
+        ("  - {after: 0, kind: move, class: cup, from: A, to: A}\n", "events[0].to"),
+        ("  - {after: 0, kind: move, class: spoon, from: A, to: B}\n", "events[0].class"),
+        ("  - {after: 0, kind: add, class: cup, side: C}\n", "events[0].side"),
+        ("  - {after: 0, kind: remove, class: cup, side: B}\n", "events[0]"),  # none there
+        ("  - {after: 0, kind: add, class: cup, side: A, when: now}\n", "events[0].when"),
+    ],
+)
+def test_bad_interference_exits_2(capsys, tmp_path, events, where):
+    task = write(tmp_path, "task.yaml", TASK)
+    ev = write(tmp_path, "ev.yaml", "version: 1\nevents:\n" + events)
+    code = main(["lots", task, "--interference", ev])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "ev.yaml" in err and where in err
+
+
+def test_formula_without_executable_run_is_infeasible(capsys, tmp_path):
+    task = write(tmp_path, "task.yaml", TASK.replace("plate: 1", "plate: 0"))
+    assert main(["lots", task]) == 1
+    assert "no accepting run" in capsys.readouterr().err

@@ -1,0 +1,107 @@
+"""The paper's cases (Example 1, Fig. 8, Fig. 9, Fig. 10): action sequences and final counts."""
+
+from __future__ import annotations
+
+import pytest
+
+from tamp.lots.run import run_task
+from tamp.lots.task import Event
+
+from .conftest import events
+
+
+def keys(report):
+    return [a.key() for a in report.actions]
+
+
+@pytest.mark.parametrize("mode", ["bfs", "random"])
+def test_example1_without_interference(example1, mode):
+    r = run_task(example1, mode=mode, seed=11)
+    assert r.satisfied
+    assert keys(r) == [("move", "p4"), ("move", "p3"), ("move", "p2"), ("move", "p1")]
+    assert r.world.counts() == {
+        "A": {},
+        "B": {"hammer": 1, "screw": 2, "screwdriver": 1},
+        "waste": {},
+    }
+    assert r.replans == 0
+
+
+def test_example1_unforeseen_state_runs_the_tree_update(example1):
+    r = run_task(example1, events("example1_interference.yaml", example1))
+    assert r.satisfied
+    assert r.replans == 1
+    # the screwdriver came too early for the automaton's order: it goes back to W^A and is
+    # delivered again when the run reaches p3
+    assert keys(r) == [
+        ("move", "p4"),
+        ("remove", "screwdriver"),
+        ("move", "p3"),
+        ("move", "p2"),
+        ("move", "p1"),
+    ]
+    assert r.actions[1].dest == "A"
+    assert r.world.counts()["B"] == {"hammer": 1, "screw": 2, "screwdriver": 1}
+    assert len(r.tables) == 2  # initial table, rebuilt once
+
+
+def test_model_building_fig8(model_building):
+    """Scissors moved to W^B unseen: fetch the other pair, see W^B, discard, bring the hammer."""
+    r = run_task(model_building, events("model_building_fig8.yaml", model_building))
+    assert r.satisfied
+    assert keys(r) == [("move", "p1"), ("discard_held", "scissors"), ("move", "p3")]
+    assert r.world.counts() == {
+        "A": {},
+        "B": {"hammer": 1, "saw": 1, "scissors": 1},
+        "waste": {"scissors": 1},
+    }
+
+
+def test_model_building_fig9(model_building):
+    """Scissors sent back to W^A: brought again; a new tool (dis_2) is ignored."""
+    r = run_task(model_building, events("model_building_fig9.yaml", model_building))
+    assert r.satisfied
+    assert keys(r) == [("move", "p1"), ("move", "p2"), ("move", "p2"), ("move", "p3")]
+    counts = r.world.counts()
+    assert counts["B"] == {"hammer": 1, "saw": 1, "scissors": 1}
+    assert counts["A"] == {"scissors": 1, "wrench": 1}
+    assert [e.disturbance for _, _, e in r.world.log] == ["dis_1", "dis_2"]
+
+
+def test_tower_fig10(tower):
+    r = run_task(tower, events("tower_interference.yaml", tower))
+    assert r.satisfied
+    assert keys(r) == [
+        ("move", "p1"),  # Fig. 10.1-10.3
+        ("discard_held", "body"),  # 10.5-10.6: body already built by the person
+        ("return_held", "peak"),  # 10.7-10.8: body taken away, peak put back
+        ("move", "p2"),  # rebuild the body
+        ("move", "p2"),  # 10.9-10.13: body moved back to W^A, rebuilt again
+        ("move", "p3"),  # 10.14-10.16
+    ]
+    assert r.world.counts() == {
+        "A": {"toy_car": 1},
+        "B": {"body": 1, "bottom": 1, "peak": 1},
+        "waste": {"body": 1},
+    }
+    # the W^B deliveries, in order, form an accepted word of F(p1 & F(p2 & F p3))
+    c = r.controller
+    word = [frozenset({a.prop}) for a in r.actions if a.kind == "move"]
+    assert c.aut.accepts_lasso(word, [frozenset()])
+
+
+def test_every_hammer_taken_away_is_infeasible(model_building):
+    gone = Event(after=1, kind="remove", cls="hammer", side="A")
+    r = run_task(model_building, [gone], max_waits=2)
+    assert not r.satisfied
+    assert "no hammer left in W^A for p3" in r.reason
+    assert [a.kind for a in r.actions][-2:] == ["wait", "wait"]
+    assert r.world.counts()["B"] == {"saw": 1, "scissors": 1}
+
+
+def test_person_fixes_the_task_while_the_robot_waits(model_building):
+    gone = Event(after=1, kind="remove", cls="hammer", side="A")
+    back = Event(after=3, kind="add", cls="hammer", side="A")  # after the first wait
+    r = run_task(model_building, [gone, back], max_waits=3)
+    assert r.satisfied
+    assert keys(r) == [("move", "p1"), ("move", "p2"), ("wait", None), ("move", "p3")]
