@@ -67,11 +67,14 @@ class OrderProblem:
                     self.bound[s, g] = INF
         self.per_metre = model.per_metre
         self.per_goal = model.per_goal
+        # plain-float copies for the scalar hot path of `step_cost`
+        self._approach = approach.tolist()
+        self._carry = self.carry.tolist()
 
     def step_cost(self, last: int, g: int) -> float:
         """Cost of achieving goal ``g`` with the robot at the drop of ``last`` (−1: start)."""
         row = len(self.drop) if last < 0 else last
-        return self.per_metre * (self.approach[row, g] + self.carry[g]) + self.per_goal
+        return self.per_metre * (self._approach[row][g] + self._carry[g]) + self.per_goal
 
     def heuristic(self, mask: int, last: int) -> float:
         k = len(self.drop)
