@@ -25,7 +25,7 @@ import time
 from tamp.demo import cyclic_swap
 from tamp.rg.costs import CostModel
 from tamp.rg.search import OrderProblem, astar
-from tamp.world import Point, default_domain
+from tamp.world import Point
 
 
 def mm(a: Point, b: Point) -> float:
@@ -157,7 +157,10 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
 
     rows = []
-    header = f"{'n':>3} {'goals':>5} {'ours cost':>11} {'ours s':>8} {'FD cost':>11} {'FD s':>9} {'speed-up':>9}"
+    header = (
+        f"{'n':>3} {'goals':>5} {'ours cost':>11} {'ours s':>8} {'FD cost':>11} "
+        f"{'FD s':>9} {'speed-up':>9}"
+    )
     print(f"layout={args.layout}; costs in mm (rounded up)")
     print(header)
     print("-" * len(header))
