@@ -178,6 +178,15 @@ class Planner:
         self.dead: set[Pair] = set()
         self._cycles: dict[int, list[Letter]] = {}
         self.expanded = 0  # pairs expanded by plan_from (for the benchmark)
+        # per automaton state: (cost, proposition or None, class index or -1, successor)
+        self._trans: list[list[tuple[float, str | None, int, int]]] = []
+        for q in range(aut.num_states):
+            out = [(0.0, None, -1, nq) for nq in aut.successors(q, EMPTY)]
+            for p in (pp.name for pp in task.propositions):
+                for nq in aut.successors(q, frozenset({p})):
+                    out.append((self.cost_of[p], p, lots.prop_class[p], nq))
+            self._trans.append(out)
+        self._empty = [aut.successors(q, EMPTY) for q in range(aut.num_states)]
 
     def heuristic(self, b: Counts) -> float:
         """Admissible: every missing object needs one delivery of at least its cheapest cost."""
@@ -210,46 +219,87 @@ class Planner:
     def is_goal(self, q: int, b: Counts) -> bool:
         return q in self.aut.live_accepting and b == self.lots.final
 
+    def successor_pairs(self, q: int, b: Counts) -> Iterator[Pair]:
+        """The pairs one step away (what the tree update adds, Alg. 3 lines 3-6)."""
+        final = self.lots.final
+        for _, p, ci, nq in self._trans[q]:
+            if p is None:
+                yield (nq, b)
+            elif b[ci] < final[ci]:
+                yield (nq, b[:ci] + (b[ci] + 1,) + b[ci + 1 :])
+        for ci, x in enumerate(b):
+            if x:
+                nb = b[:ci] + (x - 1,) + b[ci + 1 :]
+                for nq in self._empty[q]:
+                    yield (nq, nb)
+
     def plan_from(self, q: int, b: Counts) -> Plan | None:
         """Cheapest run from ``(q, b)`` to an accepting ``q_F`` with ``b = s^B_final``, or None.
 
-        A* on pairs with key (cost + h, cost, steps); an exhausted search marks every pair it
-        closed as dead (none of them can complete the task), so later calls prune them.
+        A* on pairs (key: cost + h, then the deeper node, then fewer steps); an exhausted
+        search marks every pair it closed as dead (none of them can complete the task), so
+        later calls prune them.
         """
         if not self.lots.in_box(b) or (q, b) in self.dead:
             return None
+        final, live, dead = self.lots.final, self.aut.live_accepting, self.dead
+        trans, empty, min_cost, rc = self._trans, self._empty, self._min_cost, self.remove_cost
         start = (q, b)
         tie = itertools.count()
         g: dict[Pair, tuple[float, int]] = {start: (0.0, 0)}
-        parent: dict[Pair, Step | None] = {start: None}
-        heap = [(self.heuristic(b), 0.0, 0, next(tie), start)]
+        parent: dict[Pair, tuple[Pair, str | None, int]] = {}
+        heap = [(self.heuristic(b), 0.0, 0, next(tie), start, self.heuristic(b))]
         closed: set[Pair] = set()
+        push = heapq.heappush
         while heap:
-            _, cost, nsteps, _, node = heapq.heappop(heap)
+            _, negc, nsteps, _, node, h = heapq.heappop(heap)
+            cost = -negc
             if node in closed or g[node] != (cost, nsteps):
                 continue
             closed.add(node)
             self.expanded += 1
-            if self.is_goal(*node):
-                steps: list[Step] = []
-                while parent[node] is not None:
-                    s = parent[node]
-                    steps.append(s)
-                    node = (s.q, s.b)
-                steps.reverse()
-                end_q = steps[-1].q_next if steps else q
-                return Plan(start, steps, self.cycle_from(end_q), cost)
-            for s in self.moves(*node):
-                nxt = (s.q_next, s.b_next)
-                if nxt in self.dead or nxt in closed:
+            nq_, nb_ = node
+            if nq_ in live and nb_ == final:
+                return self._plan(start, node, parent, cost)
+            ns = nsteps + 1
+            succ = []
+            for c, p, ci, nq in trans[nq_]:
+                if p is None:
+                    succ.append(((nq, nb_), c, h, None, -1))
+                elif nb_[ci] < final[ci]:
+                    nb = nb_[:ci] + (nb_[ci] + 1,) + nb_[ci + 1 :]
+                    succ.append(((nq, nb), c, h - min_cost[ci], p, ci))
+            for ci, x in enumerate(nb_):
+                if x:
+                    nb = nb_[:ci] + (x - 1,) + nb_[ci + 1 :]
+                    for nq in empty[nq_]:
+                        succ.append(((nq, nb), rc, h + min_cost[ci], None, ci))
+            for nxt, c, nh, p, ci in succ:
+                if nxt in dead or nxt in closed:
                     continue
-                nk = (cost + self.step_cost(s), nsteps + 1)
-                if nxt not in g or nk < g[nxt]:
+                nk = (cost + c, ns)
+                old = g.get(nxt)
+                if old is None or nk < old:
                     g[nxt] = nk
-                    parent[nxt] = s
-                    heapq.heappush(heap, (nk[0] + self.heuristic(s.b_next), *nk, next(tie), nxt))
-        self.dead |= closed
+                    parent[nxt] = (node, p, ci)
+                    push(heap, (nk[0] + nh, -nk[0], ns, next(tie), nxt, nh))
+        dead |= closed
         return None
+
+    def _plan(self, start: Pair, node: Pair, parent: dict, cost: float) -> Plan:
+        steps: list[Step] = []
+        while node != start:
+            prev, p, ci = parent[node]
+            if p is not None:
+                steps.append(Step("move", prev[0], prev[1], node[0], node[1], prop=p, cls=ci))
+            elif ci >= 0:
+                steps.append(Step("remove", prev[0], prev[1], node[0], node[1], cls=ci))
+            else:
+                steps.append(Step("idle", prev[0], prev[1], node[0], node[1]))
+            node = prev
+        steps.reverse()
+        end_q = steps[-1].q_next if steps else start[0]
+        return Plan(start, steps, self.cycle_from(end_q), cost)
 
     def cycle_from(self, qf: int) -> list[Letter]:
         """Cheapest non-empty accepting cycle ``q_F → q_F`` (letters only; the ω-continuation)."""
@@ -478,8 +528,7 @@ class Tree:
             node = self._pop()
             self.expansions += 1
             hit = False
-            for s in self.planner.moves(*node):
-                child = (s.q_next, s.b_next)
+            for child in self.planner.successor_pairs(*node):
                 if self.add(child, node) and child[1] == b:
                     hit = True
             if hit:

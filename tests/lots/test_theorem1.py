@@ -1,0 +1,128 @@
+"""Theorem 1 as a property: interference that respects Assumption 1 never stops the robot.
+
+A person acts at random moments (between robot actions or while the robot carries an
+object, unseen): dis_1 moves of any object between W^A and W^B, dis_2 additions (task
+objects or new tools, on either side) and dis_2 removals of spare objects only, so enough
+objects always remain (Assumption 1). The robot must finish the round — true W^B counts equal
+``s^B_final`` — within the controller's bound on actions. Taking every object of a needed
+class away breaks Assumption 1 and must end in the infeasible verdict, never in a loop.
+"""
+
+from __future__ import annotations
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from tamp.lots.run import run_task
+from tamp.lots.task import Event, Proposition, Task
+from tamp.scenarios import path
+from tamp.lots.task import load_task
+
+TASKS = {
+    "example1": load_task(path("lots/example1.yaml")),
+    "tower": load_task(path("lots/tower.yaml")),
+    "model_building": load_task(path("lots/model_building.yaml")),
+    "either_order": Task(
+        "F p1 & F p2 & F p3",
+        tuple(Proposition(f"p{i}", c) for i, c in enumerate(("nut", "bolt", "gear"), 1)),
+        {"nut": 1, "bolt": 1, "gear": 2},
+    ),
+}
+
+OPS = ("move_ab", "move_ba", "add_a", "add_b", "remove_spare")
+abstract_event = st.tuples(
+    st.integers(0, 7),  # after this many robot actions
+    st.sampled_from(("idle", "holding")),
+    st.sampled_from(OPS),
+    st.integers(0, 5),  # which class
+)
+
+
+def make_policy(task, final, abstract):
+    classes = list(task.classes) + ["wrench"]
+
+    def concrete(op, k, world):
+        cls = classes[k % len(classes)]
+        if op == "move_ab" and world.a[cls] > 0:
+            return Event(after=0, kind="move", cls=cls, src="A", dst="B")
+        if op == "move_ba" and world.b[cls] > 0:
+            return Event(after=0, kind="move", cls=cls, src="B", dst="A")
+        if op == "add_a":
+            return Event(after=0, kind="add", cls=cls, side="A")
+        if op == "add_b" and cls in task.classes:
+            return Event(after=0, kind="add", cls=cls, side="B")
+        if op == "remove_spare" and world.a[cls] > 0:
+            total = world.a[cls] + world.b[cls] + (world.held == cls)
+            if total - 1 >= final.get(cls, 0):
+                return Event(after=0, kind="remove", cls=cls, side="A")
+        return None
+
+    pending = list(abstract)
+
+    def policy(n, phase, world):
+        out = []
+        for item in list(pending):
+            after, ph, op, k = item
+            if after == n and ph == phase:
+                pending.remove(item)
+                e = concrete(op, k, world)
+                if e is not None:
+                    world.apply(e, phase)
+                    out.append(e)
+        return []  # already applied (each sees the previous one's effect)
+
+    return policy
+
+
+def final_counts(name):
+    from tamp.lots.controller import LotsController
+
+    c = LotsController(TASKS[name])
+    return c.lots.named(c.lots.final)
+
+
+FINALS = {name: final_counts(name) for name in TASKS}
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    name=st.sampled_from(sorted(TASKS)),
+    abstract=st.lists(abstract_event, max_size=5),
+    mode=st.sampled_from(("bfs", "random")),
+    seed=st.integers(0, 3),
+)
+def test_interference_respecting_assumption1_ends_satisfied(name, abstract, mode, seed):
+    task, final = TASKS[name], FINALS[name]
+    policy = make_policy(task, final, abstract)
+    r = run_task(task, mode=mode, seed=seed, policy=policy)
+    assert r.satisfied, (r.reason, [a.text() for a in r.actions], r.world.log)
+    c = r.controller
+    assert c.lots.vector(r.world.counts()["B"]) == c.lots.final
+    assert len(r.actions) <= c.default_limit(len(abstract) + 4)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    name=st.sampled_from(sorted(TASKS)),
+    abstract=st.lists(abstract_event, max_size=3),
+    when=st.integers(0, 3),
+    k=st.integers(0, 5),
+)
+def test_taking_a_needed_class_away_ends_infeasible(name, abstract, when, k):
+    task, final = TASKS[name], FINALS[name]
+    cls = task.classes[k % len(task.classes)]
+    inner = make_policy(task, final, abstract)
+
+    def policy(n, phase, world):
+        inner(n, phase, world)
+        if n == when and phase == "idle":
+            for side, counts in (("A", world.a), ("B", world.b)):
+                if counts[cls]:
+                    world.apply(
+                        Event(after=n, kind="remove", cls=cls, side=side, count=counts[cls]), phase
+                    )
+        return []
+
+    r = run_task(task, policy=policy, max_waits=2)
+    assert not r.satisfied
+    assert "waited 2 times" in r.reason, r.reason
