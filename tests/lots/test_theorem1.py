@@ -14,9 +14,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tamp.lots.run import run_task
-from tamp.lots.task import Event, Proposition, Task
+from tamp.lots.task import Event, Proposition, Task, load_task
 from tamp.scenarios import path
-from tamp.lots.task import load_task
 
 TASKS = {
     "example1": load_task(path("lots/example1.yaml")),
