@@ -507,7 +507,7 @@ def check_executor(
     verdicts: list[Verdict] = []
     for f in formulas:
         verdicts.append(model_check(ex.system, f, subject=name))
-    return Report(verdicts)
+    return Report(verdicts, explored=ex.system.num_states)
 
 
 def executor_for(demo, order: Sequence[str] | None = None, *, domain=None):

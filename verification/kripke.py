@@ -105,6 +105,9 @@ def model_check(
         if run_states is None:
             prefix = [k.state_number(st.s) for st in run.prefix]
             cycle = [k.state_number(st.s) for st in run.cycle]
+            while prefix and prefix[-1] == cycle[-1]:  # shortest equivalent lasso
+                prefix.pop()
+                cycle = cycle[-1:] + cycle[:-1]
             run_states = (prefix, cycle)
     states = ts.num_states
     if not violated:

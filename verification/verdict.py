@@ -106,6 +106,8 @@ class Report:
     """The verdicts of one plan; holds when all hold."""
 
     verdicts: list[Verdict]
+    #: states of the one system all verdicts share (BT exploration); None: sum of verdicts
+    explored: int | None = None
 
     @property
     def holds(self) -> bool:
@@ -113,6 +115,8 @@ class Report:
 
     @property
     def states_explored(self) -> int:
+        if self.explored is not None:
+            return self.explored
         return sum(v.states_explored for v in self.verdicts)
 
     @property

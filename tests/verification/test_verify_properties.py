@@ -14,8 +14,8 @@ import os
 import spot
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from ltlf_oracle import lasso_violates, ltlf_holds, prefix_is_bad
 
+from tests.verification.ltlf_oracle import lasso_violates, ltlf_holds, prefix_is_bad
 from verification.traces import check_trace
 from verification.words import Word
 

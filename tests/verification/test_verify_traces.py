@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 import spot
-from ltlf_oracle import lasso_violates, ltlf_holds, prefix_is_bad
 
 from tamp.errors import InputError
+from tests.verification.ltlf_oracle import lasso_violates, ltlf_holds, prefix_is_bad
 from verification import ltl
 from verification.traces import check_trace
 from verification.words import Word, load_trace, parse_word

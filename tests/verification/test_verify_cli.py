@@ -1,0 +1,115 @@
+"""`tamp-verify`: exit codes 0 holds / 1 violated / 2 bad input, text and JSON output."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from tamp.scenarios import path
+from verification.cli import main
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    rc = main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def test_trace_word_holds_and_violated(capsys) -> None:
+    rc, out, _ = run(capsys, "trace", "--formula", "GF p1 & GF p2", "--word", "p1; cycle{p1; p2}")
+    assert rc == 0 and "holds" in out
+    rc, out, _ = run(capsys, "trace", "--formula", "GF p1 & GF p2", "--word", "p1; cycle{p1}")
+    assert rc == 1 and "counterexample" in out and "accepted:" in out
+
+
+def test_trace_json_document(capsys) -> None:
+    rc, out, _ = run(
+        capsys, "trace", "--formula", "G !bad", "--word", "a; bad; a", "--finite", "--json"
+    )
+    assert rc == 1
+    doc = json.loads(out)
+    assert doc["holds"] is False
+    assert isinstance(doc["states_explored"], int) and doc["states_explored"] > 0
+    ce = doc["counterexample"]
+    assert ce["position"] == 1
+    assert ce["word"]["trace"] == [["a"], ["bad"], ["a"]]
+    assert ["bad"] not in ce["accepting_word"]["trace"]
+    rc, out, _ = run(capsys, "trace", "--formula", "G !bad", "--word", "a; a", "--finite", "--json")
+    doc = json.loads(out)
+    assert rc == 0 and doc["holds"] is True and doc["counterexample"] is None
+    assert doc["checks"][0]["semantics"] == "finite"
+
+
+def test_trace_file(capsys, tmp_path) -> None:
+    f = tmp_path / "t.yaml"
+    f.write_text("version: 1\ntrace: [[p1], [p2], [p3]]\n")
+    rc, _, _ = run(
+        capsys, "trace", "--formula", "F(p1 & F(p2 & F p3))", "--trace", str(f), "--finite"
+    )
+    assert rc == 0
+    f.write_text("version: 1\ntrace: [[p2], [p1], [p3]]\ncycle: [[]]\n")
+    rc, _, _ = run(capsys, "trace", "--formula", "F(p1 & F(p2 & F p3))", "--trace", str(f))
+    assert rc == 1
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["trace", "--formula", "G (a &", "--word", "a; cycle{a}"],  # formula does not parse
+        ["trace", "--formula", "G a", "--word", "a | b; cycle{a}"],  # letter does not parse
+        ["trace", "--formula", "G a", "--word", "a"],  # finite word, infinite semantics
+        ["trace", "--formula", "G a", "--word", "cycle{a}", "--finite"],
+        ["trace", "--formula", "G a"],  # no trace at all
+        ["plan", str(path("case2.yaml")), "--order", "G0,G9"],
+        ["bt", str(path("case2.yaml")), "--property", "G !nonsense"],
+        ["bt", str(path("case3.yaml")), "--appear", "Oa@nowhere"],
+        ["lots", str(path("lots/tower_interference.yaml"))],  # an events file
+    ],
+)
+def test_bad_input_exits_2(capsys, argv) -> None:
+    rc, out, err = run(capsys, *argv)
+    assert rc == 2
+    assert "Traceback" not in err
+
+
+def test_malformed_trace_file_exits_2(capsys, tmp_path) -> None:
+    f = tmp_path / "bad.yaml"
+    f.write_text("version: 1\ntrace: [[p1], 7]\n")
+    rc, _, err = run(capsys, "trace", "--formula", "G p1", "--trace", str(f), "--finite")
+    assert rc == 2 and "trace[1]" in err
+    f.write_text("trace: [")
+    rc, _, err = run(capsys, "trace", "--formula", "G p1", "--trace", str(f), "--finite")
+    assert rc == 2 and "YAML" in err
+
+
+def test_plan_default_and_corrupted_order(capsys) -> None:
+    demo = str(path("case2.yaml"))
+    rc, out, _ = run(capsys, "plan", demo, "--json")
+    doc = json.loads(out)
+    assert rc == 0 and doc["holds"] and len(doc["checks"]) == 2
+    rc, out, _ = run(capsys, "plan", demo, "--order", "G2,G3,G0,G1", "--json")
+    doc = json.loads(out)
+    assert rc == 1 and doc["counterexample"]["position"] == 1
+
+
+def test_bt_and_lots_commands(capsys) -> None:
+    rc, out, _ = run(
+        capsys,
+        "bt",
+        str(path("case3.yaml")),
+        "--appear",
+        "Oa@L1",
+        "--max-failures",
+        "0",
+        "--property",
+        'G !"IsGraspedObject(Oa)"',
+        "--json",
+    )
+    doc = json.loads(out)
+    assert rc == 1 and doc["states_explored"] > 10
+    assert any("Pick(Oa)" in s for s in doc["counterexample"]["steps"])
+    rc, out, _ = run(capsys, "bt", str(path("case1.yaml")), "--max-failures", "0")
+    assert rc == 0 and out.count("holds") == 3
+    rc, out, _ = run(capsys, "lots", str(path("lots/tower.yaml")), "--json")
+    assert rc == 0 and json.loads(out)["holds"]
