@@ -1,0 +1,83 @@
+"""The --execute helpers of `tamp plan`: argument parsing, JSON output, exit status."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import pytest
+
+from tamp import scenarios
+from tamp.bt.cli_args import add_execute_arguments, parse_failure, parse_obstacle, run_execute
+from tamp.demo import load_demonstration
+from tamp.errors import InputError
+from tamp.rg import plan
+from tamp.world import default_domain
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="tamp plan")
+    p.add_argument("demo")
+    p.add_argument("--json", action="store_true")
+    add_execute_arguments(p)
+    return p
+
+
+def _run(argv: list[str], capsys) -> tuple[int, str, str]:
+    args = _parser().parse_args(argv)
+    demo = load_demonstration(scenarios.resolve(args.demo))
+    code = run_execute(args, demo, plan(demo))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_execute_case3_json(tmp_path, capsys) -> None:
+    xml, dot = tmp_path / "bt.xml", tmp_path / "bt.dot"
+    code, out, _ = _run(
+        ["case3.yaml", "--execute", "--obstacle", "Oa@2.2,0.8,0.1", "--json",
+         "--bt-xml", str(xml), "--bt-dot", str(dot)],
+        capsys,
+    )  # fmt: skip
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["reached"] is True and doc["order"] == ["G0", "G1"]
+    assert {"action": "Place", "args": ["O1", "free2"]} in doc["executed"]
+    assert doc["executed"][-1] == {"action": "Place", "args": ["O1", "L1"]}
+    assert doc["conflicts"] == 1 and doc["recoveries"] == 1 and doc["expansions"] > 0
+    assert doc["final_world"]["objects"]["Oa"][:2] == [0.8, 1.7]
+    assert xml.read_text().startswith("<?xml") and "digraph" in dot.read_text()
+
+
+def test_execute_text_and_failure_exit_status(capsys) -> None:
+    code, out, err = _run(["case1.yaml", "--execute", "--fail", "Pick:O1:9"], capsys)
+    assert code == 1
+    assert "Pick(O1) failed" in out and "goal not reached" in err
+    code, out, _ = _run(["case1.yaml", "--execute"], capsys)
+    assert code == 0 and "SUCCESS" in out and "Place(O0, L0)" in out
+
+
+@pytest.mark.parametrize("text", ["Oa", "Oa@1,2,x", "Oa@1", "@1,2,3", "Oa@1,2,3@-1", "O0@1,2,3"])
+def test_bad_obstacle_is_input_error(text: str) -> None:
+    with pytest.raises(InputError, match="--obstacle"):
+        parse_obstacle(text, known={"O0"})
+
+
+def test_obstacle_forms() -> None:
+    a = parse_obstacle("Oa@2.2,0.8,0.1")
+    assert (a.obj, a.pos.x, a.pos.y, a.pos.z, a.at_tick) == ("Oa", 2.2, 0.8, 0.1, None)
+    b = parse_obstacle("Ob@-1,2@7")
+    assert (b.pos.x, b.pos.y, b.pos.z, b.at_tick) == (-1.0, 2.0, 0.0, 7)
+
+
+@pytest.mark.parametrize("text", ["Fly:O1", "Place:O1", "Pick:O1:0", "Pick::"])
+def test_bad_failure_is_input_error(text: str) -> None:
+    with pytest.raises(InputError, match="--fail"):
+        parse_failure(text, default_domain())
+
+
+def test_failure_forms() -> None:
+    d = default_domain()
+    assert parse_failure("Pick:O1", d).args == ("O1",)
+    f = parse_failure("Place:O1,L1:2", d)
+    assert f.args == ("O1", "L1") and f.times == 2
+    assert parse_failure("MoveTo", d).args is None
