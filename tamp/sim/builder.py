@@ -1,0 +1,228 @@
+"""Builds the SMP-MRO simulation diagram from a `SimScenario` (one function, one Diagram).
+
+    MultibodyPlant + SceneGraph  (models/sdf: floor, youBot-like robot, objects, area discs)
+      body_poses ─► WorldStateEstimator ─► world_state ─► BtExecutor ─► skill_command
+      skill_command, robot state, body_poses ─► SkillController ─► desired_state (PD actuators)
+      SkillController.grasp ─► WorldStateEstimator, and the weld switch of `SimRunner`
+    MeshcatVisualizer (optional)
+
+Plant settings come from Drake's `MultibodyPlantConfig` (discrete SAP solver, needed by
+weld constraints; hydroelastic contact for the objects on the floor). The robot's joints
+are driven by the plant's PD-controlled actuators (`PdControllerGains`, implicit in SAP)
+tracking the controller's desired state; gravity is switched off for the robot only
+(ideal gravity compensation, as the real youBot's controllers provide), objects fall.
+
+Grasps are weld constraints: two per graspable object (`tamp.sim.ik.grasp_transform`),
+added before `Finalize`, all inactive at the start. They are switched between simulation
+steps by `SimRunner` (see `tamp.sim.runner`), never inside an event.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from pydrake.geometry import (
+    CollisionFilterDeclaration,
+    GeometrySet,
+    Meshcat,
+    MeshcatVisualizer,
+    MeshcatVisualizerParams,
+    Role,
+)
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import (
+    AddMultibodyPlant,
+    MultibodyPlant,
+    MultibodyPlantConfig,
+)
+from pydrake.multibody.tree import PdControllerGains
+from pydrake.systems.framework import Diagram, DiagramBuilder
+
+from tamp.sim.controller import SkillController
+from tamp.sim.estimator import WorldStateEstimator
+from tamp.sim.executor import BtExecutor, Policy
+from tamp.sim.ik import grasp_transform
+from tamp.sim.models import HOME_ARM, MODELS_DIR, PACKAGE_XML, ROBOT, model_url
+from tamp.sim.scenario import SimScenario
+from tamp.world.geometry import Area
+
+
+@dataclass
+class SimSystem:
+    """The built diagram and the handles the runner, tests and notebooks need."""
+
+    diagram: Diagram
+    plant: MultibodyPlant
+    scenario: SimScenario
+    robot: Any  # ModelInstanceIndex
+    bodies: dict[str, Any]  # object id -> RigidBody
+    welds: dict[tuple[str, int], Any]  # (object id, variant) -> MultibodyConstraintId
+    executor: BtExecutor
+    controller: SkillController
+    estimator: WorldStateEstimator
+    areas: dict[str, Area]
+    visualizer: Any = None
+    meshcat: Meshcat | None = None
+    q_start: np.ndarray = field(default_factory=lambda: np.zeros(len(ROBOT.joints)))
+
+
+def scenario_areas(scenario: SimScenario) -> dict[str, Area]:
+    """Goal areas L_k and free areas of the demonstration, by name."""
+    demo = scenario.demo
+    areas = {g.area.name: g.area for g in demo.goals}
+    areas.update({a.name: a for a in demo.free_areas})
+    return areas
+
+
+def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
+    text = (MODELS_DIR / "sdf" / "area_marker.sdf").read_text()
+    text = text.replace('<model name="area_marker">', f'<model name="area_{name}">')
+    text = re.sub(r"<radius>[^<]*</radius>", f"<radius>{radius:.4f}</radius>", text, count=1)
+    if free:
+        text = text.replace("0.2 0.75 0.3 0.35", "0.6 0.6 0.6 0.35")
+    return text
+
+
+def build_diagram(
+    scenario: SimScenario, policy: Policy, *, meshcat: Meshcat | None = None
+) -> SimSystem:
+    """The named Diagram of ``scenario`` with ``policy`` (the grown BT) in the BtExecutor."""
+    builder = DiagramBuilder()
+    config = MultibodyPlantConfig(
+        time_step=scenario.time_step,
+        discrete_contact_approximation="sap",
+        contact_model=scenario.contact_model,
+    )
+    plant, scene_graph = AddMultibodyPlant(config, builder)
+    parser = Parser(plant)
+    parser.package_map().AddPackageXml(str(PACKAGE_XML))
+
+    (floor,) = parser.AddModelsFromUrl(model_url("floor"))
+    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("floor", floor))
+    areas = scenario_areas(scenario)
+    free_names = {a.name for a in scenario.demo.free_areas}
+    for name, area in areas.items():
+        (m,) = parser.AddModelsFromString(
+            _area_marker_sdf(name, area.radius, name in free_names), "sdf"
+        )
+        plant.WeldFrames(
+            plant.world_frame(),
+            plant.GetFrameByName("marker", m),
+            RigidTransform([area.pos.x, area.pos.y, 0.0]),
+        )
+
+    (robot,) = parser.AddModelsFromUrl(ROBOT.url)
+    rx, ry, ryaw = scenario.robot_start
+    q_start = np.zeros(len(ROBOT.joints))
+    q_start[0:3] = (rx, ry, ryaw)
+    q_start[3:8] = HOME_ARM
+    q_start[8:10] = ROBOT.finger_open
+    for k, name in enumerate(ROBOT.joints):
+        joint = plant.GetJointByName(name, robot)
+        joint.set_default_positions([q_start[k]])
+        actuator = plant.GetJointActuatorByName(name, robot)
+        kp, kd = ROBOT.gains(name)
+        actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
+
+    bodies = {}
+    kinds = {}
+    welds = {}
+    palm = plant.GetBodyByName(ROBOT.palm_body, robot)
+    parser.SetAutoRenaming(True)
+    for i, obj in enumerate(scenario.objects):
+        text = (MODELS_DIR / "sdf" / f"{obj.kind.name}.sdf").read_text()
+        text = text.replace(f'<model name="{obj.kind.name}">', f'<model name="{obj.id}">')
+        (m,) = parser.AddModelsFromString(text, "sdf")
+        body = plant.GetBodyByName(obj.kind.body, m)
+        if obj.appear is None:
+            x, y = obj.xy
+        else:
+            x, y = scenario.parking(i)
+        X = RigidTransform(RotationMatrix.MakeZRotation(obj.yaw), [x, y, obj.kind.half_height])
+        plant.SetDefaultFloatingBaseBodyPose(body, X)
+        bodies[obj.id] = body
+        kinds[obj.id] = obj.kind
+        for variant in (0, 1):
+            welds[(obj.id, variant)] = plant.AddWeldConstraint(
+                palm, grasp_transform(obj.kind, variant), body, RigidTransform()
+            )
+
+    plant.mutable_gravity_field().set_enabled(robot, False)
+    plant.Finalize()
+
+    # the robot does not collide with itself (its links overlap at the joints)
+    robot_geoms = []
+    for index in plant.GetBodyIndices(robot):
+        robot_geoms += plant.GetCollisionGeometriesForBody(plant.get_body(index))
+    scene_graph.collision_filter_manager().Apply(
+        CollisionFilterDeclaration().ExcludeWithin(GeometrySet(robot_geoms))
+    )
+
+    actuator_order = []
+    for index in plant.GetJointActuatorIndices(robot):
+        name = plant.get_joint_actuator(index).joint().name()
+        actuator_order.append(ROBOT.joints.index(name))
+
+    failures = {f.action: f.attempts for f in scenario.failures}
+    estimator = builder.AddSystem(
+        WorldStateEstimator(
+            bodies={k: int(b.index()) for k, b in bodies.items()},
+            kinds=kinds,
+            base_body=int(plant.GetBodyByName(ROBOT.base_body, robot).index()),
+            palm_body=int(palm.index()),
+            areas=areas,
+            workspace=scenario.workspace,
+        )
+    )
+    controller = builder.AddSystem(
+        SkillController(
+            period=scenario.controller_period,
+            bodies={k: int(b.index()) for k, b in bodies.items()},
+            kinds=kinds,
+            palm_body=int(palm.index()),
+            areas=areas,
+            actuator_order=actuator_order,
+            q_start=q_start,
+            base_limits=scenario.base,
+            workspace=scenario.workspace,
+            failures=failures,
+        )
+    )
+    executor = builder.AddSystem(BtExecutor(policy, period=scenario.bt_period))
+
+    poses = plant.get_body_poses_output_port()
+    builder.Connect(poses, estimator.body_poses_port)
+    builder.Connect(poses, controller.body_poses_port)
+    builder.Connect(plant.get_state_output_port(robot), controller.robot_state_port)
+    builder.Connect(controller.grasp_port, estimator.grasp_port)
+    builder.Connect(estimator.world_state_port, executor.world_state_port)
+    builder.Connect(controller.status_port, executor.skill_status_port)
+    builder.Connect(executor.command_port, controller.command_port)
+    builder.Connect(controller.desired_state_port, plant.get_desired_state_input_port(robot))
+
+    visualizer = None
+    if meshcat is not None:
+        params = MeshcatVisualizerParams(publish_period=1.0 / 30.0, role=Role.kIllustration)
+        visualizer = MeshcatVisualizer.AddToBuilder(builder, scene_graph, meshcat, params)
+
+    diagram = builder.Build()
+    diagram.set_name(f"smp_mro_{scenario.name}")
+    return SimSystem(
+        diagram=diagram,
+        plant=plant,
+        scenario=scenario,
+        robot=robot,
+        bodies=bodies,
+        welds=welds,
+        executor=executor,
+        controller=controller,
+        estimator=estimator,
+        areas=areas,
+        visualizer=visualizer,
+        meshcat=meshcat,
+        q_start=q_start,
+    )

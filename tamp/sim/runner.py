@@ -1,0 +1,224 @@
+"""SimRunner: advances the simulator and does what must happen *between* steps.
+
+Weld toggling. A weld constraint's active status lives in the plant's context and is not
+an output of any system, so no LeafSystem event can switch it. The runner therefore
+advances the simulator in chunks of one controller period (`Simulator.AdvanceTo`) and,
+between chunks, reads the SkillController's ``grasp`` output and switches the matching
+weld on (or every weld off) with `MultibodyPlant.SetConstraintActiveStatus`. The controller
+asks for a weld only once the fingers have closed at the grasp pose, and waits a dwell
+longer than one chunk before it lifts, so the weld is always on when the lift starts
+(FIELD_NOTES: a weld switched on with the bodies apart snaps them together).
+
+Appearances. An object that "appears" (Case 3's O_a) waits outside the workspace; at its
+time, or when the named skill succeeds, the runner puts it down at its area centre and
+zeroes its velocity. This is a person putting an object down (scripted), not the robot.
+
+The run ends when the BtExecutor's tree returns SUCCESS or FAILURE, or at
+``max_sim_time``. `SimResult` has the executed actions with sim start/end times, final
+plant poses of the objects, sim time, wall time and the real-time factor.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.math import SpatialVelocity
+from pydrake.systems.analysis import ApplySimulatorConfig, Simulator, SimulatorConfig
+
+from tamp.sim.builder import SimSystem
+from tamp.sim.executor import ActionLog
+from tamp.world.interface import Status
+
+
+@dataclass
+class ObjectPose:
+    x: float
+    y: float
+    z: float
+    yaw: float
+
+    def to_json(self) -> dict:
+        return {k: round(v, 4) for k, v in vars(self).items()}
+
+
+@dataclass
+class SimResult:
+    """What a simulation run did, read from the plant and the executor's state."""
+
+    scenario: str
+    status: str  # SUCCESS | FAILURE | TIMEOUT
+    reason: str
+    actions: list[ActionLog]
+    final_poses: dict[str, ObjectPose]
+    sim_time: float
+    wall_time: float
+    base_path: list[tuple[float, float, float]] = field(default_factory=list)
+    appeared: dict[str, float] = field(default_factory=dict)
+    goals: dict[str, bool] = field(default_factory=dict)
+    recording: str | None = None
+
+    @property
+    def realtime_factor(self) -> float:
+        return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
+
+    @property
+    def executed(self) -> list[str]:
+        return [a.action for a in self.actions if a.status == "SUCCESS"]
+
+    def to_json(self) -> dict:
+        return {
+            "scenario": self.scenario,
+            "status": self.status,
+            "reason": self.reason,
+            "actions": [a.to_json() for a in self.actions],
+            "final_poses": {k: v.to_json() for k, v in sorted(self.final_poses.items())},
+            "goals": self.goals,
+            "appeared": {k: round(v, 3) for k, v in self.appeared.items()},
+            "sim_time": round(self.sim_time, 3),
+            "wall_time": round(self.wall_time, 3),
+            "realtime_factor": round(self.realtime_factor, 2),
+            "recording": self.recording,
+        }
+
+
+class SimRunner:
+    """Runs a built `SimSystem` to the end of its task."""
+
+    def __init__(self, system: SimSystem):
+        self.system = system
+        self.simulator = Simulator(system.diagram)
+        ApplySimulatorConfig(
+            SimulatorConfig(target_realtime_rate=0.0, publish_every_time_step=False),
+            self.simulator,
+        )
+        root = self.simulator.get_mutable_context()
+        self.root = root
+        self.plant_context = system.plant.GetMyMutableContextFromRoot(root)
+        for cid in system.welds.values():
+            system.plant.SetConstraintActiveStatus(self.plant_context, cid, False)
+        self.active: tuple[str, int] | None = None
+        self.appeared: dict[str, float] = {}
+        self.base_path: list[tuple[float, float, float]] = []
+
+    # -- between-step work -------------------------------------------------------------------
+    def _sync_grasp(self) -> None:
+        s = self.system
+        ctl_context = s.controller.GetMyContextFromRoot(self.root)
+        req = s.controller.grasp_port.Eval(ctl_context)
+        want = None if req.obj is None else (req.obj, req.variant)
+        if want == self.active:
+            return
+        if self.active is not None:
+            s.plant.SetConstraintActiveStatus(self.plant_context, s.welds[self.active], False)
+        if want is not None:
+            s.plant.SetConstraintActiveStatus(self.plant_context, s.welds[want], True)
+        self.active = want
+
+    def _appearances(self, t: float, log: list[ActionLog]) -> None:
+        s = self.system
+        done = {a.action for a in log if a.status == "SUCCESS"}
+        for obj in s.scenario.objects:
+            ap = obj.appear
+            if ap is None or obj.id in self.appeared:
+                continue
+            if ap.time is not None:
+                due = t >= ap.time
+            else:
+                name, args = ap.after
+                due = f"{name}({', '.join(args)})" in done
+            if not due:
+                continue
+            area = s.areas[ap.area]
+            X = RigidTransform([area.pos.x, area.pos.y, obj.kind.half_height + 0.003])
+            body = s.bodies[obj.id]
+            s.plant.SetFreeBodyPose(self.plant_context, body, X)
+            s.plant.SetFreeBodySpatialVelocity(self.plant_context, body, SpatialVelocity.Zero())
+            self.appeared[obj.id] = t
+
+    def object_poses(self) -> dict[str, ObjectPose]:
+        s = self.system
+        out = {}
+        for uid, body in s.bodies.items():
+            X = s.plant.EvalBodyPoseInWorld(self.plant_context, body)
+            p = X.translation()
+            yaw = RollPitchYaw(X.rotation()).yaw_angle()
+            out[uid] = ObjectPose(float(p[0]), float(p[1]), float(p[2]), float(yaw))
+        return out
+
+    def robot_pose(self) -> tuple[float, float, float]:
+        q = self.system.plant.GetPositions(self.plant_context, self.system.robot)
+        return float(q[0]), float(q[1]), float(q[2])
+
+    # -- main loop ---------------------------------------------------------------------------
+    def run(
+        self,
+        *,
+        max_sim_time: float | None = None,
+        on_chunk: Callable[[float], None] | None = None,
+        path_every: float = 0.1,
+    ) -> SimResult:
+        s = self.system
+        limit = s.scenario.max_sim_time if max_sim_time is None else max_sim_time
+        chunk = s.scenario.controller_period
+        ex_context = s.executor.GetMyContextFromRoot(self.root)
+        self.simulator.Initialize()
+        wall0 = time.perf_counter()
+        t = self.root.get_time()
+        next_path = t
+        status, reason = "TIMEOUT", f"no result within {limit:g} s of sim time"
+        n = 0
+        while t < limit - 1e-9:
+            n += 1
+            t = min(chunk * n, limit)
+            self.simulator.AdvanceTo(t)
+            self._sync_grasp()
+            ex = s.executor.state(ex_context)
+            self._appearances(t, ex.log)
+            if t >= next_path:
+                self.base_path.append(self.robot_pose())
+                next_path += path_every
+            if on_chunk is not None:
+                on_chunk(t)
+            if ex.result is not None:
+                status = ex.result.value
+                policy = s.executor.policy(ex_context)
+                reason = getattr(policy, "reason", "") or (
+                    "every goal reached" if ex.result is Status.SUCCESS else "tree failed"
+                )
+                break
+        wall = time.perf_counter() - wall0
+        ex = s.executor.state(ex_context)
+        poses = self.object_poses()
+        return SimResult(
+            scenario=s.scenario.name,
+            status=status,
+            reason=reason,
+            actions=[a for a in ex.log],
+            final_poses=poses,
+            sim_time=t,
+            wall_time=wall,
+            base_path=list(self.base_path),
+            appeared=dict(self.appeared),
+            goals=self.goals_on_plant(poses),
+        )
+
+    def goals_on_plant(self, poses: dict[str, ObjectPose] | None = None) -> dict[str, bool]:
+        """For each goal object, whether it rests inside its *final* goal area (plant)."""
+        s = self.system
+        poses = poses or self.object_poses()
+        final: dict[str, str] = {}
+        for g in s.scenario.demo.goals:
+            final[g.object] = g.area.name
+        out = {}
+        for uid, area_name in final.items():
+            a = s.areas[area_name]
+            p = poses[uid]
+            inside = math.hypot(p.x - a.pos.x, p.y - a.pos.y) <= a.radius
+            out[f"{uid}@{area_name}"] = bool(
+                inside and abs(p.z - s.scenario.object(uid).kind.half_height) < 0.01
+            )
+        return out
