@@ -146,6 +146,12 @@ class SymbolicLotsWorld:
         return True
 
     def _end_action(self) -> None:
+        # a 'holding' event scheduled for an action without a pick (a removal, a wait)
+        # happens during that action rather than never
+        for i, e in enumerate(self.events):
+            if i not in self._fired and e.after == self.actions_done and e.phase == "holding":
+                self._fired.add(i)
+                self.apply(e, "holding")
         self.actions_done += 1
         self._fire("idle")
 
