@@ -64,17 +64,29 @@ def check_trace(
             field="trace",
         )
     parts = ltl.conjuncts(f)
-    explored = 0
-    violated = []
-    for c in parts:
-        ok, n = _holds_finite(c, word) if finite else _holds_lasso(c, word)
-        explored += n
-        if not ok:
-            violated.append(c)
     semantics = "finite" if finite else "infinite"
+    whole = len(parts) <= ltl.MAX_CONJUNCTS_FOR_WHOLE
+
+    def holds(g: spot.formula) -> tuple[bool, int]:
+        return _holds_finite(g, word) if finite else _holds_lasso(g, word)
+
+    explored = 0
+    if whole:  # one product with the (small) whole-formula automaton decides
+        ok, explored = holds(f)
+        if ok:
+            return Verdict(subject, str(f), semantics, True, explored)
+    violated = []
+    if len(parts) > 1 or not whole:
+        for c in parts:
+            ok, n = holds(c)
+            if not whole:
+                explored += n
+            if not ok:
+                violated.append(c)
+    else:
+        violated = [f]
     if not violated:
         return Verdict(subject, str(f), semantics, True, explored)
-    whole = len(parts) <= ltl.MAX_CONJUNCTS_FOR_WHOLE
     if whole:
         ce = explain(f, word, finite=finite)
     else:
