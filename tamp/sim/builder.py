@@ -33,7 +33,6 @@ from pydrake.geometry import (
     Role,
 )
 from pydrake.math import RigidTransform, RotationMatrix
-from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import (
     AddMultibodyPlant,
     MultibodyPlant,
@@ -46,7 +45,8 @@ from tamp.sim.controller import SkillController
 from tamp.sim.estimator import WorldStateEstimator
 from tamp.sim.executor import BtExecutor, Policy
 from tamp.sim.ik import grasp_transform
-from tamp.sim.models import HOME_ARM, MODELS_DIR, PACKAGE_XML, ROBOT, model_url
+from tamp.sim.models import HOME_ARM, MODELS_DIR, ROBOT, model_url
+from tamp.sim.parsing import make_parser
 from tamp.sim.scenario import SimScenario
 from tamp.world.geometry import Area
 
@@ -98,8 +98,7 @@ def build_diagram(
         contact_model=scenario.contact_model,
     )
     plant, scene_graph = AddMultibodyPlant(config, builder)
-    parser = Parser(plant)
-    parser.package_map().AddPackageXml(str(PACKAGE_XML))
+    parser = make_parser(plant)
 
     (floor,) = parser.AddModelsFromUrl(model_url("floor"))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("floor", floor))

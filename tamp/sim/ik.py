@@ -15,11 +15,11 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.multibody.inverse_kinematics import InverseKinematics
-from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.solvers import Solve
 
-from tamp.sim.models import PACKAGE_XML, ROBOT, ObjectKind
+from tamp.sim.models import ROBOT, ObjectKind
+from tamp.sim.parsing import make_parser
 
 
 def grasp_rotation(variant: int) -> RotationMatrix:
@@ -51,8 +51,7 @@ class ArmIK:
 
     def __init__(self) -> None:
         self.plant = MultibodyPlant(0.0)
-        parser = Parser(self.plant)
-        parser.package_map().AddPackageXml(str(PACKAGE_XML))
+        parser = make_parser(self.plant)
         parser.AddModelsFromUrl(ROBOT.url)
         self.plant.Finalize()
         self.context = self.plant.CreateDefaultContext()

@@ -1,0 +1,105 @@
+"""SMP-MRO end to end in Drake: plan (RG + A*), verify, grow and tick the tree, simulate.
+
+`prepare` runs the planning layers on the scenario's demonstration: the RG order under the
+scenario's cost (SMP-MRO §IV-B, Alg. 1), C_goal for the tree (§IV-C, Alg. 2), and the
+verification gate on both — the order against the LTL encoding of the constraints and every
+execution of the tree over the symbolic domain (scripted appearances included, one skill
+failure allowed). A failed check raises `verification.VerificationError` (exit 1) with the
+counterexample, and nothing is simulated. `simulate_smp_mro` then builds the diagram around
+the *same* tree object and runs it (optionally recording a Meshcat animation).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from tamp.sim.scenario import SimScenario
+
+
+@dataclass
+class Prepared:
+    """The plan, the tree the executor will tick, and the verification reports."""
+
+    scenario: SimScenario
+    plan: Any  # tamp.rg.PlanResult
+    policy: Any  # tamp.bt.PaBtExecutor
+    reports: dict[str, Any] = field(default_factory=dict)
+    verify_time: float = 0.0
+
+
+def make_tree(scenario: SimScenario, plan) -> Any:
+    """The PA-BT executor for the plan's C_goal (Alg. 2 l. 1-3), with the free areas."""
+    from tamp.bt import PaBtExecutor
+
+    demo = scenario.demo
+    return PaBtExecutor(plan.c_goal, demo.domain(), free_areas=list(demo.free_areas))
+
+
+def verification_events(scenario: SimScenario) -> list:
+    """The scenario's appearances as symbolic events, for the tree's verification."""
+    from tamp.bt import Appear
+
+    areas = {g.area.name: g.area for g in scenario.demo.goals}
+    areas.update({a.name: a for a in scenario.demo.free_areas})
+    return [
+        Appear(o.id, areas[o.appear.area].pos) for o in scenario.objects if o.appear is not None
+    ]
+
+
+def prepare(scenario: SimScenario, *, verify: bool = True) -> Prepared:
+    """Plan, build the tree, and pass the verification gate (the hook before simulation)."""
+    from tamp.rg import plan as rg_plan
+
+    result = rg_plan(scenario.demo, scenario.cost)
+    tree = make_tree(scenario, result)
+    prepared = Prepared(scenario, result, tree)
+    if verify:
+        from verification import gate
+
+        t0 = time.perf_counter()
+        prepared.reports["order"] = gate(result)
+        probe = make_tree(scenario, result)  # the gate ticks a copy, never the real tree
+        prepared.reports["tree"] = gate(
+            probe, state=scenario.demo.initial_world(), events=verification_events(scenario)
+        )
+        prepared.verify_time = time.perf_counter() - t0
+    return prepared
+
+
+def simulate_smp_mro(
+    scenario: SimScenario,
+    *,
+    verify: bool = True,
+    meshcat: Any = None,
+    record: str | Path | None = None,
+    max_sim_time: float | None = None,
+):
+    """Plan, verify, build and run; returns (`SimResult`, `Prepared`, `SimSystem`).
+
+    ``record``: write a self-contained Meshcat animation (HTML) of the run there
+    (a local Meshcat server is started when ``meshcat`` is None).
+    """
+    from tamp.sim.builder import build_diagram
+    from tamp.sim.runner import SimRunner
+
+    prepared = prepare(scenario, verify=verify)
+    if record is not None and meshcat is None:
+        from pydrake.geometry import Meshcat
+
+        meshcat = Meshcat(0)
+    system = build_diagram(scenario, prepared.policy, meshcat=meshcat)
+    runner = SimRunner(system)
+    if record is not None:
+        system.visualizer.StartRecording(set_transforms_while_recording=False)
+    result = runner.run(max_sim_time=max_sim_time)
+    if record is not None:
+        system.visualizer.StopRecording()
+        system.visualizer.PublishRecording()
+        path = Path(record)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(meshcat.StaticHtml())
+        result.recording = str(path)
+    return result, prepared, system
