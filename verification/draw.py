@@ -1,0 +1,114 @@
+"""Drawing a trace on the automaton it is checked against (Graphviz DOT, SVG via ``dot``).
+
+The picture shows what the checker does: starting in the initial state, every letter
+moves the set of reachable states along the edges whose label the letter satisfies.
+Edges taken into states that can still reach acceptance are green; an edge taken into a
+dead state (no accepting continuation) is red, and the step where no live state remains is
+the end of the shortest bad prefix. Dead states are grey, accepting states double circles.
+A lasso is unrolled for two turns of its cycle.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import buddy
+import spot
+
+from verification import ltl
+from verification.words import Word
+
+
+def _esc(text: str) -> str:
+    return text.replace("\\", "\\\\").replace('"', '\\"')
+
+
+def trace_dot(
+    formula: str | spot.formula, word: Word, *, finite: bool = False, title: str = ""
+) -> str:
+    """DOT text of the automaton of ``formula`` with ``word``'s walk highlighted."""
+    f = formula if isinstance(formula, spot.formula) else ltl.parse_formula(formula)
+    aut = ltl.finite_automaton(f) if finite else ltl.buchi(f)
+    d = aut.get_dict()
+    live = ltl.live_states(aut, finite=finite)
+    letters = list(word.prefix)
+    if word.cycle is not None:
+        letters += list(word.cycle) * 2
+    init = aut.get_init_state_number()
+    cur = {init} & live
+    green: set[tuple[int, int, str]] = set()
+    red: set[tuple[int, int, str]] = set()
+    visited = set(cur)
+    failed: tuple[list[int], frozenset[str]] | None = None
+    for letter in letters:
+        b = ltl.letter_bdd(aut, letter)
+        nxt = set()
+        for s in cur:
+            for e in aut.out(s):
+                if (e.cond & b) == buddy.bddfalse:
+                    continue
+                key = (e.src, e.dst, spot.bdd_format_formula(d, e.cond))
+                if e.dst in live:
+                    green.add(key)
+                    nxt.add(e.dst)
+                else:
+                    red.add(key)
+        visited |= nxt
+        if not nxt:
+            failed = (sorted(cur), letter)
+            break
+        cur = nxt
+    lines = [
+        "digraph trace {",
+        "  rankdir=LR;",
+        f'  label="{_esc(title or str(f))}"; labelloc=t;',
+        '  node [fontname="Helvetica"]; edge [fontname="Helvetica", fontsize=10];',
+        '  start [shape=point, label=""];',
+    ]
+    for s in range(aut.num_states()):
+        shape = "doublecircle" if aut.state_is_accepting(s) else "circle"
+        if s not in live:
+            style = 'style=filled, fillcolor="#dddddd", fontcolor="#777777"'
+        elif s in visited:
+            style = 'style=filled, fillcolor="#c8f0c8"'
+        else:
+            style = ""
+        lines.append(f'  q{s} [shape={shape}, label="q{s}"{", " + style if style else ""}];')
+    lines.append(f"  start -> q{init};")
+    for s in range(aut.num_states()):
+        for e in aut.out(s):
+            label = spot.bdd_format_formula(d, e.cond)
+            key = (e.src, e.dst, label)
+            attrs = f'label="{_esc(label)}"'
+            if key in red:
+                attrs += ', color="#d62728", fontcolor="#d62728", penwidth=2.5'
+            elif key in green:
+                attrs += ', color="#2ca02c", penwidth=2.5'
+            else:
+                attrs += ', color="#999999", fontcolor="#999999"'
+            lines.append(f"  q{e.src} -> q{e.dst} [{attrs}];")
+    if failed is not None:  # the letter that leaves every accepting continuation
+        states, letter = failed
+        aps = [a.ap_name() for a in aut.ap()]
+        text = " & ".join(a if a in letter else f"!{a}" for a in aps) or "1"
+        lines.append(
+            '  dead [shape=box, style="filled,dashed", fillcolor="#f8d0d0", '
+            'label="no accepting\\ncontinuation"];'
+        )
+        for s in states:
+            lines.append(
+                f'  q{s} -> dead [label="{_esc(text)}", color="#d62728", '
+                'fontcolor="#d62728", style=dashed, penwidth=2.5];'
+            )
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
+def to_svg(dot: str) -> str:
+    """Render DOT to SVG with Graphviz ``dot`` (installed by ``make``'s system-deps)."""
+    exe = shutil.which("dot")
+    if exe is None:
+        raise RuntimeError("Graphviz 'dot' is not installed (apt-get install graphviz)")
+    out = subprocess.run([exe, "-Tsvg"], input=dot, capture_output=True, text=True, check=True)
+    return out.stdout
