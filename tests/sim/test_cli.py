@@ -1,0 +1,44 @@
+"""`tamp simulate smp-mro`: JSON output with sim times and plant poses, Meshcat recording."""
+
+from __future__ import annotations
+
+import json
+
+from tamp.cli import main
+
+from .helpers import write_one_bottle
+
+
+def test_json_output_and_recording(tmp_path, capsys):
+    path = write_one_bottle(tmp_path)
+    html = tmp_path / "out" / "run.html"
+    code = main(["simulate", "smp-mro", "--scenario", str(path), "--record", str(html), "--json"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    data = json.loads(out)
+    assert data["ok"] and data["status"] == "SUCCESS"
+    assert data["order"] == ["G0"]
+    assert data["verified"] == {"order": True, "tree": True}
+    done = [a for a in data["actions"] if a["status"] == "SUCCESS"]
+    assert [a["action"] for a in done][-2:] == ["Pick(O0)", "Place(O0, L0)"]
+    for a in data["actions"]:
+        assert a["end"] >= a["start"]
+    starts = [a["start"] for a in data["actions"]]
+    assert starts == sorted(starts)
+    pose = data["final_poses"]["O0"]
+    assert abs(pose["x"] - 1.0) < 0.15 and abs(pose["y"] - 0.7) < 0.15
+    assert data["sim_time"] >= done[-1]["end"]
+    assert data["realtime_factor"] > 0 and data["wall_time"] > 0
+    text = html.read_text()
+    assert data["recording"] == str(html)
+    assert "<html" in text.lower() and "meshcat" in text.lower()
+    assert len(text) > 100_000  # the animation is embedded, not linked
+
+
+def test_human_readable_output(tmp_path, capsys):
+    path = write_one_bottle(tmp_path)
+    code = main(["simulate", "smp-mro", "--scenario", str(path), "--no-verify"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "Place(O0, L0)" in out and "real-time factor" in out
+    assert "O0@L0: inside" in out
