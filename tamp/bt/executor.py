@@ -121,6 +121,7 @@ class PaBtExecutor:
         max_repeats: int = 2,
         max_fruitless: int = 50,
         failure_decay: float = 0.5,
+        record_attempts: bool = True,
     ) -> None:
         if not c_goal:
             raise ValueError("C_goal is empty: nothing to execute")
@@ -131,6 +132,7 @@ class PaBtExecutor:
         self.max_repeats = max_repeats
         self.max_fruitless = max_fruitless
         self.failure_decay = failure_decay
+        self.record_attempts = record_attempts
         self.c_goal = list(c_goal)
         self.free_areas: list[str] = []
         self.extra_areas: dict[str, Area] = {}
@@ -301,7 +303,7 @@ class PaBtExecutor:
             self.stats.implicit_preemptions += 1
             self.log_event("preempt", str(self.running.action), "implicit", str(node.action))
             self.running.halt(self)
-        key = (str(node.action), _fingerprint(self.state), _cursor(self.root))
+        key = (node.uid, _fingerprint(self.state), _cursor(self.root))
         if self._completed_from[key] >= self.max_repeats:
             self._abort = (
                 f"livelock: {node.action} would start again from a state it already "
@@ -311,7 +313,8 @@ class PaBtExecutor:
         node.handle = self.world.start(node.action)
         self.running = node
         self._start_key = key
-        self.attempts.append(ActionRecord(node.action, self.tick_id))
+        if self.record_attempts:
+            self.attempts.append(ActionRecord(node.action, self.tick_id))
         return True
 
     def action_finished(self, node: ActionNode, status: Status) -> None:
@@ -333,10 +336,11 @@ class PaBtExecutor:
         world = self.world
         if world is not None:
             state = world.observe()
-            if self.extra_areas:
-                state = self._with_extra_areas(world, state)
-            self.state = state
-            self.cache.clear()
+            if state is not self.state:
+                if self.extra_areas:
+                    state = self._with_extra_areas(world, state)
+                self.state = state
+                self.cache.clear()
 
     def cancel_action(self, node: ActionNode) -> None:
         if node.handle is not None and self.world is not None:
@@ -494,10 +498,10 @@ class PaBtExecutor:
 
 
 def _fingerprint(state: WorldState | None) -> tuple:
+    """A hashable value of the state (robot pose, held object, object positions)."""
     if not isinstance(state, WorldState):
-        return (repr(state),)
-    s = state.summary()
-    return (tuple(s["robot"]), s["held"], tuple((k, tuple(v)) for k, v in s["objects"].items()))
+        return (id(state),)
+    return (state.robot, state.held, tuple(sorted((k, o.pos) for k, o in state.objects.items())))
 
 
 def _cursor(root: Node) -> int:

@@ -361,3 +361,25 @@ def test_hand_free_is_achieved_by_placing_the_held_object() -> None:
     report = execute(state, [IsHandFree()], free_areas=free)
     assert report.reached
     assert report.executed[-1].name == "Place" and report.executed[-1].args[0] == "O0"
+
+
+def test_livelock_between_two_places_is_detected_and_stops() -> None:
+    """Weld(o, a, b) needs the robot close to areas a and b at once, and they are ~2 m apart:
+    MoveTo(b) undoes IsRobotCloseTo(a), which the predicates cannot see as a conflict
+    (proximity is geometry); the executor notices the same action starting again from a
+    state it already succeeded from, and stops instead of looping."""
+    weld = ActionTemplate(
+        "Weld",
+        (("o", "object"), ("a", "area"), ("b", "area")),
+        (CondPattern("IsRobotCloseTo", ("a",)), CondPattern("IsRobotCloseTo", ("b",))),
+        (CondPattern("IsGraspedObject", ("o",)),),
+    )
+    domain = Domain("test", {"MoveTo": default_domain().template("MoveTo"), "Weld": weld})
+    state, _ = case3_by_hand()
+    # the unbound areas a, b are filled by the free-area rule: here L0 first, then L1
+    report = execute(state, [IsGraspedObject("O1")], free_areas=["L0", "L1"], domain=domain)
+    assert report.status is Status.FAILURE
+    assert report.reason.startswith("livelock: MoveTo(")
+    moves = _names(report.executed)
+    assert moves[:3] == ["MoveTo(L0)", "MoveTo(L1)", "MoveTo(L0)"]
+    assert len(moves) <= 6
