@@ -132,3 +132,17 @@ def test_formula_without_executable_run_is_infeasible(capsys, tmp_path):
     task = write(tmp_path, "task.yaml", TASK.replace("plate: 1", "plate: 0"))
     assert main(["lots", task]) == 1
     assert "no accepting run" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("seed", ["0", "5"])
+def test_random_tree_variant_gives_the_same_run(capsys, seed):
+    argv = ["example1.yaml", "--interference", "example1_interference.yaml"]
+    _, bfs = run_json(capsys, *argv)
+    code, rnd = run_json(capsys, *argv, "--tree", "random", "--seed", seed)
+    assert code == 0 and rnd["satisfied"]
+    assert [a["text"] for a in rnd["actions"]] == [a["text"] for a in bfs["actions"]]
+
+
+def test_max_waits_must_be_positive(capsys):
+    assert main(["lots", "tower.yaml", "--max-waits", "0"]) == 2
+    assert "--max-waits" in capsys.readouterr().err
