@@ -108,6 +108,8 @@ class Report:
     verdicts: list[Verdict]
     #: states of the one system all verdicts share (BT exploration); None: sum of verdicts
     explored: int | None = None
+    #: checks that were skipped or bounded, in words
+    notes: list[str] = field(default_factory=list)
 
     @property
     def holds(self) -> bool:
@@ -135,10 +137,11 @@ class Report:
             "counterexample": ce.to_json() if ce else None,
             "states_explored": self.states_explored,
             "checks": [v.to_json() for v in self.verdicts],
+            "notes": list(self.notes),
         }
 
     def text(self) -> str:
-        return "\n".join(v.text() for v in self.verdicts)
+        return "\n".join([v.text() for v in self.verdicts] + [f"note: {n}" for n in self.notes])
 
 
 class VerificationError(InfeasibleError):
