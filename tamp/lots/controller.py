@@ -252,6 +252,11 @@ class LotsController:
             a_obs = lots.vector(world.observe("A"))
             b = self.belief.on_a(a_obs)  # Alg. 1 lines 5-11
             looks += 1
+            if looks > 8:  # observations keep disagreeing: let an action slot pass
+                world.wait()
+                record("wait", note="observations of W^A and W^B disagree")
+                looks = 0
+                continue
             i = lots.surplus(b)
             if i is not None:  # more in W^B than one round needs (Lemma 1): remove it
                 b_obs = look_b()
