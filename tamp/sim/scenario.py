@@ -9,8 +9,8 @@ Example (``tamp/scenarios/sim/case3.yaml``)::
     name: case3
     demonstration: ../case3.yaml       # path relative to this file, or a packaged name
     planner: {cost: distance}
-    plant: {time_step: 0.005}
-    executor: {bt_period: 0.05, controller_period: 0.01, max_sim_time: 300}
+    plant: {time_step: 0.01}
+    executor: {bt_period: 0.1, controller_period: 0.02, max_sim_time: 300}
     base: {max_speed: 0.5, max_accel: 0.6, max_yaw_rate: 1.2, max_yaw_accel: 2.0}
     workspace: {x: [-1.0, 4.0], y: [-2.0, 2.5]}
     objects:                           # demonstration objects are bottles unless listed
@@ -161,13 +161,13 @@ def load_scenario(path: str | Path) -> SimScenario:
 
     plant = f.sub("plant", {})
     plant.check_keys({"time_step", "contact_model"})
-    time_step = plant.float("time_step", 0.005, min=0.0005, max=0.02)
+    time_step = plant.float("time_step", 0.01, min=0.0005, max=0.02)
     contact = plant.str("contact_model", "point", choices=CONTACT_MODELS)
 
     ex = f.sub("executor", {})
     ex.check_keys({"bt_period", "controller_period", "max_sim_time"})
-    controller_period = ex.float("controller_period", 0.01, min=time_step, max=0.1)
-    bt_period = ex.float("bt_period", 0.05, min=controller_period, max=1.0)
+    controller_period = ex.float("controller_period", 0.02, min=time_step, max=0.1)
+    bt_period = ex.float("bt_period", 0.1, min=controller_period, max=1.0)
     max_sim_time = ex.float("max_sim_time", 300.0, min=0.0, strict_min=True)
 
     b = f.sub("base", {})
