@@ -465,12 +465,35 @@ class PaBtExecutor:
         return to_btcpp_xml(self.root)
 
     def __deepcopy__(self, memo: dict) -> PaBtExecutor:
+        """Copy the tree and the executor's mutable bookkeeping; share what never changes
+        (domain, predicates, actions, logged events, the last observed state)."""
         new = PaBtExecutor.__new__(PaBtExecutor)
         memo[id(self)] = new
-        shared = {"domain", "priority", "state", "world", "c_goal"}
         for k, v in self.__dict__.items():
-            setattr(new, k, v if k in shared else copy.deepcopy(v, memo))
+            if k in self._SHARED:
+                setattr(new, k, v)
+            elif k in self._SHALLOW:
+                setattr(new, k, copy.copy(v))
+        new.root = copy.deepcopy(self.root, memo)
+        new.running = None if self.running is None else memo[id(self.running)]
+        new.preempt = [memo.get(id(n), n) for n in self.preempt]
+        new.attempts = [copy.copy(r) for r in self.attempts]
+        new.stats = copy.deepcopy(self.stats, memo)
         return new
+
+    _SHARED = frozenset(
+        {
+            "domain", "priority", "state", "world", "c_goal", "max_expansions", "max_retries",
+            "max_repeats", "max_fruitless", "failure_decay", "record_attempts", "tick_id",
+            "result", "reason", "_abort", "_start_key", "_fruitless", "goal_areas",
+        }
+    )  # fmt: skip
+    _SHALLOW = frozenset(
+        {
+            "free_areas", "extra_areas", "reserved", "put_down_hint", "cache", "log",
+            "_completed_from", "_pending_areas",
+        }
+    )  # fmt: skip
 
     # -- helpers ---------------------------------------------------------------------------
     def _open_record(self, action: Action) -> ActionRecord | None:

@@ -21,7 +21,6 @@ which is what `GetFailedNode` (Alg. 2 line 8) and the DOT colours read.
 
 from __future__ import annotations
 
-import copy
 import itertools
 from collections.abc import Iterable, Iterator
 from typing import Protocol
@@ -70,7 +69,6 @@ class Node:
 
     __slots__ = ("uid", "parent", "children", "status", "tick_id", "__weakref__")
     kind = "Node"
-    _shared_slots: frozenset[str] = frozenset()
 
     def __init__(self, children: Iterable[Node] = ()) -> None:
         self.uid = next(_uids)
@@ -162,20 +160,42 @@ class Node:
         return f"<{self.describe()} #{self.uid}>"
 
     def __deepcopy__(self, memo: dict) -> Node:
-        # Predicates and actions are immutable: share them; copy the rest of the graph.
-        cls = type(self)
+        """Copy the subtree below this node, top-down, sharing the immutable payloads.
+
+        Node slots hold immutable values (ints, floats, enums, predicates, actions) or lists
+        of them, except ``children`` (copied recursively) and ``parent`` (the copy of the
+        parent if it is being copied too, else None: a copied subtree is detached).
+        """
+        cls = self.__class__
         new = cls.__new__(cls)
         memo[id(self)] = new
-        for klass in cls.__mro__:
-            for slot in getattr(klass, "__slots__", ()):
-                if slot == "__weakref__" or not hasattr(self, slot):
-                    continue
-                value = getattr(self, slot)
-                if slot in cls._shared_slots or isinstance(value, int | float | str | Status):
-                    setattr(new, slot, value)
-                else:
-                    setattr(new, slot, copy.deepcopy(value, memo))
+        for slot in _slots_of(cls):
+            value = getattr(self, slot)
+            if slot == "children":
+                value = [c.__deepcopy__(memo) for c in value]
+            elif slot == "parent":
+                value = None if value is None else memo.get(id(value))
+            elif value.__class__ is list:
+                value = value[:]
+            setattr(new, slot, value)
         return new
+
+
+_SLOTS: dict[type, tuple[str, ...]] = {}
+
+
+def _slots_of(cls: type) -> tuple[str, ...]:
+    slots = _SLOTS.get(cls)
+    if slots is None:
+        names: list[str] = []
+        for klass in reversed(cls.__mro__):
+            for slot in getattr(klass, "__slots__", ()):
+                if slot != "__weakref__" and slot not in names:
+                    names.append(slot)
+        # parent before children, so children find their parent's copy in the memo
+        names.sort(key=lambda n: (n == "children",))
+        slots = _SLOTS[cls] = tuple(names)
+    return slots
 
 
 class Condition(Node):
@@ -187,7 +207,6 @@ class Condition(Node):
 
     __slots__ = ("pred", "key", "expanded")
     kind = "Condition"
-    _shared_slots = frozenset({"pred"})
 
     def __init__(self, pred: Predicate, *, expanded: bool = False) -> None:
         super().__init__()
@@ -222,7 +241,6 @@ class ActionNode(Node):
 
     __slots__ = ("action", "handle", "failures")
     kind = "Action"
-    _shared_slots = frozenset({"action"})
 
     def __init__(self, action: Action) -> None:
         super().__init__()

@@ -91,7 +91,9 @@ class Ctx:
 
 
 def case3_by_hand() -> tuple[WorldState, list[str]]:
-    """The Case 3 geometry of tamp/scenarios/case3.yaml, built directly (robot frame)."""
+    """Case 3 built directly (robot frame): the objects and goal areas of
+    tamp/scenarios/case3.yaml, with free areas placed so that every move needs a MoveTo
+    (free2 is 0.92 m from l_1, just out of reach)."""
     r = 0.15
     areas = {
         "L0": Area("L0", Point(1.6, -1.1), r),
