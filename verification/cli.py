@@ -23,6 +23,18 @@ from tamp.cli import run as run_cli
 from tamp.errors import EXIT_INFEASIBLE, EXIT_OK, InputError
 
 
+def _scenario(name: str, *subdirs: str) -> str:
+    """A user path, else a packaged scenario of that name (also under ``subdirs``)."""
+    from tamp.scenarios import resolve
+
+    p = resolve(name)
+    for sub in subdirs:
+        if p.exists():
+            break
+        p = resolve(f"{sub}/{name}")
+    return str(p) if p.exists() else name
+
+
 def _emit(report, args) -> int:
     from tamp.commands.output import print_json
 
@@ -74,7 +86,7 @@ def _cmd_plan(args) -> int:
     from verification.rg import check_graph, check_order
     from verification.verdict import Report
 
-    demo = load_demonstration(args.demo)
+    demo = load_demonstration(_scenario(args.demo))
     if args.order is not None:
         order = [g.strip() for g in args.order.split(",") if g.strip()]
     else:
@@ -144,7 +156,7 @@ def _cmd_bt(args) -> int:
     )
     from verification.rg import check_order_ids
 
-    demo = load_demonstration(args.demo)
+    demo = load_demonstration(_scenario(args.demo))
     order = None
     if args.order is not None:
         order = [g.strip() for g in args.order.split(",") if g.strip()]
@@ -216,7 +228,7 @@ def _add_bt(sub) -> None:
 def _cmd_lots(args) -> int:
     from verification.lots import check_task_file
 
-    return _emit(check_task_file(args.task), args)
+    return _emit(check_task_file(_scenario(args.task, "lots")), args)
 
 
 def _add_lots(sub) -> None:
