@@ -44,7 +44,13 @@ from tamp.errors import InputError
 from tamp.world.actions import Action
 from tamp.world.geometry import Area, Point, Pose
 from tamp.world.interface import Status
-from tamp.world.predicates import DEFAULT_REACH, PREDICATES, IsRobotCloseTo, Predicate
+from tamp.world.predicates import (
+    DEFAULT_REACH,
+    PREDICATES,
+    IsObjectAt,
+    IsRobotCloseTo,
+    Predicate,
+)
 from tamp.world.state import WorldState
 from verification import ltl
 from verification.kripke import TransitionSystem, model_check
@@ -261,11 +267,13 @@ def tree_fingerprint(executor) -> tuple:
         tuple(nodes),
         None if executor.result is None else executor.result.value,
         running,
-        _freeze(dict(executor._completed_from)),
-        executor._fruitless,
+        # growth bookkeeping that changes what the executor does next (livelock and
+        # fruitless-growth limits, expansion budget, reserved free areas)
+        _freeze(dict(getattr(executor, "_completed_from", {}))),
+        getattr(executor, "_fruitless", 0),
         executor.stats.expansions,
-        tuple(executor.reserved),
-        tuple(sorted(executor.extra_areas)),
+        tuple(getattr(executor, "reserved", ())),
+        tuple(sorted(getattr(executor, "extra_areas", {}))),
     )
 
 
@@ -282,7 +290,10 @@ def _parse_pred(name: str) -> Predicate | None:
         if len(args) == 1:
             return IsRobotCloseTo(args[0])
         if len(args) == 2:
-            return IsRobotCloseTo(args[0], float(args[1]))
+            try:
+                return IsRobotCloseTo(args[0], float(args[1]))
+            except ValueError:
+                return None
         return None
     if len(args) != len(kinds):
         return None
@@ -518,12 +529,7 @@ def executor_for(demo, order: Sequence[str] | None = None, *, domain=None):
         from tamp.rg import plan
 
         order = plan(demo).order
-    c_goal = [
-        __import__("tamp.world.predicates", fromlist=["IsObjectAt"]).IsObjectAt(
-            demo.goal(g).object, demo.goal(g).area.name
-        )
-        for g in order
-    ]
+    c_goal = [IsObjectAt(demo.goal(g).object, demo.goal(g).area.name) for g in order]
     return PaBtExecutor(c_goal, domain or demo.domain(), free_areas=list(demo.free_areas))
 
 

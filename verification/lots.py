@@ -31,8 +31,27 @@ from verification.words import Word
 
 
 def check_run(aut, prefix, cycle, *, subject: str = "LOTS planned run") -> Verdict:
-    """The planned lasso against the task formula (``aut``: `tamp.lots.automaton.Automaton`)."""
-    return check_trace(aut.spot_formula, Word.lasso(prefix, cycle), subject=subject)
+    """The planned lasso against the task automaton (``aut``: `tamp.lots.automaton.Automaton`).
+
+    The verdict is Spot's product emptiness with the planner's own automaton; it is
+    cross-checked against our translation of the formula (`check_trace`), which also gives
+    the explanation (violated conjuncts, shortest bad prefix). A disagreement between the
+    two automata is reported as a violation: the planner's automaton is then not the task.
+    """
+    word = Word.lasso(prefix, cycle)
+    prod = spot.product(aut.spot_aut, word_automaton(word, aut.spot_aut))
+    accepted = not prod.is_empty()
+    ours = check_trace(aut.spot_formula, word, subject=subject)
+    ours.states_explored += prod.num_states()
+    if accepted == ours.holds:
+        return ours
+    ce = explain_on(aut.spot_aut, word, finite=False) if not accepted else ours.counterexample
+    ce.reason = (
+        f"the task automaton {'rejects' if not accepted else 'accepts'} the run but the "
+        f"formula {'holds' if ours.holds else 'does not hold'} on it: " + ce.reason
+    )
+    ce.aps = list(aut.ap)
+    return Verdict(subject, str(aut.spot_formula), "infinite", False, ours.states_explored, ce)
 
 
 def _started_at(spot_aut: spot.twa_graph, q: int) -> spot.twa_graph:
