@@ -228,7 +228,7 @@ def _state_key(s: WorldState) -> tuple:
 
 # -- executor snapshots -------------------------------------------------------------------------
 
-_SKIP = {"uid", "parent", "children", "tick_id", "__weakref__", "key", "pred", "action"}
+_SKIP = {"uid", "parent", "children", "tick_id", "status", "__weakref__", "key", "pred", "action"}
 
 
 def _freeze(v):
@@ -241,35 +241,59 @@ def _freeze(v):
     return str(v)
 
 
+_SLOTS: dict[type, tuple[str, ...]] = {}
+_PLAIN = (int, float, str, bool, type(None))
+
+
+def _slots_of(cls: type) -> tuple[str, ...]:
+    names = _SLOTS.get(cls)
+    if names is None:
+        names = tuple(
+            slot
+            for klass in cls.__mro__
+            for slot in getattr(klass, "__slots__", ())
+            if slot not in _SKIP
+        )
+        _SLOTS[cls] = names
+    return names
+
+
 def tree_fingerprint(executor) -> tuple:
     """Structure and execution state of the executor's tree, without tick numbers."""
     nodes = []
+    tick = executor.tick_id
     for n in executor.root.walk():
-        slots = []
-        for klass in type(n).__mro__:
-            for slot in getattr(klass, "__slots__", ()):
-                if slot in _SKIP or not hasattr(n, slot):
-                    continue
-                v = getattr(n, slot)
-                slots.append((slot, v is not None if slot == "handle" else _freeze(v)))
+        values = []
+        for slot in _slots_of(type(n)):
+            v = getattr(n, slot, None)
+            if slot == "handle":
+                v = v is not None
+            elif not isinstance(v, _PLAIN):
+                v = _freeze(v)
+            values.append(v)
         nodes.append(
             (
                 type(n).__name__,
                 n.describe(),
                 len(n.children),
                 None if n.status is None else n.status.value,
-                n.tick_id == executor.tick_id,
-                tuple(slots),
+                n.tick_id == tick,
+                tuple(values),
             )
         )
     running = executor.running.describe() if executor.running is not None else None
+    completed = getattr(executor, "_completed_from", {})
+    try:
+        completed_key = frozenset(completed.items())
+    except TypeError:  # unhashable keys: fall back to a canonical text form
+        completed_key = _freeze(dict(completed))
     return (
         tuple(nodes),
         None if executor.result is None else executor.result.value,
         running,
         # growth bookkeeping that changes what the executor does next (livelock and
         # fruitless-growth limits, expansion budget, reserved free areas)
-        _freeze(dict(getattr(executor, "_completed_from", {}))),
+        completed_key,
         getattr(executor, "_fruitless", 0),
         executor.stats.expansions,
         tuple(getattr(executor, "reserved", ())),
