@@ -105,3 +105,66 @@ def test_stutter_invariance_without_next(case, data) -> None:
         j = i - len(prefix)
         stuttered = Word.lasso(prefix, cycle[:j] + [cycle[j]] * (k + 1) + cycle[j + 1 :])
     assert check_trace(text, word).holds == check_trace(text, stuttered).holds
+
+
+@st.composite
+def systems(draw):
+    n_props = draw(st.integers(2, 3))
+    props = [f"p{i}" for i in range(n_props)]
+    n = draw(st.integers(1, 6))
+    labels = [draw(st.frozensets(st.sampled_from(props))) for _ in range(n)]
+    succ = [draw(st.lists(st.integers(0, n - 1), max_size=3, unique=True)) for _ in range(n)]
+    f = draw(formulas(props))
+    return props, labels, succ, f
+
+
+def _hoa_violates(props, labels, succ, f: spot.formula) -> bool:
+    """Oracle: the system as a HOA automaton (all runs accepting), product with A(!f)."""
+    neg = spot.translate(spot.formula.Not(f), "Buchi", "SBAcc", "small", "high")
+    ap = sorted(props)
+
+    def lab(x):
+        return "&".join(str(i) if p in x else f"!{i}" for i, p in enumerate(ap))
+
+    lines = [
+        "HOA: v1",
+        f"States: {len(labels)}",
+        "Start: 0",
+        f"AP: {len(ap)} " + " ".join(f'"{p}"' for p in ap),
+        "acc-name: all",
+        "Acceptance: 0 t",
+        "--BODY--",
+    ]
+    for s, x in enumerate(labels):
+        lines.append(f"State: {s}")
+        for d in succ[s] or [s]:  # a dead end repeats forever
+            lines.append(f"[{lab(x)}] {d}")
+    lines.append("--END--")
+    system = spot.automaton("\n".join(lines) + "\n")
+    return not spot.product(system, neg).is_empty()
+
+
+@settings(max_examples=EXAMPLES // 2)
+@given(systems())
+def test_model_check_matches_hoa_product_oracle(case) -> None:
+    from verification.kripke import TransitionSystem, model_check
+
+    props, labels, succ, text = case
+    f = spot.formula(text)
+    ts = TransitionSystem()
+    for i, x in enumerate(labels):
+        ts.add_state(x, f"s{i}")
+    for i, ds in enumerate(succ):
+        for d in ds:
+            ts.add_edge(i, d)
+    v = model_check(ts, f)
+    assert v.holds == (not _hoa_violates(props, labels, succ, f))
+    if not v.holds:
+        ce = v.counterexample
+        assert lasso_violates(f, list(ce.word.prefix), list(ce.word.cycle))
+        # the run is a path of the system, starting in its initial state
+        path = [int(s[1:]) for s in ce.steps]
+        assert path[0] == 0
+        loop = path + [path[len(ce.word.prefix)]]
+        for a, b in zip(loop, loop[1:], strict=False):
+            assert b in succ[a] or (not succ[a] and a == b)
