@@ -56,7 +56,11 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("must be >= 1", field="--max-waits")
     task = load_task(_resolve(args.task))
     events = load_events(_resolve(args.interference), task) if args.interference else []
-    report = run_task(task, events, mode=args.tree, seed=args.seed, max_waits=args.max_waits)
+    from verification import gate
+
+    report = run_task(
+        task, events, mode=args.tree, seed=args.seed, max_waits=args.max_waits, check=gate
+    )
     c = report.controller
     if args.dot:
         Path(args.dot).write_text(c.aut.to_dot())

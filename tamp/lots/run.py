@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -68,9 +69,17 @@ def run_task(
     max_waits: int = 3,
     max_actions: int | None = None,
     policy: Any = None,
+    check: Callable[[LotsController], Any] | None = None,
 ) -> Report:
-    """Run Alg. 1 to the end. Infeasibility is reported (``satisfied`` False, ``reason``)."""
+    """Run Alg. 1 to the end. Infeasibility is reported (``satisfied`` False, ``reason``).
+
+    ``check`` is called with the freshly planned controller before the robot acts: the
+    front ends pass `verification.gate`, which raises when the planned run or a table entry
+    does not lead to acceptance (the verification gate of the architecture).
+    """
     controller = LotsController(task, mode=mode, seed=seed, max_waits=max_waits)
+    if check is not None:
+        check(controller)
     world = SymbolicLotsWorld(task, events, policy=policy)
     limit = max_actions if max_actions is not None else controller.default_limit(len(events) + 4)
     actions: list[ActionRecord] = []
