@@ -212,15 +212,50 @@ class BasePlanner:
         j = int(round((y - self.workspace[2]) / GRID))
         return min(max(i, 0), self.nx - 1), min(max(j, 0), self.ny - 1)
 
-    def _blocked(self, obstacles: list[Disc], start, footprint: float) -> np.ndarray:
+    def _reaches(self, obstacles: list[Disc], footprint: float) -> list[tuple[float, float, float]]:
+        return [(o.x, o.y, footprint + o.r + CLEARANCE) for o in obstacles]
+
+    def _inside(self, p, footprint: float) -> bool:
+        xmin, xmax, ymin, ymax = self.workspace
+        return (
+            xmin + footprint <= p[0] <= xmax - footprint
+            and ymin + footprint <= p[1] <= ymax - footprint
+        )
+
+    def _escape(self, start, discs, footprint: float):
+        """Where to back away to when the base starts closer to objects than it may pass.
+
+        After putting an object down the base stands 0.4 m from it, inside its inflated
+        disc. Backing away radially only ever increases that distance (so the rotating
+        corners stay clear); the result is a point outside every inflated disc, or None.
+        """
+        close = [(x, y, r) for x, y, r in discs if math.hypot(start[0] - x, start[1] - y) < r]
+        if not close:
+            return start
+        dx = sum(
+            (start[0] - x) / max(math.hypot(start[0] - x, start[1] - y), 1e-9) for x, y, _ in close
+        )
+        dy = sum(
+            (start[1] - y) / max(math.hypot(start[0] - x, start[1] - y), 1e-9) for x, y, _ in close
+        )
+        base = math.atan2(dy, dx)
+        others = [d for d in discs if d not in close]
+        for turn in (0.0, 0.4, -0.4, 0.8, -0.8, 1.2, -1.2):  # |turn| < pi/2: never closer
+            ang = base + turn
+            for step in np.arange(0.05, 0.6, 0.05):
+                p = (start[0] + step * math.cos(ang), start[1] + step * math.sin(ang))
+                if not self._inside(p, footprint):
+                    break
+                clear = all(math.hypot(p[0] - x, p[1] - y) >= r + 0.01 for x, y, r in close)
+                if clear and self._segment_free(others, start, p, footprint):
+                    return p
+        return None
+
+    def _blocked(self, discs, start, footprint: float) -> np.ndarray:
         occ = self._border(footprint)
-        occ &= np.hypot(self.X - start[0], self.Y - start[1]) > 0.08
-        for o in obstacles:
-            reach = footprint + o.r + CLEARANCE
-            # the base may start closer than that (it just put the object down): then it
-            # may go anywhere that does not bring it closer to the object than it is now.
-            reach = min(reach, math.hypot(start[0] - o.x, start[1] - o.y) - 0.02)
-            occ |= np.hypot(self.X - o.x, self.Y - o.y) < reach
+        for x, y, r in discs:
+            # grid cells are GRID apart: keep cell centres half a diagonal further away
+            occ |= np.hypot(self.X - x, self.Y - y) < r + 0.6 * GRID
         return occ
 
     def plan(
@@ -232,14 +267,24 @@ class BasePlanner:
     ) -> list[tuple[float, float]] | None:
         """Waypoints from start to goal (both included), or None when there is no way.
 
-        The base (and whatever it carries) is a disc of radius ``footprint``.
+        The base (and whatever it carries) is a disc of radius ``footprint``; it keeps
+        ``footprint + r + CLEARANCE`` from every object's centre, backing away first when
+        it starts closer than that (see `_escape`).
         """
-        occ = self._blocked(obstacles, start, footprint)
-        gi = self.cell(*goal)
-        occ[max(gi[0] - 1, 0) : gi[0] + 2, max(gi[1] - 1, 0) : gi[1] + 2] = False
-        if self._segment_free(occ, start, goal):
+        discs = self._reaches(obstacles, footprint)
+        esc = self._escape(start, discs, footprint)
+        if esc is None:
+            return None
+        if esc != start:
+            rest = self.plan(esc, goal, obstacles, footprint)
+            return None if rest is None else [start, *rest]
+        if self._segment_free(discs, start, goal, footprint):
             return [start, goal]
+        occ = self._blocked(discs, start, footprint)
+        gi = self.cell(*goal)
         si = self.cell(*start)
+        occ[gi] = False
+        occ[si] = False
         moves = [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)]
         g = {si: 0.0}
         parent: dict = {si: None}
@@ -267,24 +312,30 @@ class BasePlanner:
             c = parent[c]
         cells.reverse()
         pts = [start] + [self._xy(c) for c in cells[1:-1]] + [goal]
-        return self._shortcut(occ, pts)
+        return self._shortcut(discs, pts, footprint)
 
     def _xy(self, c: tuple[int, int]) -> tuple[float, float]:
         return (self.workspace[0] + GRID * c[0], self.workspace[2] + GRID * c[1])
 
-    def _segment_free(self, occ: np.ndarray, a, b) -> bool:
-        n = max(2, int(math.hypot(b[0] - a[0], b[1] - a[1]) / (GRID / 2)) + 1)
-        for u in np.linspace(0.0, 1.0, n):
-            if occ[self.cell(a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1]))]:
+    def _segment_free(self, discs, a, b, footprint: float) -> bool:
+        """Exact: the segment keeps every inflated disc's distance (the region is convex)."""
+        if not (self._inside(a, footprint) and self._inside(b, footprint)):
+            return False
+        ax, ay = a
+        vx, vy = b[0] - a[0], b[1] - a[1]
+        n2 = vx * vx + vy * vy
+        for x, y, r in discs:
+            u = 0.0 if n2 == 0 else min(max(((x - ax) * vx + (y - ay) * vy) / n2, 0.0), 1.0)
+            if math.hypot(ax + u * vx - x, ay + u * vy - y) < r:
                 return False
         return True
 
-    def _shortcut(self, occ: np.ndarray, pts: list) -> list:
+    def _shortcut(self, discs, pts: list, footprint: float) -> list:
         out = [pts[0]]
         i = 0
         while i < len(pts) - 1:
             j = len(pts) - 1
-            while j > i + 1 and not self._segment_free(occ, pts[i], pts[j]):
+            while j > i + 1 and not self._segment_free(discs, pts[i], pts[j], footprint):
                 j -= 1
             out.append(pts[j])
             i = j

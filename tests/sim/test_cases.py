@@ -70,6 +70,21 @@ def test_objects_move_physically(case_runs, case):
             assert math.dist((first[o].x, first[o].y), (last[o].x, last[o].y)) < 0.005
 
 
+@pytest.mark.parametrize("case", [1, 2, 3])
+def test_placed_objects_stay_where_they_were_put(case_runs, case):
+    """After its last Place, an object is not pushed: it rests in that area at the end."""
+    result, _, system, _, _ = case_runs.get(f"case{case}.yaml")
+    last: dict[str, str] = {}
+    for a in result.actions:
+        if a.status == "SUCCESS" and a.action.startswith("Place("):
+            obj, area = (x.strip(" )") for x in a.action[6:].split(","))
+            last[obj] = area
+    assert last
+    for obj, area in last.items():
+        kind = system.scenario.object(obj).kind
+        assert rests_in(result.final_poses[obj], system.areas[area], kind), (obj, area)
+
+
 @pytest.mark.parametrize("case", [1, 2])
 def test_the_robot_carries_out_the_chosen_order(case_runs, case):
     result, prepared, system, _, _ = case_runs.get(f"case{case}.yaml")

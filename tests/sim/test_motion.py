@@ -97,3 +97,16 @@ def test_standoff_faces_the_target_and_avoids_neighbours():
     assert math.hypot(x - 2.0, y) == np.float64(0.4) or abs(math.hypot(x - 2.0, y) - 0.4) < 1e-9
     assert math.hypot(x - neighbour.x, y - neighbour.y) >= 0.45 + 0.035 + CLEARANCE
     assert abs(math.atan2(-y, 2.0 - x) - yaw) < 1e-9
+
+
+def test_base_backs_away_from_what_it_just_put_down():
+    placed = Disc(2.0, 0.0, 0.05)  # the obstacle box, 0.4 m ahead of the base
+    start, goal = (1.6, 0.0), (2.0, 1.5)
+    path = BasePlanner(WS).plan(start, goal, [placed], 0.45)
+    assert path is not None and path[0] == start
+    d0 = math.hypot(start[0] - placed.x, start[1] - placed.y)
+    for a, b in zip(path, path[1:], strict=False):
+        for u in np.linspace(0, 1, 100):
+            x, y = a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1])
+            # never closer than where it stood (the rotating corners reach 0.345 m)
+            assert math.hypot(x - placed.x, y - placed.y) >= d0 - 1e-6
