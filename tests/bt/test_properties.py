@@ -70,3 +70,48 @@ def test_random_demonstrations_reach_every_goal(case) -> None:
     attempts = report.attempts
     for prev, nxt in zip(attempts, attempts[1:], strict=False):
         assert prev["ended"] is not None and nxt["started"] >= prev["ended"]
+
+
+@st.composite
+def demonstrations(draw):
+    """Random demonstrations built with tamp.demo (objects may move twice, e.g. swaps)."""
+    from tamp.demo.build import make_demonstration
+
+    n = draw(st.integers(1, 3))
+    cells = draw(st.permutations(range(len(CELLS))))
+    starts = {f"O{k}": Point(*CELLS[cells[k]]) for k in range(n)}
+    spare = [Point(*CELLS[c]) for c in cells[n : n + 4]]
+    steps = []
+    for k in range(n):
+        steps.append((f"O{k}", spare[k]))
+    for k in range(n):
+        if draw(st.booleans()):  # second move: into another object's start place
+            steps.append((f"O{k}", starts[f"O{(k + 1) % n}"]))
+    frees = [Point(*CELLS[c]) for c in cells[n + 4 : n + 4 + draw(st.integers(0, 2))]]
+    free_areas = [Area(f"free{i + 1}", p, RADIUS) for i, p in enumerate(frees)]
+    demo = make_demonstration(starts, steps, RADIUS, free_areas=free_areas)
+    return demo, draw(st.integers(0, 2)), draw(st.booleans())
+
+
+@settings(max_examples=30, deadline=None)
+@given(demonstrations())
+def test_random_demonstrations_through_the_rg_layer(case) -> None:
+    from tamp.bt.run import execute_plan
+    from tamp.rg import plan
+
+    demo, n_obstacles, fail = case
+    result = plan(demo)
+    last = {}
+    for c in result.c_goal:
+        last[c.obj] = c
+    obstacles = [
+        Appear(f"X{j}", Point(g.pos.x + 0.05, g.pos.y, 0.1), None)
+        for j, g in enumerate(demo.goals[:n_obstacles])
+    ]
+    failures = [ScriptedFailure("Pick", None, 1)] if fail else []
+    report = execute_plan(demo, result.c_goal, obstacles=obstacles, failures=failures)
+    assert report.reached, report.reason
+    assert report.goals_reached == len(result.c_goal)
+    for c in last.values():
+        assert c.holds(report.final)
+    assert report.world.violations == 0
