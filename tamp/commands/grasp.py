@@ -1,0 +1,277 @@
+"""`tamp grasp`: synthetic data, training, evaluation and prediction for HRG-Net (§IV-B).
+
+    tamp grasp synth OUT --scenes N            render a Jacquard-format set with Drake
+    tamp grasp train --dataset jacquard PATH --model hrgnet --input rgbd
+    tamp grasp eval WEIGHTS --dataset jacquard PATH --split object
+    tamp grasp predict IMAGE --weights W [--depth D] [--camera camera.json]
+
+Heavy imports (torch, Drake) happen inside the handlers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from tamp.commands.output import print_json
+from tamp.errors import InputError
+
+DEFAULT_WEIGHTS = (
+    Path(__file__).resolve().parents[2] / "models" / "weights" / "hrgnet_synth_rgbd.pt"
+)
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser("grasp", help="grasp detection: HRG-Net and baselines")
+    sub = parser.add_subparsers(dest="grasp_command", metavar="ACTION", required=True)
+
+    p = sub.add_parser("synth", help="render a synthetic grasp dataset (Jacquard format)")
+    p.add_argument("out", help="output folder")
+    p.add_argument("--scenes", type=int, default=100, help="number of scenes (default 100)")
+    p.add_argument("--views", type=int, default=4, help="viewpoints per scene (default 4)")
+    p.add_argument("--size", type=int, default=128, help="image side in pixels (default 128)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p.set_defaults(func=run_synth)
+
+    p = sub.add_parser("train", help="train a grasp network")
+    _dataset_args(p)
+    p.add_argument("--model", choices=("hrgnet", "ggcnn", "grconvnet"), default="hrgnet")
+    p.add_argument("--input", choices=("d", "rgb", "rgbd"), default="rgbd")
+    p.add_argument("--out", default="runs/grasp", help="checkpoint folder (default runs/grasp)")
+    p.add_argument("--epochs", type=int, default=10)
+    p.add_argument("--batch-size", type=int, default=8)
+    p.add_argument("--batches-per-epoch", type=int, default=0, help="0: the whole split")
+    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--no-fusion", action="store_true", help="HRG-Net without layer fusion")
+    p.add_argument("--no-augment", action="store_true", help="no rotation/zoom augmentation")
+    p.add_argument(
+        "--model-arg",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="model constructor argument, VALUE in JSON (e.g. channels=16, widths=[8,16,32,64])",
+    )
+    p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
+    p.add_argument("--device", default="auto", help="auto, cpu, cuda, cuda:1 ...")
+    p.add_argument("--threads", type=int, default=0, help="torch CPU threads (0: default)")
+    p.add_argument("--eval-limit", type=int, default=0, help="evaluate on at most N test images")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true", help="print the training summary as JSON")
+    p.set_defaults(func=run_train)
+
+    p = sub.add_parser("eval", help="rectangle-metric accuracy and inference time")
+    p.add_argument("weights", help="weights file (best.pt or models/weights/*.pt)")
+    _dataset_args(p, split_choices=("image", "object", "both"))
+    p.add_argument("--device", default="cpu")
+    p.add_argument("--threads", type=int, default=0)
+    p.add_argument("--time-size", type=int, default=224, help="image side for the timing")
+    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=run_eval)
+
+    p = sub.add_parser("predict", help="grasps in an image (pixels; world frame with a camera)")
+    p.add_argument("image", help="RGB image (.png/.jpg) or depth image (.tiff, metres)")
+    p.add_argument("--depth", help="depth image (.tiff, metres) when IMAGE is the RGB image")
+    p.add_argument("--weights", default=str(DEFAULT_WEIGHTS))
+    p.add_argument("--camera", help="JSON with K (3x3) and X_WC (4x4), as `grasp synth` writes")
+    p.add_argument("--intrinsics", nargs=4, type=float, metavar=("FX", "FY", "CX", "CY"))
+    p.add_argument("--pose", nargs=16, type=float, metavar="X", help="X_WC, 16 numbers row-major")
+    p.add_argument("--top", type=int, default=1, help="number of grasps (default 1)")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=run_predict)
+
+
+def _dataset_args(p: argparse.ArgumentParser, split_choices=("image", "object")) -> None:
+    p.add_argument(
+        "--dataset",
+        nargs=2,
+        metavar=("{cornell,jacquard}", "PATH"),
+        required=True,
+        help="dataset kind and folder",
+    )
+    p.add_argument("--split", choices=split_choices, default="image")
+    p.add_argument("--test-fraction", type=float, default=0.1)
+    p.add_argument("--fold", type=int, help="test fold for k-fold cross-validation")
+    p.add_argument("--folds", type=int, default=5)
+    p.add_argument("--size", type=int, default=224, help="network input side in pixels")
+
+
+def _kind(args) -> tuple[str, str]:
+    kind, path = args.dataset
+    if kind not in ("cornell", "jacquard"):
+        raise InputError(f"--dataset: unknown kind {kind!r}; expected cornell or jacquard")
+    return kind, path
+
+
+def _model_args(items: list[str]) -> dict:
+    out = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise InputError(f"--model-arg: expected KEY=VALUE, got {item!r}")
+        try:
+            out[key] = json.loads(value)
+        except json.JSONDecodeError:
+            raise InputError(f"--model-arg {key}: value {value!r} is not JSON") from None
+    return out
+
+
+def run_synth(args) -> int:
+    from tamp.grasp.synthetic import SynthConfig, generate
+
+    if args.scenes < 1 or args.views < 1 or args.size < 16:
+        raise InputError("--scenes and --views must be >= 1 and --size >= 16")
+    cfg = SynthConfig(size=args.size, views=args.views, seed=args.seed)
+    summary = generate(args.out, args.scenes, cfg, progress=True)
+    if args.json:
+        print_json(summary | {"out": args.out})
+    else:
+        print(f"{summary['images']} images, {summary['grasps']} grasps in {args.out}")
+    return 0
+
+
+def run_train(args) -> int:
+    from tamp.grasp.train import TrainConfig, train
+
+    kind, path = _kind(args)
+    kwargs = _model_args(args.model_arg)
+    cfg = TrainConfig(
+        dataset=kind,
+        path=path,
+        model=args.model,
+        input=args.input,
+        out=args.out,
+        size=args.size,
+        epochs=args.epochs,
+        batch_size=args.batch_size,
+        batches_per_epoch=args.batches_per_epoch,
+        lr=args.lr,
+        split=args.split,
+        test_fraction=args.test_fraction,
+        fold=args.fold,
+        folds=args.folds,
+        seed=args.seed,
+        fusion=not args.no_fusion,
+        augment=not args.no_augment,
+        device=args.device,
+        threads=args.threads,
+        eval_limit=args.eval_limit,
+        model_kwargs=kwargs,
+    )
+    try:
+        summary = train(
+            cfg,
+            resume=args.resume,
+            progress=not args.quiet,
+            log=lambda m: print(m, file=sys.stderr, flush=True),
+        )
+    except TypeError as exc:  # a wrong --model-arg reaches the model constructor
+        raise InputError(f"--model-arg: {exc}") from None
+    if args.json:
+        print_json(summary)
+    else:
+        print(
+            f"{args.model} ({summary['parameters']} parameters): best accuracy "
+            f"{100 * summary['best_accuracy']:.1f}% on {summary['test_images']} test images; "
+            f"weights in {Path(args.out) / 'best.pt'}"
+        )
+    return 0
+
+
+def run_eval(args) -> int:
+    import torch
+
+    from tamp.grasp.datasets import GraspDataset, make_split
+    from tamp.grasp.evaluate import evaluate, time_inference
+    from tamp.grasp.models import INPUT_CHANNELS
+    from tamp.grasp.train import load_model
+
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    kind, path = _kind(args)
+    model, meta = load_model(args.weights, args.device)
+    size = args.size if args.size != 224 or "size" not in meta else meta["size"]
+    dataset = GraspDataset(kind, path, size, meta["input"])
+    splits = ("image", "object") if args.split == "both" else (args.split,)
+    result = {"weights": args.weights, "model": meta["model"], "input": meta["input"]}
+    result["size"] = size
+    for split in splits:
+        _, test = make_split(dataset.groups(), split, args.test_fraction, 0, args.fold, args.folds)
+        r = evaluate(model, dataset, test, device=args.device, progress=not args.quiet)
+        result[f"{split}_wise"] = r.as_dict()
+    result["time"] = time_inference(
+        model, INPUT_CHANNELS[meta["input"]], args.time_size, device=args.device
+    ) | {"size": args.time_size, "threads": torch.get_num_threads(), "device": args.device}
+    if args.json:
+        print_json(result)
+    else:
+        for split in splits:
+            r = result[f"{split}_wise"]
+            print(f"{split}-wise: {100 * r['accuracy']:.2f}% ({r['correct']}/{r['images']})")
+        t = result["time"]
+        print(
+            f"inference at {args.time_size}x{args.time_size}: {t['median_ms']:.1f} ms "
+            f"(median, min {t['min_ms']:.1f} ms, {t['threads']} threads, {args.device})"
+        )
+    return 0
+
+
+def _camera(args):
+    import numpy as np
+
+    if args.camera:
+        p = Path(args.camera)
+        if not p.is_file():
+            raise InputError("camera file not found", file=str(p))
+        try:
+            data = json.loads(p.read_text())
+            K, X = np.array(data["K"], dtype=float), np.array(data["X_WC"], dtype=float)
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+            raise InputError(
+                f"expected JSON with K (3x3) and X_WC (4x4): {exc}", file=str(p)
+            ) from None
+        if K.shape != (3, 3) or X.shape != (4, 4):
+            raise InputError("K must be 3x3 and X_WC 4x4", file=str(p))
+        return (K[0, 0], K[1, 1], K[0, 2], K[1, 2]), X
+    if args.intrinsics and args.pose:
+        return tuple(args.intrinsics), np.array(args.pose, dtype=float).reshape(4, 4)
+    if args.intrinsics or args.pose:
+        raise InputError("--intrinsics and --pose go together (or use --camera)")
+    return None, None
+
+
+def run_predict(args) -> int:
+    from tamp.grasp import formats
+    from tamp.grasp.predict import GraspPredictor
+
+    image = Path(args.image)
+    rgb = depth = None
+    if image.suffix.lower() in (".tif", ".tiff"):
+        depth = formats.read_depth_tiff(image)
+    else:
+        rgb = formats.read_rgb(image)
+    if args.depth:
+        depth = formats.read_depth_tiff(args.depth)
+    intrinsics, pose = _camera(args)
+    predictor = GraspPredictor.load(args.weights)
+    grasps = predictor.predict(rgb=rgb, depth=depth, intrinsics=intrinsics, X_WC=pose, n=args.top)
+    if args.json:
+        print_json([g.as_dict() for g in grasps])
+    else:
+        for g in grasps:
+            line = (
+                f"pixel ({g.u:.1f}, {g.v:.1f}) angle {g.angle_deg:.1f} deg width "
+                f"{g.width_px:.1f} px quality {g.quality:.3f}"
+            )
+            if g.position is not None:
+                x, y, z = g.position
+                line += (
+                    f" | world ({x:.3f}, {y:.3f}, {z:.3f}) m yaw {g.yaw_deg:.1f} deg "
+                    f"width {g.width_m * 100:.1f} cm"
+                )
+            print(line)
+    return 0

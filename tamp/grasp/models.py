@@ -1,0 +1,253 @@
+"""HRG-Net (§IV-B, Fig. 5) and the GG-CNN [49] and GR-ConvNet [57] style baselines.
+
+All three are fully convolutional and map an ``(N, C, H, W)`` image (C = 1 depth, 3 RGB or
+4 RGB-D) to four maps of the input size: grasp quality Q, cos 2Φ, sin 2Φ and width W
+(§IV-B; the angle is encoded by its double angle so that Φ and Φ + π give the same output).
+
+HRG-Net keeps a full-resolution branch through the whole network; every stage adds a
+branch at half the resolution of the previous lowest one, all branches run in parallel
+(residual blocks), and at the end of every stage the branches exchange information (layer
+fusion: each branch receives the sum of all branches, resampled by strided 3x3
+convolutions going down and 1x1 convolutions + bilinear upsampling going up). The head
+upsamples every branch to full resolution, concatenates and predicts the four maps. With
+``fusion=False`` (Table IV ablation) the branches never exchange information inside the
+network; a new branch still starts from the lowest existing one, and the head still
+concatenates them, so the only difference is the repeated exchange.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+MODELS = ("hrgnet", "ggcnn", "grconvnet")
+INPUT_CHANNELS = {"d": 1, "rgb": 3, "rgbd": 4}
+
+
+def _conv_bn(cin: int, cout: int, k: int = 3, stride: int = 1, relu: bool = True) -> nn.Sequential:
+    layers: list[nn.Module] = [
+        nn.Conv2d(cin, cout, k, stride, k // 2, bias=False),
+        nn.BatchNorm2d(cout),
+    ]
+    if relu:
+        layers.append(nn.ReLU(inplace=True))
+    return nn.Sequential(*layers)
+
+
+def _separable(cin: int, cout: int, relu: bool = True) -> nn.Sequential:
+    """Depthwise 3x3 + pointwise 1x1 convolution: the 3x3 receptive field at ~1/8 the cost."""
+    layers: list[nn.Module] = [
+        nn.Conv2d(cin, cin, 3, 1, 1, groups=cin, bias=False),
+        nn.BatchNorm2d(cin),
+        nn.Conv2d(cin, cout, 1, bias=False),
+        nn.BatchNorm2d(cout),
+    ]
+    if relu:
+        layers.append(nn.ReLU(inplace=True))
+    return nn.Sequential(*layers)
+
+
+class BasicBlock(nn.Module):
+    """Residual block of two 3x3 convolutions (the HRNet/ResNet basic block).
+
+    ``separable=True`` uses depthwise-separable convolutions, which keeps the
+    full-resolution branch affordable on a CPU.
+    """
+
+    def __init__(self, channels: int, separable: bool = False):
+        super().__init__()
+        conv = _separable if separable else _conv_bn
+        self.conv1 = conv(channels, channels)
+        self.conv2 = conv(channels, channels, relu=False)
+        nn.init.zeros_(self.conv2[-1].weight)  # zero-init residual: starts as identity
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return F.relu(x + self.conv2(self.conv1(x)))
+
+
+class FusionLayer(nn.Module):
+    """Layer fusion: output branch i = ReLU(x_i + sum_{j != i} resample_{j->i}(x_j)) (Fig. 5).
+
+    Going down (j < i) the map is average-pooled by 2^(i-j) and mapped by a 1x1 convolution;
+    going up (j > i) it is mapped by a 1x1 convolution and upsampled bilinearly. Pooling
+    instead of HRNet's chains of strided 3x3 convolutions keeps the exchange cheap at full
+    resolution, which is what makes the network run in real time on a CPU.
+    """
+
+    def __init__(self, widths: Sequence[int]):
+        super().__init__()
+        n = len(widths)
+        self.paths = nn.ModuleList(
+            nn.ModuleList(
+                nn.Identity() if j == i else _conv_bn(widths[j], widths[i], k=1, relu=False)
+                for j in range(n)
+            )
+            for i in range(n)
+        )
+        for row in self.paths:  # each exchange starts at zero and is learnt (zero-init BN)
+            for path in row:
+                if isinstance(path, nn.Sequential):
+                    nn.init.zeros_(path[-1].weight)
+
+    def forward(self, xs: list[torch.Tensor]) -> list[torch.Tensor]:
+        out = []
+        for i, row in enumerate(self.paths):
+            y = xs[i]
+            for j, path in enumerate(row):
+                if j < i:
+                    y = y + path(F.avg_pool2d(xs[j], 2 ** (i - j), ceil_mode=True))
+                elif j > i:
+                    z = path(xs[j])
+                    y = y + F.interpolate(
+                        z, size=y.shape[-2:], mode="bilinear", align_corners=False
+                    )
+            out.append(F.relu(y))
+        return out
+
+
+class HRGNet(nn.Module):
+    """High-resolution grasp network (§IV-B): parallel multi-resolution branches + fusion.
+
+    ``widths[k]`` is the channel count of the branch at 1/2^k resolution; stage ``s``
+    (s = 1..len(widths)) runs ``s`` branches with ``blocks`` residual blocks each. The head
+    maps every lower branch to the full-resolution width by a 1x1 convolution at its own
+    resolution, upsamples and adds it to the full-resolution branch (HRNetV2-style
+    aggregation at the cost of a sum), then a separable 3x3 and a 1x1 convolution give the
+    four output maps.
+    """
+
+    def __init__(
+        self,
+        in_channels: int = 4,
+        widths: Sequence[int] = (8, 16, 32, 64),
+        blocks: int = 1,
+        fusion: bool = True,
+        separable: bool = False,
+    ):
+        super().__init__()
+        self.fusion = fusion
+        self.widths = tuple(widths)
+        c0 = widths[0]
+        self.stem = nn.Sequential(_conv_bn(in_channels, c0), _separable(c0, c0))
+        self.stages = nn.ModuleList()
+        self.transitions = nn.ModuleList()
+        self.fusions = nn.ModuleList()
+        for s in range(1, len(widths) + 1):
+            if s > 1:  # a new, lower-resolution branch from the lowest existing one
+                self.transitions.append(_conv_bn(widths[s - 2], widths[s - 1], stride=2))
+            self.stages.append(
+                nn.ModuleList(
+                    nn.Sequential(*[BasicBlock(widths[b], separable) for _ in range(blocks)])
+                    for b in range(s)
+                )
+            )
+            self.fusions.append(FusionLayer(widths[:s]) if fusion and s > 1 else nn.Identity())
+        self.aggregate = nn.ModuleList(_conv_bn(w, c0, k=1, relu=False) for w in widths[1:])
+        self.head = nn.Sequential(_separable(c0, c0), nn.Conv2d(c0, 4, 1))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        xs = [self.stem(x)]
+        for s, branches in enumerate(self.stages):
+            if s > 0:
+                xs.append(self.transitions[s - 1](xs[-1]))
+            xs = [branch(t) for branch, t in zip(branches, xs, strict=True)]
+            if self.fusion and s > 0:
+                xs = self.fusions[s](xs)
+        y = xs[0]
+        for conv, t in zip(self.aggregate, xs[1:], strict=True):
+            y = y + F.interpolate(conv(t), size=y.shape[-2:], mode="bilinear", align_corners=False)
+        return self.head(F.relu(y))
+
+
+class GGCNN(nn.Module):
+    """GG-CNN [49]: three strided convolutions and three transposed convolutions (~62 k)."""
+
+    def __init__(self, in_channels: int = 1, filters: Sequence[int] = (32, 16, 8)):
+        super().__init__()
+        f1, f2, f3 = filters
+        self.body = nn.Sequential(
+            nn.Conv2d(in_channels, f1, 9, 3, 3),
+            nn.ReLU(inplace=True),
+            nn.Conv2d(f1, f2, 5, 2, 2),
+            nn.ReLU(inplace=True),
+            nn.Conv2d(f2, f3, 3, 2, 1),
+            nn.ReLU(inplace=True),
+            nn.ConvTranspose2d(f3, f3, 3, 2, 1, output_padding=1),
+            nn.ReLU(inplace=True),
+            nn.ConvTranspose2d(f3, f2, 5, 2, 2, output_padding=1),
+            nn.ReLU(inplace=True),
+            nn.ConvTranspose2d(f2, f1, 9, 3, 3),
+            nn.ReLU(inplace=True),
+        )
+        self.out = nn.Conv2d(f1, 4, 3, padding=1)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        y = self.body(x)
+        y = F.interpolate(y, size=x.shape[-2:], mode="bilinear", align_corners=False)
+        return self.out(y)
+
+
+class ResidualBlock(nn.Module):
+    def __init__(self, channels: int):
+        super().__init__()
+        self.conv1 = _conv_bn(channels, channels)
+        self.conv2 = _conv_bn(channels, channels, relu=False)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return x + self.conv2(self.conv1(x))
+
+
+class GRConvNet(nn.Module):
+    """GR-ConvNet [57]: encoder (9x9, two strided 4x4), five residual blocks, decoder."""
+
+    def __init__(self, in_channels: int = 4, channels: int = 32, dropout: float = 0.1):
+        super().__init__()
+        c = channels
+        self.encoder = nn.Sequential(
+            _conv_bn(in_channels, c, k=9),
+            nn.Conv2d(c, 2 * c, 4, 2, 1, bias=False),
+            nn.BatchNorm2d(2 * c),
+            nn.ReLU(inplace=True),
+            nn.Conv2d(2 * c, 4 * c, 4, 2, 1, bias=False),
+            nn.BatchNorm2d(4 * c),
+            nn.ReLU(inplace=True),
+        )
+        self.res = nn.Sequential(*[ResidualBlock(4 * c) for _ in range(5)])
+        self.decoder = nn.Sequential(
+            nn.ConvTranspose2d(4 * c, 2 * c, 4, 2, 1, bias=False),
+            nn.BatchNorm2d(2 * c),
+            nn.ReLU(inplace=True),
+            nn.ConvTranspose2d(2 * c, c, 4, 2, 1, bias=False),
+            nn.BatchNorm2d(c),
+            nn.ReLU(inplace=True),
+            nn.Conv2d(c, c, 9, 1, 4),
+        )
+        self.dropout = nn.Dropout(dropout)
+        self.out = nn.Conv2d(c, 4, 3, padding=1)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        y = self.decoder(self.res(self.encoder(x)))
+        if y.shape[-2:] != x.shape[-2:]:
+            y = F.interpolate(y, size=x.shape[-2:], mode="bilinear", align_corners=False)
+        return self.out(self.dropout(y))
+
+
+def build_model(name: str, input_mode: str = "rgbd", **kwargs) -> nn.Module:
+    """A model by name (:data:`MODELS`) for an input mode of :data:`INPUT_CHANNELS`."""
+    if input_mode not in INPUT_CHANNELS:
+        raise ValueError(f"unknown input {input_mode!r}; expected one of {list(INPUT_CHANNELS)}")
+    cin = INPUT_CHANNELS[input_mode]
+    if name == "hrgnet":
+        return HRGNet(cin, **kwargs)
+    if name == "ggcnn":
+        return GGCNN(cin, **kwargs)
+    if name == "grconvnet":
+        return GRConvNet(cin, **kwargs)
+    raise ValueError(f"unknown model {name!r}; expected one of {list(MODELS)}")
+
+
+def parameter_count(model: nn.Module) -> int:
+    return sum(p.numel() for p in model.parameters())

@@ -1,0 +1,140 @@
+"""Grasps from one camera image, in pixels and in the world frame (what the robot calls).
+
+``GraspPredictor.predict(rgb=..., depth=..., intrinsics=(fx, fy, cx, cy), X_WC=...)``
+takes the central square of the image, resizes it to the network's input size, runs the
+network, reads the best grasps at the peaks of the smoothed quality map (§IV-B: g = (x, y,
+z, Φ, w, q)) and maps them back to the original pixels. With the intrinsics and the camera
+pose X_WC (4x4, camera frame x right, y down, z forward, as Drake's RgbdSensor and the
+RealSense use), each grasp also gets its world point (from the z-depth at the grasp
+pixel), the closing direction's yaw in the world xy plane and the opening in metres.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from tamp.grasp.datasets import similarity, warp
+from tamp.grasp.maps import detect_grasps, fill_missing_depth, post_process, stack_input
+from tamp.grasp.rect import GraspRect, wrap_angle
+
+
+@dataclass(frozen=True)
+class PredictedGrasp:
+    """One grasp: pixel centre, angle (rad, counter-clockwise on screen), opening, quality;
+    world position (m), closing yaw (rad) and opening (m) when a camera was given."""
+
+    u: float
+    v: float
+    angle: float
+    width_px: float
+    quality: float
+    position: tuple[float, float, float] | None = None
+    yaw: float | None = None
+    width_m: float | None = None
+
+    @property
+    def angle_deg(self) -> float:
+        return math.degrees(self.angle)
+
+    @property
+    def yaw_deg(self) -> float | None:
+        return None if self.yaw is None else math.degrees(self.yaw)
+
+    def rect(self) -> GraspRect:
+        return GraspRect(self.u, self.v, self.angle, self.width_px, self.width_px / 2)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def pixel_to_camera(u: float, v: float, z: float, intrinsics) -> np.ndarray:
+    fx, fy, cx, cy = intrinsics
+    return np.array([(u - cx) * z / fx, (v - cy) * z / fy, z])
+
+
+def depth_at(depth: np.ndarray, u: float, v: float, radius: int = 2) -> float:
+    """Median of the valid depth values in a small window around (u, v)."""
+    h, w = depth.shape
+    r0, c0 = int(round(v)), int(round(u))
+    win = depth[max(r0 - radius, 0) : r0 + radius + 1, max(c0 - radius, 0) : c0 + radius + 1]
+    valid = win[np.isfinite(win) & (win > 0)]
+    if valid.size == 0:
+        valid = depth[np.isfinite(depth) & (depth > 0)]
+    return float(np.median(valid)) if valid.size else float("nan")
+
+
+def to_world(rect: GraspRect, depth: np.ndarray, intrinsics, X_WC: np.ndarray):
+    """(world point, closing yaw, opening in metres) of a pixel grasp."""
+    z = depth_at(depth, rect.x, rect.y)
+    d = rect.direction * rect.width / 2
+    a = pixel_to_camera(rect.x - d[0], rect.y - d[1], z, intrinsics)
+    b = pixel_to_camera(rect.x + d[0], rect.y + d[1], z, intrinsics)
+    c = pixel_to_camera(rect.x, rect.y, z, intrinsics)
+    R, p = X_WC[:3, :3], X_WC[:3, 3]
+    cw, aw, bw = R @ c + p, R @ a + p, R @ b + p
+    yaw = wrap_angle(math.atan2(bw[1] - aw[1], bw[0] - aw[0]))
+    return tuple(float(v) for v in cw), yaw, float(np.linalg.norm(bw - aw))
+
+
+class GraspPredictor:
+    """A trained network plus the pre- and post-processing of ``eval``."""
+
+    def __init__(self, model, meta: dict, device: str = "cpu"):
+        self.model = model
+        self.meta = meta
+        self.device = device
+        self.mode = meta["input"]
+        self.size = int(meta["size"])
+
+    @classmethod
+    def load(cls, path: str | Path, device: str = "cpu") -> GraspPredictor:
+        from tamp.grasp.train import load_model
+
+        model, meta = load_model(path, device)
+        return cls(model, meta, device)
+
+    def maps(self, rgb=None, depth=None) -> tuple[np.ndarray, np.ndarray]:
+        """(raw 4 x size x size output, 2x3 source->network pixel map) for one image."""
+        from tamp.errors import InputError
+        from tamp.grasp.evaluate import predict_maps
+
+        if self.mode in ("d", "rgbd") and depth is None:
+            raise InputError(f"this network takes {self.mode!r} input: a depth image is needed")
+        if self.mode in ("rgb", "rgbd") and rgb is None:
+            raise InputError(f"this network takes {self.mode!r} input: an RGB image is needed")
+        ref = depth if depth is not None else rgb
+        h, w = ref.shape[:2]
+        if rgb is not None and depth is not None and rgb.shape[:2] != depth.shape:
+            raise InputError(f"RGB {rgb.shape[:2]} and depth {depth.shape} differ in size")
+        matrix = similarity((w - 1) / 2, (h - 1) / 2, float(min(h, w)), self.size, 0.0)
+        d = (
+            warp(fill_missing_depth(np.asarray(depth, np.float32)), matrix, self.size)
+            if (depth is not None)
+            else None
+        )
+        c = warp(np.asarray(rgb)[..., :3], matrix, self.size) if rgb is not None else None
+        x = stack_input(c, d, self.mode)[None]
+        return predict_maps(self.model, x, self.device)[0], matrix
+
+    def predict(self, rgb=None, depth=None, intrinsics=None, X_WC=None, n: int = 1):
+        """The ``n`` best grasps, best first (see the module docstring)."""
+        raw, matrix = self.maps(rgb, depth)
+        q, angle, width = post_process(raw)
+        back = np.linalg.inv(np.vstack([matrix, [0, 0, 1]]))[:2]
+        out = []
+        for rect_net, quality in detect_grasps(q, angle, width, n=n):
+            r = rect_net.transformed(back)
+            pos = yaw = width_m = None
+            if intrinsics is not None and X_WC is not None and depth is not None:
+                pos, yaw, width_m = to_world(r, depth, intrinsics, np.asarray(X_WC, float))
+            out.append(PredictedGrasp(r.x, r.y, r.angle, r.width, quality, pos, yaw, width_m))
+        return out
+
+
+def predict_grasps(weights, rgb=None, depth=None, intrinsics=None, X_WC=None, n: int = 1):
+    """One-call form of :meth:`GraspPredictor.predict` (loads the weights each time)."""
+    return GraspPredictor.load(weights).predict(rgb, depth, intrinsics, X_WC, n)

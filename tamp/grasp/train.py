@@ -1,0 +1,271 @@
+"""Training of HRG-Net and the baselines with one code path (§V-A), resumable, optionally DDP.
+
+Loss: smooth L1 on the four maps (GR-ConvNet [57]), Adam. One epoch is
+``batches_per_epoch`` batches drawn from the training split (all of it when 0), so every
+model gets exactly the same training budget. After each epoch the model is evaluated on
+the test split (rectangle metric) and a checkpoint is written: ``last.pt`` (model,
+optimizer, epoch, RNG states: enough to resume bit-for-bit on the CPU) and ``best.pt``
+(weights of the most accurate epoch, what ``eval`` and ``predict`` load).
+
+Under ``torchrun`` (or any launcher that sets ``WORLD_SIZE``/``RANK``) the model is wrapped
+in DistributedDataParallel (``gloo`` on CPU, ``nccl`` on GPUs); each rank takes its own
+share of every epoch's batches, and only rank 0 evaluates and writes checkpoints.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from tamp.grasp.datasets import Augment, GraspDataset, make_split
+from tamp.grasp.evaluate import evaluate
+from tamp.grasp.models import build_model, parameter_count
+
+
+@dataclass
+class TrainConfig:
+    dataset: str
+    path: str
+    model: str = "hrgnet"
+    input: str = "rgbd"
+    out: str = "runs/grasp"
+    size: int = 224
+    epochs: int = 10
+    batch_size: int = 8
+    batches_per_epoch: int = 0
+    lr: float = 1e-3
+    split: str = "image"
+    test_fraction: float = 0.1
+    fold: int | None = None
+    folds: int = 5
+    seed: int = 0
+    fusion: bool = True
+    augment: bool = True
+    device: str = "auto"
+    threads: int = 0
+    eval_limit: int = 0
+    model_kwargs: dict = field(default_factory=dict)
+
+
+def model_kwargs(cfg: TrainConfig) -> dict:
+    kw = dict(cfg.model_kwargs)
+    if cfg.model == "hrgnet":
+        kw["fusion"] = cfg.fusion
+    return kw
+
+
+def loss_fn(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+    """Sum over the four maps of the smooth L1 loss (GR-ConvNet)."""
+    return sum(F.smooth_l1_loss(pred[:, k], target[:, k]) for k in range(4))
+
+
+def _rng_state() -> dict:
+    return {
+        "torch": torch.get_rng_state(),
+        "numpy": np.random.get_state(),
+        "python": random.getstate(),
+    }
+
+
+def _set_rng_state(state: dict) -> None:
+    torch.set_rng_state(state["torch"])
+    np.random.set_state(state["numpy"])
+    random.setstate(state["python"])
+
+
+def _device(name: str) -> torch.device:
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    return torch.device(name)
+
+
+def save_weights(path: Path, model: torch.nn.Module, cfg: TrainConfig, extra: dict) -> None:
+    """The deployable file: weights plus what is needed to rebuild the model."""
+    meta = {"model": cfg.model, "input": cfg.input, "size": cfg.size, "kwargs": model_kwargs(cfg)}
+    state = {k: v.detach().cpu() for k, v in model.state_dict().items()}
+    torch.save({"meta": meta | extra, "state_dict": state}, path)
+
+
+def load_model(path: str | Path, device: str = "cpu") -> tuple[torch.nn.Module, dict]:
+    """Rebuild a model from a weights or checkpoint file; returns (model in eval mode, meta)."""
+    from tamp.errors import InputError
+
+    p = Path(path)
+    if not p.is_file():
+        raise InputError("weights file not found", file=str(p))
+    try:
+        blob = torch.load(p, map_location=device, weights_only=False)
+        meta = blob["meta"]
+        model = build_model(meta["model"], meta["input"], **meta["kwargs"])
+        model.load_state_dict(blob["state_dict"])
+    except Exception as exc:  # torch.load raises pickle, zip, key and shape errors
+        raise InputError(
+            f"not a grasp weights file ({type(exc).__name__}: {exc})", file=str(p)
+        ) from None
+    return model.to(device).eval(), meta
+
+
+def train(
+    cfg: TrainConfig,
+    *,
+    resume: bool = False,
+    progress: bool = True,
+    log: Callable[[str], None] | None = None,
+) -> dict:
+    """Train as configured; returns a summary (accuracies per epoch, best, timings)."""
+    from tqdm import tqdm
+
+    distributed = int(os.environ.get("WORLD_SIZE", "1")) > 1
+    rank = int(os.environ.get("RANK", "0"))
+    world = int(os.environ.get("WORLD_SIZE", "1"))
+    device = _device(cfg.device)
+    if distributed:
+        import torch.distributed as dist
+
+        if not dist.is_initialized():
+            dist.init_process_group("nccl" if device.type == "cuda" else "gloo")
+        if device.type == "cuda":
+            device = torch.device("cuda", int(os.environ.get("LOCAL_RANK", "0")))
+            torch.cuda.set_device(device)
+    if cfg.threads:
+        torch.set_num_threads(cfg.threads)
+    log = log or (lambda m: None)
+
+    out = Path(cfg.out)
+    if rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    dataset = GraspDataset(cfg.dataset, cfg.path, cfg.size, cfg.input)
+    train_idx, test_idx = make_split(
+        dataset.groups(), cfg.split, cfg.test_fraction, cfg.seed, cfg.fold, cfg.folds
+    )
+    if cfg.eval_limit:
+        test_idx = test_idx[: cfg.eval_limit]
+
+    torch.manual_seed(cfg.seed)
+    np.random.seed(cfg.seed)
+    random.seed(cfg.seed)
+    model = build_model(cfg.model, cfg.input, **model_kwargs(cfg)).to(device)
+    optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr)
+    history: list[dict] = []
+    start_epoch = 0
+    best = -1.0
+    last = out / "last.pt"
+    if resume and last.is_file():
+        ckpt = torch.load(last, map_location=device, weights_only=False)
+        model.load_state_dict(ckpt["model"])
+        optimizer.load_state_dict(ckpt["optimizer"])
+        start_epoch = ckpt["epoch"]
+        history = ckpt["history"]
+        best = ckpt["best"]
+        _set_rng_state(ckpt["rng"])
+        log(f"resumed from {last} at epoch {start_epoch}")
+    net = model
+    if distributed:
+        from torch.nn.parallel import DistributedDataParallel
+
+        net = DistributedDataParallel(model, device_ids=[device] if device.type == "cuda" else None)
+
+    aug = Augment() if cfg.augment else None
+    per_epoch = cfg.batches_per_epoch or max(1, len(train_idx) // cfg.batch_size)
+    per_rank = max(1, per_epoch // world)
+    for epoch in range(start_epoch, cfg.epochs):
+        net.train()
+        # every rank draws the same permutation, then takes its own slice of it
+        rng = np.random.default_rng((cfg.seed, epoch))
+        order = rng.permutation(np.resize(rng.permutation(train_idx), per_epoch * cfg.batch_size))
+        mine = order.reshape(per_epoch, cfg.batch_size)[rank::world][:per_rank]
+        aug_rng = np.random.default_rng((cfg.seed, epoch, rank, 1))
+        t0 = time.perf_counter()
+        total = 0.0
+        bar = tqdm(mine, desc=f"epoch {epoch + 1}/{cfg.epochs}", disable=not progress or rank)
+        for batch in bar:
+            samples = [dataset.load(int(i), aug, aug_rng) for i in batch]
+            x = torch.from_numpy(np.stack([s.x for s in samples])).to(device)
+            y = torch.from_numpy(np.stack([s.y for s in samples])).to(device)
+            loss = loss_fn(net(x), y)
+            optimizer.zero_grad(set_to_none=True)
+            loss.backward()
+            optimizer.step()
+            total += float(loss.detach())
+            bar.set_postfix(loss=f"{float(loss.detach()):.4f}")
+        train_s = time.perf_counter() - t0
+        record = {"epoch": epoch + 1, "loss": total / len(mine), "train_s": train_s}
+        if rank == 0:
+            result = evaluate(model, dataset, test_idx, device=device, progress=False)
+            record |= {"accuracy": result.accuracy, "eval_images": result.images}
+            if result.accuracy > best:
+                best = result.accuracy
+                save_weights(out / "best.pt", model, cfg, {"accuracy": best, "epoch": epoch + 1})
+            history.append(record)
+            torch.save(
+                {
+                    "model": model.state_dict(),
+                    "optimizer": optimizer.state_dict(),
+                    "epoch": epoch + 1,
+                    "history": history,
+                    "best": best,
+                    "rng": _rng_state(),
+                    "config": asdict(cfg),
+                },
+                last,
+            )
+            log(json.dumps(record))
+        if distributed:
+            torch.distributed.barrier()
+    summary = {
+        "config": asdict(cfg),
+        "parameters": parameter_count(model),
+        "train_images": len(train_idx),
+        "test_images": len(test_idx),
+        "history": history,
+        "best_accuracy": best,
+        "world_size": world,
+        # sum of all weights: equal on every rank after DistributedDataParallel training
+        "checksum": float(sum(p.detach().double().sum() for p in model.parameters())),
+    }
+    if rank == 0:
+        (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    return summary
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _local_rank_entry(rank: int, world: int, port: int, cfg: TrainConfig, resume: bool) -> None:
+    os.environ.update(
+        MASTER_ADDR="127.0.0.1",
+        MASTER_PORT=str(port),
+        RANK=str(rank),
+        WORLD_SIZE=str(world),
+        LOCAL_RANK=str(rank),
+    )
+    import torch.distributed as dist
+
+    summary = train(cfg, resume=resume, progress=rank == 0)
+    (Path(cfg.out) / f"rank{rank}.json").write_text(json.dumps(summary))
+    dist.barrier()
+    dist.destroy_process_group()
+
+
+def train_local_processes(cfg: TrainConfig, nprocs: int, *, resume: bool = False) -> list[dict]:
+    """DistributedDataParallel on this machine without torchrun: ``nprocs`` processes
+    (gloo on the CPU) on 127.0.0.1 and a free port; returns every rank's summary."""
+    import torch.multiprocessing as mp
+
+    Path(cfg.out).mkdir(parents=True, exist_ok=True)
+    mp.spawn(_local_rank_entry, args=(nprocs, _free_port(), cfg, resume), nprocs=nprocs)
+    return [json.loads((Path(cfg.out) / f"rank{r}.json").read_text()) for r in range(nprocs)]
