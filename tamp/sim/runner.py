@@ -25,12 +25,15 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator, SimulatorConfig
 
 from tamp.sim.builder import SimSystem
 from tamp.sim.executor import ActionLog
+from tamp.sim.ik import grasp_transform
+from tamp.sim.models import ROBOT
 from tamp.world.interface import Status
 
 
@@ -108,6 +111,8 @@ class SimRunner:
         for cid in system.welds.values():
             system.plant.SetConstraintActiveStatus(self.plant_context, cid, False)
         self.active: tuple[str, int] | None = None
+        #: (time, object, variant, gap m, gap rad) each time a weld was switched on
+        self.weld_log: list[tuple[float, str, int, float, float]] = []
         self.appeared: dict[str, float] = {}
         self.base_path: list[tuple[float, float, float]] = []
 
@@ -122,8 +127,20 @@ class SimRunner:
         if self.active is not None:
             s.plant.SetConstraintActiveStatus(self.plant_context, s.welds[self.active], False)
         if want is not None:
+            self.weld_log.append((self.root.get_time(), *want, *self._weld_gap(*want)))
             s.plant.SetConstraintActiveStatus(self.plant_context, s.welds[want], True)
         self.active = want
+
+    def _weld_gap(self, obj: str, variant: int) -> tuple[float, float]:
+        """How far the object is from where the weld will hold it (m, rad): the snap."""
+        s = self.system
+        palm = s.plant.GetBodyByName(ROBOT.palm_body, s.robot)
+        X_WG = s.plant.EvalBodyPoseInWorld(self.plant_context, palm)
+        X_target = X_WG.multiply(grasp_transform(s.scenario.object(obj).kind, variant))
+        X_WO = s.plant.EvalBodyPoseInWorld(self.plant_context, s.bodies[obj])
+        X_err = X_target.inverse().multiply(X_WO)
+        angle = float(X_err.rotation().ToAngleAxis().angle())
+        return float(np.linalg.norm(X_err.translation())), angle
 
     def _appearances(self, t: float, log: list[ActionLog]) -> None:
         s = self.system

@@ -71,6 +71,17 @@ def test_objects_move_physically(case_runs, case):
 
 
 @pytest.mark.parametrize("case", [1, 2, 3])
+def test_welds_switch_on_only_at_the_grasp_pose(case_runs, case):
+    """FIELD_NOTES: a weld switched on with the bodies apart snaps them together."""
+    result, _, _, runner, _ = case_runs.get(f"case{case}.yaml")
+    picks = [a for a in result.actions if a.action.startswith("Pick(") and a.status == "SUCCESS"]
+    assert len(runner.weld_log) == len(picks)
+    for t, obj, variant, gap, angle in runner.weld_log:
+        assert gap < 0.01, f"{obj} was {gap * 1000:.1f} mm from the grasp pose at t={t:.2f}"
+        assert angle < 0.1, f"{obj} was turned {angle:.3f} rad from the grasp pose"
+
+
+@pytest.mark.parametrize("case", [1, 2, 3])
 def test_placed_objects_stay_where_they_were_put(case_runs, case):
     """After its last Place, an object is not pushed: it rests in that area at the end."""
     result, _, system, _, _ = case_runs.get(f"case{case}.yaml")
