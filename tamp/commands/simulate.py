@@ -1,6 +1,7 @@
 """``tamp simulate smp-mro``: run an SMP-MRO case in the Drake simulation (seed §V).
 
     tamp simulate smp-mro --case 1|2|3 [--scenario FILE] [--record out.html] [--json]
+                          [--meshcat] [--rate R] [--no-verify] [--max-sim-time S]
 
 Plans the order (RG + A*), passes the verification gate, then simulates the youBot-like
 robot executing the grown behavior tree. Prints the executed actions with their sim
@@ -24,6 +25,11 @@ def register(subparsers) -> None:
     s.add_argument("--scenario", help="simulation scenario file (overrides --case)")
     s.add_argument("--record", metavar="HTML", help="write a Meshcat animation (static HTML)")
     s.add_argument("--meshcat", action="store_true", help="live view in a local Meshcat")
+    s.add_argument(
+        "--rate",
+        type=float,
+        help="target real-time rate (default: as fast as possible; 1.0 with --meshcat)",
+    )
     s.add_argument("--no-verify", action="store_true", help="skip the verification gate")
     s.add_argument("--max-sim-time", type=float, help="override the scenario's time limit (s)")
     s.add_argument("--json", action="store_true", help="machine-readable output")
@@ -52,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         meshcat=meshcat,
         record=args.record,
         max_sim_time=args.max_sim_time,
+        realtime_rate=args.rate if args.rate is not None else (1.0 if args.meshcat else 0.0),
     )
     ok = result.status == "SUCCESS" and all(result.goals.values())
     if args.json:

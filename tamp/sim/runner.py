@@ -98,11 +98,12 @@ class SimResult:
 class SimRunner:
     """Runs a built `SimSystem` to the end of its task."""
 
-    def __init__(self, system: SimSystem):
+    def __init__(self, system: SimSystem, *, realtime_rate: float = 0.0):
+        """``realtime_rate``: 0 runs as fast as possible; 1.0 paces a live Meshcat view."""
         self.system = system
         self.simulator = Simulator(system.diagram)
         ApplySimulatorConfig(
-            SimulatorConfig(target_realtime_rate=0.0, publish_every_time_step=False),
+            SimulatorConfig(target_realtime_rate=realtime_rate, publish_every_time_step=False),
             self.simulator,
         )
         root = self.simulator.get_mutable_context()

@@ -76,6 +76,7 @@ def simulate_smp_mro(
     meshcat: Any = None,
     record: str | Path | None = None,
     max_sim_time: float | None = None,
+    realtime_rate: float = 0.0,
 ):
     """Plan, verify, build and run; returns (`SimResult`, `Prepared`, `SimSystem`).
 
@@ -91,7 +92,7 @@ def simulate_smp_mro(
 
         meshcat = Meshcat(0)
     system = build_diagram(scenario, prepared.policy, meshcat=meshcat)
-    runner = SimRunner(system)
+    runner = SimRunner(system, realtime_rate=realtime_rate)
     if record is not None:
         system.visualizer.StartRecording(set_transforms_while_recording=False)
     result = runner.run(max_sim_time=max_sim_time)
