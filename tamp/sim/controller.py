@@ -194,10 +194,10 @@ class SkillController(LeafSystem):
         q = np.asarray(x[:N])
         poses = self.body_poses_port.Eval(context)
         running = st.status.status is Status.RUNNING
-        if cmd.id != st.cmd.id and cmd.id > st.cmd.id and not cmd.cancel:
+        if cmd.id > st.cmd.id and not cmd.cancel:
             self._begin(st, cmd, t, q, poses)
         elif cmd.cancel and cmd.id == st.cmd.id and running:
-            st.segment = Segment(t, 0.0, q.copy(), self._hold(q))
+            st.segment = Segment(t, 0.0, q.copy(), q.copy())  # stop where it is
             st.phases, st.phase = (), ""
             st.status = SkillStatus(cmd.id, Status.FAILURE, "cancelled")
             st.cmd = cmd
@@ -210,13 +210,10 @@ class SkillController(LeafSystem):
         )
         return EventStatus.Succeeded()
 
-    def _hold(self, q: np.ndarray) -> np.ndarray:
-        return np.array(q, float)
-
     def _begin(self, st: ControllerState, cmd: SkillCommand, t, q, poses) -> None:
         st.cmd = cmd
-        for area in cmd.areas:  # an l_free the tree found at run time
-            self._areas.setdefault(area.name, area)
+        for area in cmd.areas:  # an l_free the tree found at run time: a fixed place,
+            self._areas.setdefault(area.name, area)  # so the table only ever grows
         st.memo = {}
         key = (cmd.name, tuple(cmd.args))
         st.attempts[key] = st.attempts.get(key, 0) + 1
@@ -233,7 +230,7 @@ class SkillController(LeafSystem):
             self._fail(st, t, q, str(exc))
 
     def _fail(self, st: ControllerState, t, q, why: str) -> None:
-        st.segment = Segment(t, 0.0, q.copy(), self._hold(q))
+        st.segment = Segment(t, 0.0, q.copy(), q.copy())
         st.status = SkillStatus(st.cmd.id, Status.FAILURE, why)
         st.phases, st.phase = (), ""
 
