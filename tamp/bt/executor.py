@@ -304,7 +304,7 @@ class PaBtExecutor:
             self.log_event("preempt", str(self.running.action), "implicit", str(node.action))
             self.running.halt(self)
         key = (node.uid, _fingerprint(self.state), _cursor(self.root))
-        if self._completed_from[key] >= self.max_repeats:
+        if self._completed_from.get(key, 0) >= self.max_repeats:
             self._abort = (
                 f"livelock: {node.action} would start again from a state it already "
                 f"succeeded from {self._completed_from[key]} times"
@@ -321,7 +321,7 @@ class PaBtExecutor:
         node.handle = None
         if self.running is node:
             self.running = None
-        rec = self._open_record(node.action)
+        rec = self._open_record(node.action) if self.record_attempts else None
         if rec is not None:
             rec.ended = self.tick_id
             rec.status = status.value
@@ -330,7 +330,8 @@ class PaBtExecutor:
             self._demote(node)
             return
         if self._start_key is not None:
-            self._completed_from[self._start_key] += 1
+            done = self._completed_from
+            done[self._start_key] = done.get(self._start_key, 0) + 1
         self._fruitless = 0
         # The rest of this tick must see the action's effects: observe again.
         world = self.world

@@ -379,23 +379,33 @@ class ReactiveSequence(Node):
     def tick(self, ctx: TickContext) -> Status:
         children = self.children
         r = self.running
-        preempt = ctx.preempt
-        i = 0
-        for child in children:
-            if r >= 0 and i != r and child.__class__ is not Condition:
-                mark = len(preempt)
-                preempt.append(children[r])
-                st = child.tick(ctx)
+        start = 0
+        if r >= 0:
+            # Children before the RUNNING one are re-checked with it registered for
+            # pre-emption: whatever starts among them halts it first.
+            preempt = ctx.preempt
+            mark = len(preempt)
+            preempt.append(children[r])
+            for i in range(r):
+                st = children[i].tick(ctx)
+                if st is SUCCESS:
+                    continue
                 del preempt[mark:]
-            else:
-                st = child.tick(ctx)
+                if children[r].status is RUNNING:
+                    children[r].halt(ctx)
+                self.running = i if st is RUNNING else -1
+                self.status = st
+                self.tick_id = ctx.tick_id
+                return st
+            del preempt[mark:]
+            start = r
+        n = len(children)
+        i = start
+        while i < n:
+            st = children[i].tick(ctx)
             if st is SUCCESS:
-                if i == r:
-                    r = -1
                 i += 1
                 continue
-            if r >= 0 and i != r and children[r].status is RUNNING:
-                children[r].halt(ctx)
             self.running = i if st is RUNNING else -1
             self.status = st
             self.tick_id = ctx.tick_id
@@ -434,23 +444,31 @@ class ReactiveFallback(Node):
     def tick(self, ctx: TickContext) -> Status:
         children = self.children
         r = self.running
-        preempt = ctx.preempt
-        i = 0
-        for child in children:
-            if r >= 0 and i != r and child.__class__ is not Condition:
-                mark = len(preempt)
-                preempt.append(children[r])
-                st = child.tick(ctx)
+        start = 0
+        if r >= 0:
+            preempt = ctx.preempt
+            mark = len(preempt)
+            preempt.append(children[r])
+            for i in range(r):
+                st = children[i].tick(ctx)
+                if st is FAILURE:
+                    continue
                 del preempt[mark:]
-            else:
-                st = child.tick(ctx)
+                if children[r].status is RUNNING:
+                    children[r].halt(ctx)
+                self.running = i if st is RUNNING else -1
+                self.status = st
+                self.tick_id = ctx.tick_id
+                return st
+            del preempt[mark:]
+            start = r
+        n = len(children)
+        i = start
+        while i < n:
+            st = children[i].tick(ctx)
             if st is FAILURE:
-                if i == r:
-                    r = -1
                 i += 1
                 continue
-            if r >= 0 and i != r and children[r].status is RUNNING:
-                children[r].halt(ctx)
             self.running = i if st is RUNNING else -1
             self.status = st
             self.tick_id = ctx.tick_id

@@ -222,3 +222,25 @@ def test_condition_is_evaluated_once_per_tick() -> None:
     root = Sequence([Condition(pred), Condition(pred), Condition(pred)])
     assert ctx.tick(root) is S
     assert len(calls) == 1
+
+
+def test_nested_reactive_switch_cancels_the_deep_running_skill_first() -> None:
+    """RS(RF(c1, A1), RS(RF(c2, A2), A3)): A3 runs deep inside; c1 breaks -> A3 is
+    cancelled before A1 starts; then c1 holds again and c2 breaks -> A1 was done, A2 runs."""
+    w = ScriptWorld(c1=True, c2=True)
+    ctx = Ctx(w)
+    inner = ReactiveSequence(
+        [ReactiveFallback([Condition(Flag("c2")), ActionNode(act("A2"))]), ActionNode(act("A3"))]
+    )
+    root = ReactiveSequence(
+        [ReactiveFallback([Condition(Flag("c1")), ActionNode(act("A1"))]), inner]
+    )
+    assert ctx.tick(root) is R
+    w.flags["c1"] = False
+    assert ctx.tick(root) is R
+    assert w.calls == [("start", "A3"), ("cancel", "A3"), ("start", "A1")]
+    assert inner.running == -1 and root.running == 0
+    w.flags.update(c1=True, c2=False)
+    assert ctx.tick(root) is R
+    assert w.calls[3:] == [("cancel", "A1"), ("start", "A2")]
+    assert ctx.ex.stats.implicit_preemptions == 0
