@@ -154,6 +154,7 @@ class PaBtExecutor:
         self.tick_id = 0
         self.preempt: list[Node] = []
         self.running: ActionNode | None = None
+        self.ticking = False
         # Results.
         self.log: list[GrowthEvent] = []
         self.attempts: list[ActionRecord] = []
@@ -179,9 +180,11 @@ class PaBtExecutor:
         self.state = state
         self.world = world
         self.cache.clear()
+        self.ticking = True
         try:
             st = self.root.tick(self)
         finally:
+            self.ticking = False
             self.world = None
             del self.preempt[:]
         if self._abort is not None:
@@ -486,7 +489,7 @@ class PaBtExecutor:
         {
             "domain", "priority", "state", "world", "c_goal", "max_expansions", "max_retries",
             "max_repeats", "max_fruitless", "failure_decay", "record_attempts", "tick_id",
-            "result", "reason", "_abort", "_start_key", "_fruitless", "goal_areas",
+            "result", "reason", "_abort", "_start_key", "_fruitless", "goal_areas", "ticking",
         }
     )  # fmt: skip
     _SHALLOW = frozenset(

@@ -132,6 +132,8 @@ def expand(
     a nested subtree resolves conflicts only inside it; the outermost subtree then resolves
     its conflicts with the rest of the tree.
     """
+    if ex.ticking:
+        raise RuntimeError("the tree is edited only between ticks")
     if depth > MAX_DEPTH:
         raise ExpansionError(f"expansion of {cond_node.pred} nests deeper than {MAX_DEPTH}")
     parent = cond_node.parent
@@ -276,11 +278,19 @@ def resolve_conflicts(ex: PaBtExecutor, sub: Node, scope: Node | None = None) ->
             _move_above_parent(ex, sub, conflict, scope)
         moves += 1
         conflict = find_conflict(sub, scope)
+    parent = sub.parent
+    where = ""
+    if parent is not None:
+        index = parent.index_of(sub)
+        after = parent.children[index + 1] if index + 1 < len(parent.children) else None
+        where = f", now child {index} of its {parent.describe()}"
+        if after is not None:
+            where += f", before {guard_of(after) or after.describe()}"
     ex.log_event(
         "conflict",
         guard_of(sub),
         str(first),
-        f"moved up {moves} place(s) in execution order",
+        f"moved up {moves} place(s) in execution order{where}",
         sub,
     )
     ex.count_conflict(moves)
