@@ -76,7 +76,7 @@ def test_welds_switch_on_only_at_the_grasp_pose(case_runs, case):
     result, _, _, runner, _ = case_runs.get(f"case{case}.yaml")
     picks = [a for a in result.actions if a.action.startswith("Pick(") and a.status == "SUCCESS"]
     assert len(runner.weld_log) == len(picks)
-    for t, obj, variant, gap, angle in runner.weld_log:
+    for t, obj, _variant, gap, angle in runner.weld_log:
         assert gap < 0.01, f"{obj} was {gap * 1000:.1f} mm from the grasp pose at t={t:.2f}"
         assert angle < 0.1, f"{obj} was turned {angle:.3f} rad from the grasp pose"
 
