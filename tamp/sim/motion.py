@@ -222,7 +222,7 @@ class BasePlanner:
             and ymin + footprint <= p[1] <= ymax - footprint
         )
 
-    def _escape(self, start, discs, footprint: float):
+    def _escape(self, start, goal, discs, footprint: float):
         """Where to back away to when the base starts closer to objects than it may pass.
 
         After putting an object down the base stands 0.4 m from it, inside its inflated
@@ -240,6 +240,7 @@ class BasePlanner:
         )
         base = math.atan2(dy, dx)
         others = [d for d in discs if d not in close]
+        found = []
         for turn in (0.0, 0.4, -0.4, 0.8, -0.8, 1.2, -1.2):  # |turn| < pi/2: never closer
             ang = base + turn
             for step in np.arange(0.05, 0.6, 0.05):
@@ -248,7 +249,10 @@ class BasePlanner:
                     break
                 clear = all(math.hypot(p[0] - x, p[1] - y) >= r + 0.01 for x, y, r in close)
                 if clear and self._segment_free(others, start, p, footprint):
-                    return p
+                    found.append(p)
+                    break
+        if found:  # the way out that leaves the base nearest its goal
+            return min(found, key=lambda p: math.hypot(p[0] - goal[0], p[1] - goal[1]))
         return None
 
     def _blocked(self, discs, start, footprint: float) -> np.ndarray:
@@ -272,7 +276,7 @@ class BasePlanner:
         it starts closer than that (see `_escape`).
         """
         discs = self._reaches(obstacles, footprint)
-        esc = self._escape(start, discs, footprint)
+        esc = self._escape(start, goal, discs, footprint)
         if esc is None:
             return None
         if esc != start:
