@@ -55,6 +55,13 @@ def register(subparsers) -> None:
         help="model constructor argument, VALUE in JSON (e.g. channels=16, widths=[8,16,32,64])",
     )
     p.add_argument("--resume", action="store_true", help="continue from OUT/last.pt")
+    p.add_argument(
+        "--nproc",
+        type=int,
+        default=1,
+        help="DistributedDataParallel over N local processes (gloo on CPU); for several "
+        "GPUs or machines launch with torchrun instead",
+    )
     p.add_argument("--device", default="auto", help="auto, cpu, cuda, cuda:1 ...")
     p.add_argument("--threads", type=int, default=0, help="torch CPU threads (0: default)")
     p.add_argument("--eval-limit", type=int, default=0, help="evaluate on at most N test images")
@@ -137,6 +144,8 @@ def run_synth(args) -> int:
 def run_train(args) -> int:
     from tamp.grasp.train import TrainConfig, train
 
+    if args.nproc < 1:
+        raise InputError(f"--nproc must be >= 1, got {args.nproc}")
     kind, path = _kind(args)
     kwargs = _model_args(args.model_arg)
     cfg = TrainConfig(
@@ -163,12 +172,17 @@ def run_train(args) -> int:
         model_kwargs=kwargs,
     )
     try:
-        summary = train(
-            cfg,
-            resume=args.resume,
-            progress=not args.quiet,
-            log=lambda m: print(m, file=sys.stderr, flush=True),
-        )
+        if args.nproc > 1:
+            from tamp.grasp.train import train_local_processes
+
+            summary = train_local_processes(cfg, args.nproc, resume=args.resume)[0]
+        else:
+            summary = train(
+                cfg,
+                resume=args.resume,
+                progress=not args.quiet,
+                log=lambda m: print(m, file=sys.stderr, flush=True),
+            )
     except TypeError as exc:  # a wrong --model-arg reaches the model constructor
         raise InputError(f"--model-arg: {exc}") from None
     if args.json:
@@ -186,7 +200,7 @@ def run_eval(args) -> int:
     import torch
 
     from tamp.grasp.datasets import GraspDataset, make_split
-    from tamp.grasp.evaluate import evaluate, time_inference
+    from tamp.grasp.evaluate import evaluate, optimize_for_cpu, time_inference
     from tamp.grasp.models import INPUT_CHANNELS
     from tamp.grasp.train import load_model
 
@@ -203,8 +217,9 @@ def run_eval(args) -> int:
         _, test = make_split(dataset.groups(), split, args.test_fraction, 0, args.fold, args.folds)
         r = evaluate(model, dataset, test, device=args.device, progress=not args.quiet)
         result[f"{split}_wise"] = r.as_dict()
+    timed = optimize_for_cpu(model) if args.device == "cpu" else model
     result["time"] = time_inference(
-        model, INPUT_CHANNELS[meta["input"]], args.time_size, device=args.device
+        timed, INPUT_CHANNELS[meta["input"]], args.time_size, device=args.device
     ) | {"size": args.time_size, "threads": torch.get_num_threads(), "device": args.device}
     if args.json:
         print_json(result)

@@ -92,3 +92,17 @@ def time_inference(
                 times.append((time.perf_counter() - t) * 1000)
     times.sort()
     return {"median_ms": times[len(times) // 2], "min_ms": times[0], "repeats": repeats}
+
+
+def optimize_for_cpu(model: torch.nn.Module) -> torch.nn.Module:
+    """An inference copy with every BatchNorm folded into the convolution before it
+    (torch.fx); same outputs, fewer passes over memory. Falls back to the model itself
+    when it cannot be traced."""
+    import copy
+
+    from torch.fx.experimental.optimization import fuse
+
+    try:
+        return fuse(copy.deepcopy(model).eval())
+    except Exception:  # pragma: no cover - an untraceable model still runs unfused
+        return model.eval()

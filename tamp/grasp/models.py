@@ -37,6 +37,13 @@ def _conv_bn(cin: int, cout: int, k: int = 3, stride: int = 1, relu: bool = True
     return nn.Sequential(*layers)
 
 
+def _small_output(conv: nn.Conv2d) -> None:
+    """Start the output maps near zero (the value of almost every target pixel), so that
+    training spends no steps unlearning a random output offset."""
+    nn.init.normal_(conv.weight, std=1e-3)
+    nn.init.zeros_(conv.bias)
+
+
 def _separable(cin: int, cout: int, relu: bool = True) -> nn.Sequential:
     """Depthwise 3x3 + pointwise 1x1 convolution: the 3x3 receptive field at ~1/8 the cost."""
     layers: list[nn.Module] = [
@@ -147,6 +154,7 @@ class HRGNet(nn.Module):
             self.fusions.append(FusionLayer(widths[:s]) if fusion and s > 1 else nn.Identity())
         self.aggregate = nn.ModuleList(_conv_bn(w, c0, k=1, relu=False) for w in widths[1:])
         self.head = nn.Sequential(_separable(c0, c0), nn.Conv2d(c0, 4, 1))
+        _small_output(self.head[-1])
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         xs = [self.stem(x)]
@@ -230,8 +238,8 @@ class GRConvNet(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         y = self.decoder(self.res(self.encoder(x)))
-        if y.shape[-2:] != x.shape[-2:]:
-            y = F.interpolate(y, size=x.shape[-2:], mode="bilinear", align_corners=False)
+        # identity when the side is a multiple of 4; unconditional so that torch.fx traces it
+        y = F.interpolate(y, size=x.shape[-2:], mode="bilinear", align_corners=False)
         return self.out(self.dropout(y))
 
 

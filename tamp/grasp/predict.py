@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
+import torch
 
 from tamp.grasp.datasets import similarity, warp
 from tamp.grasp.maps import detect_grasps, fill_missing_depth, post_process, stack_input
@@ -84,6 +85,10 @@ class GraspPredictor:
     """A trained network plus the pre- and post-processing of ``eval``."""
 
     def __init__(self, model, meta: dict, device: str = "cpu"):
+        if device == "cpu" and isinstance(model, torch.nn.Module):
+            from tamp.grasp.evaluate import optimize_for_cpu
+
+            model = optimize_for_cpu(model)
         self.model = model
         self.meta = meta
         self.device = device

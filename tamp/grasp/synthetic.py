@@ -3,7 +3,7 @@
 Each scene puts one to three objects (:mod:`tamp.grasp.objects`: the LOTS tools and blocks
 and random primitives) on a table and renders them with ``RgbdSensor`` + the VTK render
 engine (headless, EGL) from several eye-in-hand viewpoints: top-down-ish cameras at
-0.28-0.45 m above a target object, tilted up to 15 degrees, at a random yaw, as the hand
+0.20-0.32 m above a target object, tilted up to 15 degrees, at a random yaw, as the hand
 camera sees the table while the arm approaches a grasp (§IV-B, Fig. 6). The ground-truth
 rectangles come from the objects' geometry projected through the camera intrinsics; a
 grasp is kept only when the label image shows its own object at the grasp centre (not
@@ -38,12 +38,12 @@ class SynthConfig:
     """What to render: image size, vertical field of view, views per scene, seed."""
 
     size: int = 128
-    fov_y_deg: float = 50.0
+    fov_y_deg: float = 45.0
     views: int = 4
     seed: int = 0
     max_objects: int = 3
-    min_height: float = 0.28
-    max_height: float = 0.45
+    min_height: float = 0.2
+    max_height: float = 0.32
     max_tilt_deg: float = 15.0
 
 

@@ -66,9 +66,24 @@ def _lowres_influence(model: HRGNet) -> float:
     return float((after - base).abs().max())
 
 
+def _as_if_trained(model: HRGNet) -> HRGNet:
+    """Undo the zero/small initialisations (which make fresh exchange paths silent)."""
+    for m in model.modules():
+        if isinstance(m, torch.nn.BatchNorm2d):
+            torch.nn.init.ones_(m.weight)
+        elif isinstance(m, torch.nn.Conv2d):
+            m.reset_parameters()
+    return model
+
+
+def test_fusion_paths_start_silent():
+    model = HRGNet(4, fusion=True)
+    assert _lowres_influence(model) == 0.0  # zero-initialised exchange: learnt from zero
+
+
 def test_fusion_switch():
     torch.manual_seed(0)
-    on, off = HRGNet(4, fusion=True), HRGNet(4, fusion=False)
+    on, off = _as_if_trained(HRGNet(4, fusion=True)), _as_if_trained(HRGNet(4, fusion=False))
     assert parameter_count(on) > parameter_count(off)
     # with fusion the full-resolution branch hears the lowest branch; without, it does not
     assert _lowres_influence(on) > 1e-3

@@ -1,0 +1,149 @@
+"""HRG-Net against the GR-ConvNet- and GG-CNN-style baselines and the no-fusion ablation.
+
+One table (and one JSON line): parameters, object-wise accuracy on the synthetic test split
+(rectangle metric), CPU time per 224x224 RGB-D image (batch 1; median and minimum), and GPU
+time where a GPU exists. Every model is trained by the same code with the same budget.
+
+    python benchmarks/grasp.py --runs DIR      # evaluate runs made by `tamp grasp train`
+                                               # (DIR/{hrgnet,hrgnet_nofusion,grconvnet,ggcnn})
+    python benchmarks/grasp.py --quick         # render a small set and train everything here
+    python benchmarks/grasp.py --train DIR --data SYNTH   # the full documented budget
+
+Targets (issue 7): HRG-Net accuracy >= GR-ConvNet's and >= 90 %; fusion on beats off;
+CPU inference <= 60 ms at 224x224 RGB-D.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+RUNS = {
+    "hrgnet": dict(model="hrgnet", fusion=True),
+    "hrgnet_nofusion": dict(model="hrgnet", fusion=False),
+    "grconvnet": dict(model="grconvnet", model_kwargs={"channels": 16}),
+    "ggcnn": dict(model="ggcnn"),
+}
+FULL_BUDGET = dict(size=128, epochs=8, batches_per_epoch=150, batch_size=8, split="object")
+QUICK_BUDGET = dict(size=64, epochs=2, batches_per_epoch=15, batch_size=8, split="object")
+
+
+def train_all(data: Path, out: Path, budget: dict, threads: int) -> None:
+    from tamp.grasp.train import TrainConfig, train
+
+    for name, spec in RUNS.items():
+        print(f"training {name} ...", file=sys.stderr, flush=True)
+        cfg = TrainConfig(
+            dataset="jacquard", path=str(data), input="rgbd", out=str(out / name),
+            threads=threads, **budget, **spec,
+        )  # fmt: skip
+        train(cfg, progress=True)
+
+
+def cpu_time(model, threads: int, size: int = 224, repeats: int = 30) -> dict:
+    import torch
+
+    from tamp.grasp.evaluate import optimize_for_cpu, time_inference
+
+    torch.set_num_threads(threads)
+    return time_inference(optimize_for_cpu(model), 4, size, repeats=repeats)
+
+
+def measure(runs: Path, data: Path | None, threads: list[int]) -> list[dict]:
+    import torch
+
+    from tamp.grasp.datasets import GraspDataset, make_split
+    from tamp.grasp.evaluate import evaluate, time_inference
+    from tamp.grasp.models import parameter_count
+    from tamp.grasp.train import load_model
+
+    rows = []
+    for name in RUNS:
+        summary = json.loads((runs / name / "summary.json").read_text())
+        cfg = summary["config"]
+        model, meta = load_model(runs / name / "best.pt")
+        root = data or Path(cfg["path"])
+        ds = GraspDataset(cfg["dataset"], root, cfg["size"], cfg["input"])
+        _, test = make_split(ds.groups(), cfg["split"], cfg["test_fraction"], cfg["seed"])
+        acc = evaluate(model, ds, test, progress=False)
+        row = {
+            "model": name,
+            "parameters": parameter_count(model),
+            "accuracy": acc.accuracy,
+            "test_images": acc.images,
+            "best_epoch": meta.get("epoch"),
+            "budget": {k: cfg[k] for k in ("size", "epochs", "batches_per_epoch", "batch_size")},
+        }
+        for t in threads:
+            row[f"cpu_{t}t"] = cpu_time(model, t)
+        if torch.cuda.is_available():
+            row["gpu"] = time_inference(model.cuda(), 4, 224, device="cuda", repeats=50)
+        rows.append(row)
+    return rows
+
+
+def report(rows: list[dict], threads: list[int]) -> dict:
+    by = {r["model"]: r for r in rows}
+    head = f"{'model':<16}{'params':>10}{'acc (OW)':>10}"
+    head += "".join(f"{f'CPU {t}t ms':>22}" for t in threads)
+    head += f"{'GPU ms':>10}" if any("gpu" in r for r in rows) else ""
+    print(head)
+    for r in rows:
+        line = f"{r['model']:<16}{r['parameters']:>10,}{100 * r['accuracy']:>9.1f}%"
+        for t in threads:
+            c = r[f"cpu_{t}t"]
+            line += f"{c['median_ms']:>12.1f} (min {c['min_ms']:>4.1f})"
+        if "gpu" in r:
+            line += f"{r['gpu']['median_ms']:>10.2f}"
+        print(line)
+    best_cpu = min(by["hrgnet"][f"cpu_{t}t"]["median_ms"] for t in threads)
+    targets = {
+        "hrgnet >= grconvnet": by["hrgnet"]["accuracy"] >= by["grconvnet"]["accuracy"],
+        "hrgnet >= 90%": by["hrgnet"]["accuracy"] >= 0.90,
+        "fusion on > off": by["hrgnet"]["accuracy"] > by["hrgnet_nofusion"]["accuracy"],
+        "hrgnet CPU <= 60 ms (224 RGB-D)": best_cpu <= 60.0,
+    }
+    for k, ok in targets.items():
+        print(f"  {'PASS' if ok else 'FAIL'}  {k}")
+    return {"rows": rows, "targets": targets}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=Path, help="folder with runs made by `tamp grasp train`")
+    ap.add_argument("--data", type=Path, help="synthetic dataset (default: each run's path)")
+    ap.add_argument("--quick", action="store_true", help="small set + small budget, all here")
+    ap.add_argument("--train", type=Path, help="train all four here with the full budget")
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--train-threads", type=int, default=1)
+    args = ap.parse_args(argv)
+    if args.quick:
+        from tamp.grasp.synthetic import SynthConfig, generate
+
+        tmp = Path(tempfile.mkdtemp(prefix="grasp_bench_"))
+        generate(tmp / "data", 40, SynthConfig(size=64, views=4, seed=1))
+        train_all(tmp / "data", tmp / "runs", QUICK_BUDGET, args.train_threads)
+        runs, data = tmp / "runs", tmp / "data"
+    elif args.train:
+        if not args.data:
+            ap.error("--train needs --data (a set made by `tamp grasp synth`)")
+        train_all(args.data, args.train, FULL_BUDGET, args.train_threads)
+        runs, data = args.train, args.data
+    elif args.runs:
+        runs, data = args.runs, args.data
+    else:
+        ap.error("give --runs DIR, --quick or --train DIR --data SYNTH")
+    rows = measure(runs, data, args.threads)
+    result = report(rows, args.threads)
+    print(json.dumps({"benchmark": "grasp", "runs": str(runs)} | result))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
