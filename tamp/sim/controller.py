@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from tamp.sim.ik import ArmIK, grasp_rotation
@@ -53,8 +53,12 @@ ARM = slice(3, 8)
 FING = slice(8, 10)
 ARM_SPEED = 1.2  # rad/s peak joint speed of arm moves
 SETTLE_TIMEOUT = 1.5  # s after a segment ends before a phase gives up waiting to settle
-PREGRASP_HEIGHT = 0.08  # the youBot arm with the palm down reaches ~0.3 m above the floor
-LIFT_HEIGHT = 0.10
+# Heights above the grasp / place pose, tried in order: the youBot arm with the palm down
+# reaches only ~0.3 m above the floor at the stand-off distance, and the base stops within
+# a couple of centimetres of its stand-off pose, so lower fall-backs keep IK solvable.
+PREGRASP_HEIGHTS = (0.08, 0.06, 0.04)
+LIFT_HEIGHTS = (0.10, 0.08, 0.06)
+PREPLACE_HEIGHTS = (0.08, 0.06, 0.04)
 PLACE_CLEARANCE = 0.004
 
 PHASES = {
@@ -358,22 +362,33 @@ class SkillController(LeafSystem):
             raise SkillFailure(f"{uid} is out of the arm's reach")
         q_g = q.copy()
         q_g[ARM] = res.q_arm
-        from pydrake.math import RollPitchYaw
-
         yaw = RollPitchYaw(X_WO.rotation()).yaw_angle()
         R_WG = RotationMatrix.MakeZRotation(yaw).multiply(grasp_rotation(res.variant).transpose())
         point = X_WO.translation() + [0.0, 0.0, kind.grasp_height]
-        pre = self._ik.solve(q_g, point + [0, 0, PREGRASP_HEIGHT], R_WG=R_WG, nominal_arm=res.q_arm)
-        lift = self._ik.solve(q_g, point + [0, 0, LIFT_HEIGHT], R_WG=R_WG, nominal_arm=res.q_arm)
+        pre = self._first(q_g, point, PREGRASP_HEIGHTS, R_WG, res.q_arm)
+        lift = self._first(q_g, point, LIFT_HEIGHTS, R_WG, res.q_arm)
         if pre is None or lift is None:
             raise SkillFailure(f"no pre-grasp or lift pose for {uid}")
         st.memo.update(
-            grasp=res.q_arm, pre=pre, lift=lift, variant=res.variant, z0=X_WO.translation()[2]
+            grasp=res.q_arm,
+            pre=pre[0],
+            lift=lift[0],
+            lift_height=lift[1],
+            variant=res.variant,
+            z0=X_WO.translation()[2],
         )
         q1 = q.copy()
-        q1[ARM] = pre
+        q1[ARM] = pre[0]
         q1[FING] = ROBOT.finger_open
         return joint_segment(t, q, q1, ARM_SPEED, 0.6)
+
+    def _first(self, q, point, heights, R_WG=None, nominal=None):
+        """(arm joints, height) for the first height above ``point`` that IK can reach."""
+        for h in heights:
+            sol = self._ik.solve(q, point + np.array([0.0, 0.0, h]), R_WG=R_WG, nominal_arm=nominal)
+            if sol is not None:
+                return sol, h
+        return None
 
     def _phase_descend(self, st, t, q, poses):
         q1 = q.copy()
@@ -402,7 +417,7 @@ class SkillController(LeafSystem):
     def _phase_check_pick(self, st, t, q, poses):
         uid = st.cmd.args[0]
         z = self._X(poses, uid).translation()[2]
-        if st.grasp.obj != uid or z < st.memo["z0"] + 0.5 * LIFT_HEIGHT:
+        if st.grasp.obj != uid or z < st.memo["z0"] + 0.5 * st.memo["lift_height"]:
             st.grasp = GraspRequest()
             raise SkillFailure(f"grasp of {uid} lost (it stayed at z = {z:.3f} m)")
         st.grasp = GraspRequest(st.grasp.obj, st.grasp.variant, holding=uid)
@@ -416,9 +431,10 @@ class SkillController(LeafSystem):
         return np.array([a.x, a.y, z])
 
     def _phase_preplace(self, st, t, q, poses):
-        pre = self._ik.solve(q, self._place_point(st, 0.10))
-        if pre is None:
+        found = self._first(q, self._place_point(st, 0.0), PREPLACE_HEIGHTS)
+        if found is None:
             raise SkillFailure(f"area {st.cmd.args[1]} is out of the arm's reach")
+        pre = found[0]
         q_pre = q.copy()
         q_pre[ARM] = pre
         down = self._ik.solve(q_pre, self._place_point(st, 0.0), nominal_arm=pre)

@@ -111,7 +111,8 @@ class ArmIK:
         weights[self.arm] = [1.0, 0.1, 0.1, 0.1, 1.0]
         prog.AddQuadraticErrorCost(np.diag(weights), q_nom, q)
         best = None
-        for seed in (nom, base_nominal, np.array([aim, 0.9, 0.6, 1.6, 0.0])):
+        seeds = (nom, base_nominal, np.array([aim, 0.9, 0.6, 1.6, 0.0]), q_robot[3:8])
+        for seed in seeds:
             guess = q_now.copy()
             guess[self.arm] = seed
             prog.SetInitialGuess(q, guess)
