@@ -1,6 +1,6 @@
 """SkillController: runs MoveTo / Pick / Place on the simulated robot (SMP-MRO §V-A3).
 
-A LeafSystem with a periodic unrestricted update (the controller period, e.g. 10 ms). Its
+A LeafSystem with a periodic unrestricted update (the controller period, e.g. 20 ms). Its
 abstract state holds the command it works on, the phase of the skill, the reference
 `Segment` the joints track, and the weld it asks for. Outputs, computed from that state:
 - ``desired_state``: [q_d, v_d] of the robot's PD-controlled actuators (the plant's
@@ -13,7 +13,7 @@ poses), so nothing assumes the previous phase ended exactly where it was meant t
 - MoveTo(target): fold the arm if the hand is free, drive to a stand-off pose 0.40 m from
   the target facing it (grid A* path around the objects, trapezoidal profile).
 - Pick(o): fold, drive to o's stand-off pose (skipped when already there), IK pre-grasp
-  above o, descend, close the fingers, ask for the weld, lift 0.25 m, and check on the plant
+  above o, descend, close the fingers, ask for the weld, lift 6-10 cm, and check on the plant
   that o rose with the gripper (a lost grasp is a FAILURE; scripted failures drop the weld).
 - Place(o, l): refuse if l is occupied, drive to l's stand-off pose, IK above l's centre,
   lower until o is 4 mm above the floor, release the weld, open, retreat, fold, and check

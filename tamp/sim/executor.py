@@ -1,7 +1,7 @@
 """BtExecutor: a LeafSystem that ticks the very behavior tree of `tamp.bt` in the diagram.
 
 The tree (a `tamp.bt.PaBtExecutor`, or any object with ``tick(world) -> Status``) lives in
-the system's abstract state. A periodic unrestricted update (the BT period, e.g. 50 ms)
+the system's abstract state. A periodic unrestricted update (the BT period, e.g. 100 ms)
 ticks it once against `PortWorld`, an implementation of the `tamp.world.World` protocol
 over the system's ports and state:
 
