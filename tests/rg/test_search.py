@@ -90,6 +90,27 @@ def test_astar_equals_brute_force(demo) -> None:
     assert _respects(r.order, demo.constraints)
     assert r.cost == pytest.approx(best, abs=1e-9)
     assert _independent_cost(demo, r.order) == pytest.approx(r.cost, abs=1e-9)
+    weak = astar(OrderProblem(demo, CostModel.of("distance", default_domain()), "min"))
+    assert weak is not None and weak.cost == pytest.approx(best, abs=1e-9)
+
+
+@settings(max_examples=40)
+@given(demonstrations(max_objects=4, max_steps=7))
+def test_bounds_are_admissible_everywhere(demo) -> None:
+    """Both lower bounds never exceed the true optimal cost-to-go from any search state."""
+    problem = OrderProblem(demo, CostModel.of("distance", default_domain()))
+    weak = OrderProblem(demo, CostModel.of("distance", default_domain()), "min")
+    ids = demo.goal_ids
+    for order in itertools.permutations(ids):
+        if not _respects(order, demo.constraints):
+            continue
+        pos = {g: i for i, g in enumerate(problem.index.ids)}
+        mask, last, to_go = 0, -1, problem.order_cost(list(order))
+        for gid in order:
+            assert weak.heuristic(mask, last) <= problem.heuristic(mask, last) + 1e-9
+            assert problem.heuristic(mask, last) <= to_go + 1e-9
+            to_go -= problem.step_cost(last, pos[gid])
+            mask, last = mask | 1 << pos[gid], pos[gid]
 
 
 @settings(max_examples=60)
