@@ -362,15 +362,17 @@ class Fallback(Node):
             self.cursor += delta
 
 
-class ReactiveSequence(Node):
-    """Re-ticks every child from the first on each tick (preconditions stay checked).
+class _Reactive(Node):
+    """Re-ticks every child from the first on each tick (shared by the two reactive nodes).
 
-    When an earlier child fails or starts running, the RUNNING later child is halted
-    *before* anything new starts (see the module docstring).
+    A child returning ``_passes`` lets the next one run; any other status ends the tick with
+    it; when every child passes the node returns ``_passes``. When an earlier child stops
+    passing while a later one is RUNNING, the RUNNING child is halted *before* anything new
+    starts (see the module docstring).
     """
 
     __slots__ = ("running",)
-    kind = "ReactiveSequence"
+    _passes: Status = SUCCESS
 
     def __init__(self, children: Iterable[Node] = ()) -> None:
         self.running = -1
@@ -378,6 +380,7 @@ class ReactiveSequence(Node):
 
     def tick(self, ctx: TickContext) -> Status:
         children = self.children
+        passes = self._passes
         r = self.running
         start = 0
         if r >= 0:
@@ -388,7 +391,7 @@ class ReactiveSequence(Node):
             preempt.append(children[r])
             for i in range(r):
                 st = children[i].tick(ctx)
-                if st is SUCCESS:
+                if st is passes:
                     continue
                 del preempt[mark:]
                 if children[r].status is RUNNING:
@@ -403,7 +406,7 @@ class ReactiveSequence(Node):
         i = start
         while i < n:
             st = children[i].tick(ctx)
-            if st is SUCCESS:
+            if st is passes:
                 i += 1
                 continue
             self.running = i if st is RUNNING else -1
@@ -411,9 +414,9 @@ class ReactiveSequence(Node):
             self.tick_id = ctx.tick_id
             return st
         self.running = -1
-        self.status = SUCCESS
+        self.status = passes
         self.tick_id = ctx.tick_id
-        return SUCCESS
+        return passes
 
     def halt(self, ctx: TickContext) -> None:
         super().halt(ctx)
@@ -427,67 +430,24 @@ class ReactiveSequence(Node):
             self.running += delta
 
 
-class ReactiveFallback(Node):
-    """Re-ticks every child from the first on each tick; used as RF(condition, actions).
+class ReactiveSequence(_Reactive):
+    """Succeeds when every child succeeds, re-checking earlier children (preconditions)."""
+
+    __slots__ = ()
+    kind = "ReactiveSequence"
+    _passes = SUCCESS
+
+
+class ReactiveFallback(_Reactive):
+    """Succeeds with the first child that does not fail; used as RF(condition, actions).
 
     When the guard condition becomes true while an achieving action runs, the action is
     halted (its skill cancelled) and the node succeeds.
     """
 
-    __slots__ = ("running",)
+    __slots__ = ()
     kind = "ReactiveFallback"
-
-    def __init__(self, children: Iterable[Node] = ()) -> None:
-        self.running = -1
-        super().__init__(children)
-
-    def tick(self, ctx: TickContext) -> Status:
-        children = self.children
-        r = self.running
-        start = 0
-        if r >= 0:
-            preempt = ctx.preempt
-            mark = len(preempt)
-            preempt.append(children[r])
-            for i in range(r):
-                st = children[i].tick(ctx)
-                if st is FAILURE:
-                    continue
-                del preempt[mark:]
-                if children[r].status is RUNNING:
-                    children[r].halt(ctx)
-                self.running = i if st is RUNNING else -1
-                self.status = st
-                self.tick_id = ctx.tick_id
-                return st
-            del preempt[mark:]
-            start = r
-        n = len(children)
-        i = start
-        while i < n:
-            st = children[i].tick(ctx)
-            if st is FAILURE:
-                i += 1
-                continue
-            self.running = i if st is RUNNING else -1
-            self.status = st
-            self.tick_id = ctx.tick_id
-            return st
-        self.running = -1
-        self.status = FAILURE
-        self.tick_id = ctx.tick_id
-        return FAILURE
-
-    def halt(self, ctx: TickContext) -> None:
-        super().halt(ctx)
-        self.running = -1
-
-    def _active_index(self) -> int:
-        return self.running
-
-    def _shift_indices(self, index: int, delta: int) -> None:
-        if self.running >= index and self.running >= 0:
-            self.running += delta
+    _passes = FAILURE
 
 
 class PriorityFallback(Node):
