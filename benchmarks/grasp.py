@@ -30,7 +30,7 @@ RUNS = {
     "grconvnet": dict(model="grconvnet", model_kwargs={"channels": 16}),
     "ggcnn": dict(model="ggcnn"),
 }
-FULL_BUDGET = dict(size=128, epochs=8, batches_per_epoch=150, batch_size=8, split="object")
+FULL_BUDGET = dict(size=128, epochs=10, batches_per_epoch=150, batch_size=8, split="object")
 QUICK_BUDGET = dict(size=64, epochs=2, batches_per_epoch=15, batch_size=8, split="object")
 
 

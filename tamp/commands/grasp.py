@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -72,7 +73,7 @@ def register(subparsers) -> None:
 
     p = sub.add_parser("eval", help="rectangle-metric accuracy and inference time")
     p.add_argument("weights", help="weights file (best.pt or models/weights/*.pt)")
-    _dataset_args(p, split_choices=("image", "object", "both"))
+    _dataset_args(p, split_choices=("image", "object", "both"), size=None)
     p.add_argument("--device", default="cpu")
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--time-size", type=int, default=224, help="image side for the timing")
@@ -92,7 +93,9 @@ def register(subparsers) -> None:
     p.set_defaults(func=run_predict)
 
 
-def _dataset_args(p: argparse.ArgumentParser, split_choices=("image", "object")) -> None:
+def _dataset_args(
+    p: argparse.ArgumentParser, split_choices=("image", "object"), size: int | None = 224
+) -> None:
     p.add_argument(
         "--dataset",
         nargs=2,
@@ -104,7 +107,12 @@ def _dataset_args(p: argparse.ArgumentParser, split_choices=("image", "object"))
     p.add_argument("--test-fraction", type=float, default=0.1)
     p.add_argument("--fold", type=int, help="test fold for k-fold cross-validation")
     p.add_argument("--folds", type=int, default=5)
-    p.add_argument("--size", type=int, default=224, help="network input side in pixels")
+    p.add_argument(
+        "--size",
+        type=int,
+        default=size,
+        help=f"network input side in pixels (default {size or 'the training size'})",
+    )
 
 
 def _kind(args) -> tuple[str, str]:
@@ -185,6 +193,8 @@ def run_train(args) -> int:
             )
     except TypeError as exc:  # a wrong --model-arg reaches the model constructor
         raise InputError(f"--model-arg: {exc}") from None
+    if int(os.environ.get("RANK", "0")) != 0:
+        return 0  # under torchrun only rank 0 reports
     if args.json:
         print_json(summary)
     else:
@@ -208,7 +218,7 @@ def run_eval(args) -> int:
         torch.set_num_threads(args.threads)
     kind, path = _kind(args)
     model, meta = load_model(args.weights, args.device)
-    size = args.size if args.size != 224 or "size" not in meta else meta["size"]
+    size = args.size or int(meta["size"])
     dataset = GraspDataset(kind, path, size, meta["input"])
     splits = ("image", "object") if args.split == "both" else (args.split,)
     result = {"weights": args.weights, "model": meta["model"], "input": meta["input"]}

@@ -76,19 +76,28 @@ def _color(rng: np.random.Generator) -> tuple[float, float, float, float]:
     return (float(c[0]), float(c[1]), float(c[2]), 1.0)
 
 
+#: Spacing of the grasps listed along a bar: dense (half a jaw), so that every point of the
+#: bar's centre line is covered by some ground-truth rectangle, as in Jacquard's dense
+#: annotations; sparse samples would make the quality map learn an arbitrary phase.
+SPACING = 0.01
+
+
 def _bar_grasps(
     x0: float, x1: float, width: float, top: float, yaw: float = 0.0, y: float = 0.0
 ) -> list[Grasp3D]:
-    """Grasps across a bar of ``width`` lying along x from ``x0`` to ``x1`` (rotated by yaw)."""
+    """Grasps across a bar of ``width`` lying along x from ``x0`` to ``x1`` (rotated by yaw),
+    every :data:`SPACING` along it with the jaw inside the bar."""
     if width + CLEARANCE > MAX_OPENING:
         return []
     length = x1 - x0
-    n = max(1, int(round(length / 0.03)))
-    out = []
+    jaw = min(JAW, length)
+    free = length - jaw
+    n = int(math.floor(free / SPACING + 1e-9)) + 1
+    start = x0 + jaw / 2 + (free - (n - 1) * SPACING) / 2
     c, s = math.cos(yaw), math.sin(yaw)
+    out = []
     for i in range(n):
-        t = x0 + (i + 0.5) * length / n
-        jaw = min(JAW, length / n)
+        t = start + i * SPACING
         out.append(
             Grasp3D((t * c - y * s, t * s + y * c, top), yaw + math.pi / 2, width + CLEARANCE, jaw)
         )

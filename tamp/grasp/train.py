@@ -227,7 +227,7 @@ def train(
         "train_images": len(train_idx),
         "test_images": len(test_idx),
         "history": history,
-        "best_accuracy": best,
+        "best_accuracy": best if rank == 0 else None,  # only rank 0 evaluates
         "world_size": world,
         # sum of all weights: equal on every rank after DistributedDataParallel training
         "checksum": float(sum(p.detach().double().sum() for p in model.parameters())),

@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tamp.grasp.maps import WIDTH_SCALE
 from tamp.grasp.predict import GraspPredictor, to_world
 from tamp.grasp.rect import GraspRect, angle_difference
 from tamp.grasp.synthetic import look_at, project
@@ -56,7 +57,7 @@ class _PeakModel:
         self.out[0, 0, row - 2 : row + 3, col - 2 : col + 3] = 1.0
         self.out[0, 1] = math.cos(2 * angle)
         self.out[0, 2] = math.sin(2 * angle)
-        self.out[0, 3] = width / 150.0
+        self.out[0, 3] = width / WIDTH_SCALE
 
     def __call__(self, x):
         return self.out.expand(x.shape[0], -1, -1, -1)
