@@ -18,7 +18,10 @@ Choices written down here:
   appears when the robot first comes within reach of it (Case 3's O_a at l_1), or at a
   given tick; a person moves an object at a given tick.
 - The exploration is bounded by ``max_states``; when the bound is hit the verdict says so
-  and a holding verdict is only "no violation among the explored states".
+  and a holding verdict is only "no violation among the explored states". The states left
+  unexpanded at the bound are not dead ends (`TransitionSystem.unexpanded`): a path that
+  stops there is a counterexample only when it is already a bad prefix (see
+  `verification.kripke`), never merely because the exploration stopped.
 
 Propositions available to properties (labels of a state; unknown names are bad input):
 ``goal`` (the tree returned SUCCESS: every goal of C_goal reached in order), ``failed``
@@ -474,6 +477,7 @@ def explore(
             if new:
                 if ts.num_states >= max_states:
                     complete = False
+                    ts.unexpanded = {j, *(q[0] for q in queue)}
                     queue.clear()
                     break
                 queue.append((j, e2, w2))

@@ -57,7 +57,7 @@ def _cmd_trace(args) -> int:
     formula = parse_formula(args.formula, field="--formula")
     word = load_trace(args.trace) if args.trace is not None else parse_word(args.word)
     if args.finite and word.is_lasso:
-        raise InputError("--finite: the trace has a cycle (an infinite word)", field="--finite")
+        raise InputError("the trace has a cycle (an infinite word)", field="--finite")
     if not args.finite and not word.is_lasso:
         raise InputError(
             "the trace has no cycle: add cycle{…} (infinite word) or pass --finite (LTLf)",
@@ -81,6 +81,14 @@ def _add_trace(sub) -> None:
 # -- plan -----------------------------------------------------------------------------------
 
 
+def _order(text: str) -> list[str]:
+    """``--order G1,G0`` -> ``["G1", "G0"]``; an order naming no goal is bad input."""
+    order = [g.strip() for g in text.split(",") if g.strip()]
+    if not order:
+        raise InputError(f"expected goal ids such as G1,G0, got {text!r}", field="--order")
+    return order
+
+
 def _cmd_plan(args) -> int:
     from tamp.demo import load_demonstration
     from verification.rg import check_graph, check_order
@@ -88,7 +96,7 @@ def _cmd_plan(args) -> int:
 
     demo = load_demonstration(_scenario(args.demo))
     if args.order is not None:
-        order = [g.strip() for g in args.order.split(",") if g.strip()]
+        order = _order(args.order)
     else:
         from tamp.rg import plan
 
@@ -157,9 +165,13 @@ def _cmd_bt(args) -> int:
     from verification.rg import check_order_ids
 
     demo = load_demonstration(_scenario(args.demo))
+    if args.max_failures < 0:
+        raise InputError(f"must be >= 0, got {args.max_failures}", field="--max-failures")
+    if args.max_states < 1:
+        raise InputError(f"must be >= 1, got {args.max_states}", field="--max-states")
     order = None
     if args.order is not None:
-        order = [g.strip() for g in args.order.split(",") if g.strip()]
+        order = _order(args.order)
         check_order_ids(demo.goal_ids, order)
     state = demo.initial_world()
     events = [

@@ -113,3 +113,38 @@ def test_bt_and_lots_commands(capsys) -> None:
     assert rc == 0 and out.count("holds") == 3
     rc, out, _ = run(capsys, "lots", str(path("lots/tower.yaml")), "--json")
     assert rc == 0 and json.loads(out)["holds"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (["--order", ","], "--order"),
+        (["--max-states", "0"], "--max-states"),
+        (["--max-failures", "-1"], "--max-failures"),
+    ],
+)
+def test_bt_bad_numbers_and_empty_order_exit_2(capsys, argv, option) -> None:
+    rc, out, err = run(capsys, "bt", str(path("case1.yaml")), *argv)
+    assert rc == 2 and out == "" and option in err and "internal error" not in err
+
+
+def test_plan_empty_order_exits_2(capsys) -> None:
+    rc, out, err = run(capsys, "plan", str(path("case1.yaml")), "--order", " , ")
+    assert rc == 2 and "--order" in err
+
+
+def test_bounded_bt_exploration_reports_no_spurious_violation(capsys) -> None:
+    """At the bound the unexpanded states used to stutter forever, so `F goal` was reported
+    VIOLATED by a path that merely stops where the exploration stopped."""
+    rc, out, _ = run(capsys, "bt", str(path("case1.yaml")), "--max-states", "5", "--json")
+    doc = json.loads(out)
+    assert rc == 0, out
+    assert len(doc["checks"]) == 3
+    for v in doc["checks"]:
+        assert "BOUNDED" in v["subject"]
+        assert v["holds"] and v["counterexample"] is None
+    # a bad prefix inside the explored states is still a violation at the bound
+    rc, out, _ = run(
+        capsys, "bt", str(path("case1.yaml")), "--max-states", "5", "--property", "G goal"
+    )
+    assert rc == 1 and "no continuation can satisfy" in out
