@@ -167,7 +167,9 @@ def train(
         history = ckpt["history"]
         best = ckpt["best"]
         _set_rng_state(ckpt["rng"])
-        log(f"resumed from {last} at epoch {start_epoch}")
+        for group in optimizer.param_groups:  # `--resume --lr X` continues at a new rate
+            group["lr"] = cfg.lr
+        log(f"resumed from {last} at epoch {start_epoch}, learning rate {cfg.lr:g}")
     net = model
     if distributed:
         from torch.nn.parallel import DistributedDataParallel
@@ -198,7 +200,7 @@ def train(
             total += float(loss.detach())
             bar.set_postfix(loss=f"{float(loss.detach()):.4f}")
         train_s = time.perf_counter() - t0
-        record = {"epoch": epoch + 1, "loss": total / len(mine), "train_s": train_s}
+        record = {"epoch": epoch + 1, "lr": cfg.lr, "loss": total / len(mine), "train_s": train_s}
         if rank == 0:
             result = evaluate(model, dataset, test_idx, device=device, progress=False)
             record |= {"accuracy": result.accuracy, "eval_images": result.images}
