@@ -268,7 +268,55 @@ class ActionNode(Node):
         return str(self.action)
 
 
-class Sequence(Node):
+class _Ordered(Node):
+    """Ticks children in order from a cursor (shared by Sequence and Fallback).
+
+    A child returning ``_passes`` lets the next one run; any other status ends the tick
+    with it, and the cursor stays on that child when it is RUNNING (or, with ``memory``,
+    on any stop) and otherwise goes back to the first child. When every child passes the
+    node returns ``_passes``.
+    """
+
+    __slots__ = ("cursor",)
+    _passes: Status = SUCCESS
+    memory: bool = False
+
+    def __init__(self, children: Iterable[Node] = ()) -> None:
+        self.cursor = 0
+        super().__init__(children)
+
+    def tick(self, ctx: TickContext) -> Status:
+        children = self.children
+        passes = self._passes
+        n = len(children)
+        i = self.cursor
+        while i < n:
+            st = children[i].tick(ctx)
+            if st is passes:
+                i += 1
+                continue
+            self.cursor = i if st is RUNNING or self.memory else 0
+            self.status = st
+            self.tick_id = ctx.tick_id
+            return st
+        self.cursor = 0
+        self.status = passes
+        self.tick_id = ctx.tick_id
+        return passes
+
+    def halt(self, ctx: TickContext) -> None:
+        super().halt(ctx)
+        self.cursor = 0
+
+    def _active_index(self) -> int:
+        return self.cursor if self.status is RUNNING else -1
+
+    def _shift_indices(self, index: int, delta: int) -> None:
+        if index < self.cursor:
+            self.cursor += delta
+
+
+class Sequence(_Ordered):
     """Ticks children in order; fails at the first failure.
 
     ``memory=False`` is BehaviorTree.CPP's Sequence (resumes a RUNNING child, restarts from
@@ -278,88 +326,24 @@ class Sequence(Node):
     when a later goal moves the same object again (Case 2).
     """
 
-    __slots__ = ("memory", "cursor")
+    __slots__ = ("memory",)
     kind = "Sequence"
+    _passes = SUCCESS
 
     def __init__(self, children: Iterable[Node] = (), *, memory: bool = False) -> None:
         self.memory = memory
-        self.cursor = 0
         super().__init__(children)
-
-    def tick(self, ctx: TickContext) -> Status:
-        children = self.children
-        n = len(children)
-        i = self.cursor
-        while i < n:
-            st = children[i].tick(ctx)
-            if st is SUCCESS:
-                i += 1
-                continue
-            if st is RUNNING:
-                self.cursor = i
-            else:
-                self.cursor = i if self.memory else 0
-            self.status = st
-            self.tick_id = ctx.tick_id
-            return st
-        self.cursor = 0
-        self.status = SUCCESS
-        self.tick_id = ctx.tick_id
-        return SUCCESS
-
-    def halt(self, ctx: TickContext) -> None:
-        super().halt(ctx)
-        self.cursor = 0
-
-    def _active_index(self) -> int:
-        return self.cursor if self.status is RUNNING else -1
-
-    def _shift_indices(self, index: int, delta: int) -> None:
-        if index < self.cursor:
-            self.cursor += delta
 
     def describe(self) -> str:
         return "SequenceWithMemory" if self.memory else "Sequence"
 
 
-class Fallback(Node):
+class Fallback(_Ordered):
     """Ticks children in order until one does not fail (BehaviorTree.CPP Fallback)."""
 
-    __slots__ = ("cursor",)
+    __slots__ = ()
     kind = "Fallback"
-
-    def __init__(self, children: Iterable[Node] = ()) -> None:
-        self.cursor = 0
-        super().__init__(children)
-
-    def tick(self, ctx: TickContext) -> Status:
-        children = self.children
-        n = len(children)
-        i = self.cursor
-        while i < n:
-            st = children[i].tick(ctx)
-            if st is FAILURE:
-                i += 1
-                continue
-            self.cursor = i if st is RUNNING else 0
-            self.status = st
-            self.tick_id = ctx.tick_id
-            return st
-        self.cursor = 0
-        self.status = FAILURE
-        self.tick_id = ctx.tick_id
-        return FAILURE
-
-    def halt(self, ctx: TickContext) -> None:
-        super().halt(ctx)
-        self.cursor = 0
-
-    def _active_index(self) -> int:
-        return self.cursor if self.status is RUNNING else -1
-
-    def _shift_indices(self, index: int, delta: int) -> None:
-        if index < self.cursor:
-            self.cursor += delta
+    _passes = FAILURE
 
 
 class _Reactive(Node):
