@@ -100,9 +100,13 @@ def parse_failure(text: str, domain: Any = None) -> ScriptedFailure:
 def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any):
     """Run the execution; returns (report, JSON document, exit status)."""
     from tamp.bt.run import execute_plan
+    from tamp.commands.output import output_file
     from tamp.world.actions import default_domain
 
     domain = default_domain()
+    for option in ("bt_xml", "bt_dot"):
+        if getattr(args, option, None):
+            output_file(getattr(args, option), "--" + option.replace("_", "-"))
     if args.skill_ticks < 0:
         raise InputError("must be >= 0", field="--skill-ticks")
     if args.max_ticks < 1:

@@ -47,13 +47,15 @@ def _resolve(name: str):
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from tamp.commands.output import print_json
+    from tamp.commands.output import output_file, print_json
     from tamp.errors import InfeasibleError, InputError
     from tamp.lots.run import run_task
     from tamp.lots.task import load_events, load_task
 
     if args.max_waits < 1:
         raise InputError("must be >= 1", field="--max-waits")
+    if args.dot:
+        output_file(args.dot, "--dot")
     task = load_task(_resolve(args.task))
     events = load_events(_resolve(args.interference), task) if args.interference else []
     from verification import gate

@@ -1,10 +1,14 @@
-"""Helpers shared by subcommands: JSON printing and progress on stderr."""
+"""Helpers shared by subcommands: JSON printing, progress on stderr, output-file checks."""
 
 from __future__ import annotations
 
 import json
+import os
 import sys
+from pathlib import Path
 from typing import Any
+
+from tamp.errors import InputError
 
 
 def print_json(payload: Any) -> None:
@@ -25,3 +29,26 @@ def progress(message: str, *, quiet: bool = False) -> None:
     """A progress line on stderr, so stdout stays clean for --json."""
     if not quiet:
         print(message, file=sys.stderr, flush=True)
+
+
+def output_file(path: str | Path, option: str, *, make_parents: bool = False) -> Path:
+    """Check that ``path`` can be written *before* any work is done; returns it as a Path.
+
+    A directory, a missing parent directory (unless ``make_parents``) or a parent that cannot
+    be written is bad input (`InputError` naming ``option``, exit 2), not an internal error
+    after a long run.
+    """
+    out = Path(path)
+    if out.is_dir():
+        raise InputError(f"{out} is a directory, expected a file name", field=option)
+    parent = out.parent
+    if make_parents:
+        existing = next((p for p in (parent, *parent.parents) if p.exists()), Path("."))
+        if not existing.is_dir():
+            raise InputError(f"{existing} is not a directory", field=option)
+        parent = existing
+    elif not parent.is_dir():
+        raise InputError(f"directory {parent} does not exist", field=option)
+    if not os.access(parent, os.W_OK):
+        raise InputError(f"directory {parent} is not writable", field=option)
+    return out

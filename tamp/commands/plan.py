@@ -7,9 +7,8 @@ symbolic world (the BT layer's options are added by `tamp.bt.cli_args` when it i
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from tamp.commands.output import print_json
+from tamp.commands.output import output_file, print_json
 from tamp.errors import InputError
 
 MAX_DOT_STATES = 5000
@@ -43,12 +42,21 @@ def run(args: argparse.Namespace) -> int:
     from tamp.rg import plan
     from tamp.scenarios import resolve
 
+    if args.dot:
+        output_file(args.dot, "--dot")
+    execute = getattr(args, "execute", False)
+    for option in ("bt_xml", "bt_dot"):
+        if getattr(args, option, None) and not execute:
+            raise InputError(
+                "needs --execute (the tree is grown while executing)",
+                field="--" + option.replace("_", "-"),
+            )
     demo = load_demonstration(resolve(args.demo))
     result = plan(demo, args.cost)
     _gate(result)
     if args.dot:
         _write_dot(demo, result, args.dot)
-    if getattr(args, "execute", False):
+    if execute:
         from tamp.bt.cli_args import run_execute
 
         return run_execute(args, demo, result)
@@ -76,9 +84,7 @@ def _write_dot(demo, result, path: str) -> None:
         raise InputError(
             f"the RG has more than {MAX_DOT_STATES} states: too large to draw", field="--dot"
         )
-    out = Path(path)
-    if out.parent and not out.parent.exists():
-        raise InputError(f"directory {out.parent} does not exist", field="--dot")
+    out = output_file(path, "--dot")
     rg_to_dot(demo, build_rg(demo), result.order).write_raw(str(out))
 
 

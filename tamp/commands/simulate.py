@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import argparse
 
-from tamp.commands.output import print_json, progress
+from tamp.commands.output import output_file, print_json, progress
 
 
 def register(subparsers) -> None:
@@ -40,9 +40,22 @@ def run(args: argparse.Namespace) -> int:
     import os
 
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
+    import math
+
+    from tamp.errors import InputError
     from tamp.sim.scenario import load_scenario, scenario_path
     from tamp.sim.smp import simulate_smp_mro
 
+    if args.max_sim_time is not None and not (
+        math.isfinite(args.max_sim_time) and args.max_sim_time > 0
+    ):
+        raise InputError(
+            f"must be a positive number of seconds, got {args.max_sim_time}", field="--max-sim-time"
+        )
+    if args.rate is not None and not (math.isfinite(args.rate) and args.rate >= 0):
+        raise InputError(f"must be >= 0 (0: as fast as possible), got {args.rate}", field="--rate")
+    if args.record:
+        output_file(args.record, "--record", make_parents=True)
     name = args.scenario or f"case{args.case or 1}.yaml"
     scenario = load_scenario(args.scenario or scenario_path(name))
     progress(f"simulating {scenario.name} ({scenario.source})", quiet=args.json)

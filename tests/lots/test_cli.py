@@ -146,3 +146,10 @@ def test_random_tree_variant_gives_the_same_run(capsys, seed):
 def test_max_waits_must_be_positive(capsys):
     assert main(["lots", "tower.yaml", "--max-waits", "0"]) == 2
     assert "--max-waits" in capsys.readouterr().err
+
+
+def test_unwritable_dot_exits_2(capsys, tmp_path):
+    for target in (tmp_path, tmp_path / "missing" / "a.dot"):
+        assert main(["lots", "tower.yaml", "--dot", str(target)]) == 2
+        err = capsys.readouterr().err
+        assert "--dot" in err and "internal error" not in err

@@ -77,3 +77,24 @@ def test_console_script_exit_status() -> None:
     )
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["order"] == ["G2", "G1", "G0"]
+
+
+def test_unwritable_outputs_exit_2_before_planning(capsys, tmp_path) -> None:
+    """A directory or a missing directory as an output file is bad input, not exit 3."""
+    for argv in (
+        ["--dot", str(tmp_path)],
+        ["--dot", str(tmp_path / "missing" / "rg.dot")],
+        ["--execute", "--bt-xml", str(tmp_path)],
+        ["--execute", "--bt-dot", str(tmp_path / "missing" / "bt.dot")],
+    ):
+        code, out, err = _run(capsys, "plan", "case1.yaml", *argv)
+        assert code == 2 and out == "", argv
+        assert argv[-2] in err and "internal error" not in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_tree_exports_need_execute(capsys, tmp_path) -> None:
+    """--bt-xml/--bt-dot without --execute used to be ignored silently (no file written)."""
+    code, _, err = _run(capsys, "plan", "case1.yaml", "--bt-xml", str(tmp_path / "t.xml"))
+    assert code == 2 and "--bt-xml" in err and "--execute" in err
+    assert not (tmp_path / "t.xml").exists()

@@ -42,3 +42,18 @@ def test_human_readable_output(tmp_path, capsys):
     assert code == 0
     assert "Place(O0, L0)" in out and "real-time factor" in out
     assert "O0@L0: inside" in out
+
+
+def test_bad_options_exit_2_before_simulating(tmp_path, capsys):
+    """Checked before Drake builds anything: a time limit <= 0 used to give a TIMEOUT (exit
+    1), a directory as the recording an internal error after the whole run."""
+    path = write_one_bottle(tmp_path)
+    for argv, option in (
+        (["--max-sim-time", "0"], "--max-sim-time"),
+        (["--max-sim-time", "nan"], "--max-sim-time"),
+        (["--rate", "-1"], "--rate"),
+        (["--record", str(tmp_path)], "--record"),
+    ):
+        code = main(["simulate", "smp-mro", "--scenario", str(path), *argv])
+        err = capsys.readouterr().err
+        assert code == 2 and option in err and "internal error" not in err, (argv, err)
