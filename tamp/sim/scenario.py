@@ -346,7 +346,6 @@ def _check_geometry(s: SimScenario, f: Fields) -> None:
                     file=s.source,
                     field=field(late.id),
                 )
-    reach_margin = 0.45  # the base stands ~0.4 m from what it picks or places on
     areas = [(g.id, g.area) for g in s.demo.goals] + [(a.name, a) for a in s.demo.free_areas]
     for gid, area in areas:
         p = area.pos
@@ -358,9 +357,6 @@ def _check_geometry(s: SimScenario, f: Fields) -> None:
                 file=s.source,
                 field="workspace",
             )
-        xmin, xmax, ymin, ymax = s.workspace
-        if (xmax - xmin) < 2 * reach_margin or (ymax - ymin) < 2 * reach_margin:
-            raise InputError("workspace too small for the base", file=s.source, field="workspace")
     rx, ry, _ = s.robot_start
     if not s.in_workspace(rx, ry):
         raise InputError("robot start lies outside the workspace", file=s.source, field="robot")
