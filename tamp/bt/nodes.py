@@ -312,7 +312,10 @@ class _Ordered(Node):
         return self.cursor if self.status is RUNNING else -1
 
     def _shift_indices(self, index: int, delta: int) -> None:
-        if index < self.cursor:
+        # A RUNNING child keeps the cursor even when a child is inserted right before it;
+        # a cursor on a child that did not run (memory after a failure) moves to the new
+        # child, which then runs next.
+        if index < self.cursor or (index == self.cursor and self.status is RUNNING):
             self.cursor += delta
 
 

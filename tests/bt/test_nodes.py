@@ -194,6 +194,23 @@ def test_memory_sequence_insert_at_cursor_runs_the_inserted_child_next() -> None
     assert w.calls == [("start", "Fix")]
 
 
+@pytest.mark.parametrize("kind", [Sequence, Fallback])
+def test_insert_before_the_running_child_keeps_it_running(kind) -> None:
+    """The cursor used to move onto the inserted child: the node then returned without the
+    RUNNING child, whose skill was never cancelled, and `_active_index` named the wrong one."""
+    w = ScriptWorld(a=kind is Sequence)
+    ctx = Ctx(w)
+    action = ActionNode(act("Do"))
+    node = kind([action])
+    assert ctx.tick(node) is R
+    node.insert(0, Condition(Flag("a")))
+    assert node.children[node._active_index()] is action
+    with pytest.raises(ValueError):
+        node.remove(action)
+    assert ctx.tick(node) is R and action.status is R
+    assert w.calls == [("start", "Do")]  # resumed, not restarted, not abandoned
+
+
 def test_deepcopy_keeps_state_and_shares_immutable_payloads() -> None:
     w = ScriptWorld(a=True)
     ctx = Ctx(w)
