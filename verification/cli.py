@@ -1,8 +1,9 @@
 """The `tamp-verify` command: model-check traces, RG plans, behavior trees and LOTS tables.
 
     tamp-verify trace --formula F (--trace FILE | --word 'p1&!p2; …; cycle{…}') [--finite]
-    tamp-verify plan DEMO.yaml [--order G1,G0,…] [--cost distance|time|success]
-    tamp-verify bt DEMO.yaml --property F [--property F …] [--interference FILE]
+    tamp-verify plan DEMO.yaml [--order G1,G0,…] [--cost distance|time|success] [--no-graph]
+    tamp-verify bt DEMO.yaml [--property F …] [--order G1,G0,…] [--appear OBJ@AREA[:TICK] …]
+                   [--move OBJ@AREA:TICK …] [--max-failures N] [--may-fail A,B] [--max-states N]
     tamp-verify lots TASK.yaml
 
 Exit status: 0 the property holds, 1 violated (the counterexample is printed; with
