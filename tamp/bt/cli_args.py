@@ -101,9 +101,8 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any):
     """Run the execution; returns (report, JSON document, exit status)."""
     from tamp.bt.run import execute_plan
     from tamp.commands.output import output_file
-    from tamp.world.actions import default_domain
 
-    domain = default_domain()
+    domain = demo.domain()  # the robot's templates named in the demonstration (or youBot's)
     for option in ("bt_xml", "bt_dot"):
         if getattr(args, option, None):
             output_file(getattr(args, option), "--" + option.replace("_", "-"))

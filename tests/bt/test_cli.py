@@ -84,3 +84,28 @@ def test_failure_forms() -> None:
     f = parse_failure("Place:O1,L1:2", d)
     assert f.args == ("O1", "L1") and f.times == 2
     assert parse_failure("MoveTo", d).args is None
+
+
+def test_execute_uses_the_demonstrations_domain(tmp_path, capsys) -> None:
+    """`robot.domain` of the demonstration drives --execute (it used to run youBot's
+    templates whatever the file said, unlike `tamp-verify bt` and the simulation)."""
+    from tamp.world.actions import DOMAINS_DIR
+
+    text = (DOMAINS_DIR / "youbot.yaml").read_text()
+    assert "name: Pick" in text
+    domain = tmp_path / "grasping.yaml"
+    domain.write_text(text.replace("name: Pick", "name: Grasp"))
+    demo = tmp_path / "demo.yaml"
+    source = scenarios.path("case1.yaml").read_text()
+    assert "robot:\n  start: [0, 0, 0]\n" in source
+    demo.write_text(
+        source.replace(
+            "robot:\n  start: [0, 0, 0]\n", f"robot:\n  start: [0, 0, 0]\n  domain: {domain}\n"
+        )
+    )
+    code, out, _ = _run([str(demo), "--execute", "--fail", "Grasp:O2", "--json"], capsys)
+    assert code == 0, out
+    doc = json.loads(out)
+    names = [a["action"] for a in doc["executed"]]
+    assert "Grasp" in names and "Pick" not in names
+    assert doc["retries"] >= 1  # the scripted Grasp failure was matched and retried
