@@ -117,6 +117,14 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any):
         known.add(ob.obj)
         obstacles.append(ob)
     failures = [parse_failure(t, domain) for t in args.fail]
+    for f in failures:  # a misspelt object would make the scripted failure never happen
+        params = domain.templates[f.action].params
+        for (_, kind), arg in zip(params, f.args or (), strict=False):
+            if kind == "object" and arg not in known:
+                raise InputError(
+                    f"{f.action}: unknown object {arg!r} (known: {', '.join(sorted(known))})",
+                    field="--fail",
+                )
     report = execute_plan(
         demo,
         plan_result.c_goal,

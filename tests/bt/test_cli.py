@@ -109,3 +109,14 @@ def test_execute_uses_the_demonstrations_domain(tmp_path, capsys) -> None:
     names = [a["action"] for a in doc["executed"]]
     assert "Grasp" in names and "Pick" not in names
     assert doc["retries"] >= 1  # the scripted Grasp failure was matched and retried
+
+
+def test_fail_on_an_unknown_object_is_bad_input(capsys) -> None:
+    """`--fail Pick:O9` used to be accepted and never to fire (no such object)."""
+    with pytest.raises(InputError, match="unknown object 'O9'"):
+        _run(["case1.yaml", "--execute", "--fail", "Pick:O9"], capsys)
+    # an object that appears during execution may fail too
+    code, out, _ = _run(
+        ["case3.yaml", "--execute", "--obstacle", "Oa@2.2,0.8,0.1", "--fail", "Pick:Oa"], capsys
+    )
+    assert code == 0 and "retry Pick(Oa): skill failed" in out
