@@ -86,3 +86,15 @@ def test_domain_errors_name_the_field(tmp_path, body: str, field: str) -> None:
     with pytest.raises(InputError) as err:
         load_domain(p)
     assert str(p) in str(err.value) and field in str(err.value)
+
+
+@pytest.mark.parametrize("content", [b"\xff\xfe\x00binary", b"version: 1\nrobot: [unclosed\n", b""])
+def test_unreadable_files_are_bad_input(tmp_path, content: bytes) -> None:
+    from tamp.cli import main
+
+    p = tmp_path / "demo.yaml"
+    p.write_bytes(content)
+    with pytest.raises(InputError) as err:
+        load_domain(p)
+    assert str(p) in str(err.value)
+    assert main(["plan", str(p)]) == 2
