@@ -62,3 +62,17 @@ def test_bad_model_arg(jacquard_dir: Path, tmp_path: Path, capsys):
     rc = main(["grasp", "train", "--dataset", "jacquard", str(jacquard_dir), "--model-arg",
                "depth=3", "--out", str(tmp_path / "x"), "--quiet"])  # fmt: skip
     assert rc == 2 and "--model-arg" in capsys.readouterr().err
+
+
+def test_synth_writes_a_jacquard_set(tmp_path: Path, capsys):
+    import pytest
+
+    pytest.importorskip("pydrake")
+    rc = main(["grasp", "synth", str(tmp_path / "s"), "--scenes", "2", "--views", "1",
+               "--size", "48", "--seed", "3", "--json"])  # fmt: skip
+    assert rc == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["scenes"] == 2
+    assert len(list((tmp_path / "s").rglob("*_grasps.txt"))) == summary["images"]
+    rc = main(["grasp", "synth", str(tmp_path / "t"), "--scenes", "0"])
+    assert rc == 2 and "--scenes" in capsys.readouterr().err
