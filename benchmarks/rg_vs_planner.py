@@ -19,7 +19,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
+import tempfile
 import time
 
 from tamp.demo import cyclic_swap
@@ -134,10 +136,16 @@ def fast_downward(n: int, layout: str, timeout: float) -> dict:
     costs = {move: dist(a, b), pick: up.Int(0), places[0]: up.Int(0), places[1]: up.Int(0)}
     problem.add_quality_metric(up.MinimizeActionCosts(costs))
 
-    t0 = time.perf_counter()
-    with up.OneshotPlanner(name="fast-downward-opt") as planner:
-        res = planner.solve(problem, timeout=timeout)
-    dt = time.perf_counter() - t0
+    here = os.getcwd()
+    with tempfile.TemporaryDirectory() as scratch:  # FD's translator writes output.sas to cwd
+        os.chdir(scratch)
+        try:
+            t0 = time.perf_counter()
+            with up.OneshotPlanner(name="fast-downward-opt") as planner:
+                res = planner.solve(problem, timeout=timeout)
+            dt = time.perf_counter() - t0
+        finally:
+            os.chdir(here)
     if res.status not in (S.SOLVED_OPTIMALLY, S.SOLVED_SATISFICING) or res.plan is None:
         return {"cost": None, "time_s": dt, "status": res.status.name}
     cost = 0
