@@ -72,7 +72,13 @@ class InstantWorld:
         pass
 
 
-def build_ours(n: int) -> PaBtExecutor:
+def build_ours(n: int, steady: bool = False) -> PaBtExecutor:
+    """N action units as the PA-BT grows them.
+
+    ``steady=False``: nothing achieved yet, every node is ticked (a memory Sequence root);
+    ``steady=True``: N-1 achieved units re-checked reactively while the last one's action
+    runs (a ReactiveSequence root).
+    """
     ex = PaBtExecutor([Const("goal", True)], record_attempts=False, max_repeats=10**9)
     units = []
     for i in range(n):
@@ -80,63 +86,16 @@ def build_ours(n: int) -> PaBtExecutor:
         rs = ReactiveSequence(
             [Condition(Const(f"a{i}", True)), Condition(Const(f"b{i}", True)), ActionNode(act)]
         )
-        units.append(
-            ReactiveFallback([Condition(Const(f"c{i}", False)), PriorityFallback([rs], [1.0])])
-        )
-    ex.root = Sequence(units, memory=True)
-    return ex
-
-
-def build_py_trees(n: int):
-    import py_trees
-    from py_trees.common import Status as PS
-
-    class Cond(py_trees.behaviour.Behaviour):
-        def __init__(self, name: str, value: bool) -> None:
-            super().__init__(name)
-            self.pred = Const(name, value)
-
-        def update(self):
-            return PS.SUCCESS if self.pred.holds(None) else PS.FAILURE
-
-    class Act(py_trees.behaviour.Behaviour):
-        def update(self):
-            return PS.SUCCESS
-
-    units = []
-    for i in range(n):
-        rs = py_trees.composites.Sequence(
-            f"rs{i}",
-            memory=False,
-            children=[Cond(f"a{i}", True), Cond(f"b{i}", True), Act(f"Act{i}")],
-        )
-        pf = py_trees.composites.Selector(f"pf{i}", memory=True, children=[rs])
-        units.append(
-            py_trees.composites.Selector(
-                f"rf{i}", memory=False, children=[Cond(f"c{i}", False), pf]
-            )
-        )
-    return py_trees.composites.Sequence("root", memory=True, children=units)
-
-
-def build_ours_steady(n: int) -> PaBtExecutor:
-    """Steady state: N-1 achieved units re-checked reactively, the last one's action runs."""
-    ex = PaBtExecutor([Const("goal", True)], record_attempts=False, max_repeats=10**9)
-    units = []
-    for i in range(n):
-        act = Action(ActionTemplate(f"Act{i}", (), (), ()), (), (), ())
-        rs = ReactiveSequence(
-            [Condition(Const(f"a{i}", True)), Condition(Const(f"b{i}", True)), ActionNode(act)]
-        )
-        done = i < n - 1
+        done = steady and i < n - 1
         units.append(
             ReactiveFallback([Condition(Const(f"c{i}", done)), PriorityFallback([rs], [1.0])])
         )
-    ex.root = ReactiveSequence(units)
+    ex.root = ReactiveSequence(units) if steady else Sequence(units, memory=True)
     return ex
 
 
-def build_py_trees_steady(n: int):
+def build_py_trees(n: int, steady: bool = False):
+    """The same tree shape in py_trees 2.6 (memoryless Sequence/Selector = reactive nodes)."""
     import py_trees
     from py_trees.common import Status as PS
 
@@ -150,7 +109,7 @@ def build_py_trees_steady(n: int):
 
     class Act(py_trees.behaviour.Behaviour):
         def update(self):
-            return PS.RUNNING
+            return PS.RUNNING if steady else PS.SUCCESS
 
     units = []
     for i in range(n):
@@ -162,10 +121,10 @@ def build_py_trees_steady(n: int):
         pf = py_trees.composites.Selector(f"pf{i}", memory=True, children=[rs])
         units.append(
             py_trees.composites.Selector(
-                f"rf{i}", memory=False, children=[Cond(f"c{i}", i < n - 1), pf]
+                f"rf{i}", memory=False, children=[Cond(f"c{i}", steady and i < n - 1), pf]
             )
         )
-    return py_trees.composites.Sequence("root", memory=False, children=units)
+    return py_trees.composites.Sequence("root", memory=not steady, children=units)
 
 
 class RunningWorld(InstantWorld):
@@ -197,7 +156,7 @@ def measure(scenario: str, n: int, node_ticks: int, repeats: int) -> dict:
     if scenario == "full":
         ex, world, root = build_ours(n), InstantWorld(), build_py_trees(n)
     else:
-        ex, world, root = build_ours_steady(n), RunningWorld(), build_py_trees_steady(n)
+        ex, world, root = build_ours(n, True), RunningWorld(), build_py_trees(n, True)
     ex.tick(world)
     root.tick_once()
     v_ours = sum(1 for node in ex.root.walk() if node.tick_id == ex.tick_id)
