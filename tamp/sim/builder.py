@@ -170,9 +170,7 @@ def build_diagram(
     estimator = builder.AddSystem(
         WorldStateEstimator(
             bodies={k: int(b.index()) for k, b in bodies.items()},
-            kinds=kinds,
             base_body=int(plant.GetBodyByName(ROBOT.base_body, robot).index()),
-            palm_body=int(palm.index()),
             areas=areas,
             workspace=scenario.workspace,
         )

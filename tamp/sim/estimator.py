@@ -16,7 +16,6 @@ from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.systems.framework import LeafSystem
 
 from tamp.sim.messages import GraspRequest
-from tamp.sim.models import ObjectKind
 from tamp.world.geometry import Area, Point, Pose, Quaternion
 from tamp.world.state import ObjectState, WorldState
 
@@ -37,18 +36,14 @@ class WorldStateEstimator(LeafSystem):
         self,
         *,
         bodies: dict[str, int],
-        kinds: dict[str, ObjectKind],
         base_body: int,
-        palm_body: int,
         areas: dict[str, Area],
         workspace: tuple[float, float, float, float],
     ):
         super().__init__()
         self.set_name("world_state_estimator")
         self._bodies = dict(bodies)
-        self._kinds = dict(kinds)
         self._base = base_body
-        self._palm = palm_body
         self._areas = dict(areas)
         self._workspace = workspace
         self.body_poses_port = self.DeclareAbstractInputPort(
