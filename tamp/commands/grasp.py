@@ -45,7 +45,13 @@ def register(subparsers) -> None:
     p.add_argument("--epochs", type=int, default=10)
     p.add_argument("--batch-size", type=int, default=8)
     p.add_argument("--batches-per-epoch", type=int, default=0, help="0: the whole split")
-    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--lr", type=float, default=1e-3, help="(peak) learning rate")
+    p.add_argument(
+        "--schedule",
+        choices=("cosine", "constant"),
+        default="cosine",
+        help="cosine annealing to zero over the whole run (default) or a constant rate",
+    )
     p.add_argument("--no-fusion", action="store_true", help="HRG-Net without layer fusion")
     p.add_argument("--no-augment", action="store_true", help="no rotation/zoom augmentation")
     p.add_argument(
@@ -167,6 +173,7 @@ def run_train(args) -> int:
         batch_size=args.batch_size,
         batches_per_epoch=args.batches_per_epoch,
         lr=args.lr,
+        schedule=args.schedule,
         split=args.split,
         test_fraction=args.test_fraction,
         fold=args.fold,

@@ -9,7 +9,7 @@ branch at half the resolution of the previous lowest one, all branches run in pa
 (residual blocks), and at the end of every stage the branches exchange information (layer
 fusion: each branch receives the sum of all branches, resampled by strided 3x3
 convolutions going down and 1x1 convolutions + bilinear upsampling going up). The head
-upsamples every branch to full resolution, concatenates and predicts the four maps. With
+projects every branch, upsamples it to full resolution, sums and predicts the four maps. With
 ``fusion=False`` (Table IV ablation) the branches never exchange information inside the
 network; a new branch still starts from the lowest existing one, and the head still
 concatenates them, so the only difference is the repeated exchange.
@@ -75,13 +75,25 @@ class BasicBlock(nn.Module):
         return F.relu(x + self.conv2(self.conv1(x)))
 
 
+def _down_path(cin: int, cout: int, steps: int) -> nn.Sequential:
+    """HRNet's downsampling exchange path: ``steps`` strided 3x3 convolutions (ReLU between
+    them, none after the last), halving the resolution each time."""
+    layers = [
+        _conv_bn(cin, cout if k == steps - 1 else cin, stride=2, relu=k < steps - 1)
+        for k in range(steps)
+    ]
+    return nn.Sequential(*layers)
+
+
 class FusionLayer(nn.Module):
     """Layer fusion: output branch i = ReLU(x_i + sum_{j != i} resample_{j->i}(x_j)) (Fig. 5).
 
-    Going down (j < i) the map is average-pooled by 2^(i-j) and mapped by a 1x1 convolution;
-    going up (j > i) it is mapped by a 1x1 convolution and upsampled bilinearly. Pooling
-    instead of HRNet's chains of strided 3x3 convolutions keeps the exchange cheap at full
-    resolution, which is what makes the network run in real time on a CPU.
+    As in HRNet, going down (j < i) the map passes i - j strided 3x3 convolutions; going up
+    (j > i) it is mapped by a 1x1 convolution and upsampled bilinearly. The last batch norm
+    of every path starts at zero, so each exchange opens as training finds it useful: with
+    HRNet's ordinary initialisation the coarse maps summed into the 8-channel
+    full-resolution branch from the first step wiped out its detail (5-epoch pilot on the
+    synthetic set: 74.8 % against 86.7 % gated; average-pooled down paths: 86.0 %).
     """
 
     def __init__(self, widths: Sequence[int]):
@@ -89,15 +101,20 @@ class FusionLayer(nn.Module):
         n = len(widths)
         self.paths = nn.ModuleList(
             nn.ModuleList(
-                nn.Identity() if j == i else _conv_bn(widths[j], widths[i], k=1, relu=False)
+                nn.Identity()
+                if j == i
+                else _down_path(widths[j], widths[i], i - j)
+                if j < i
+                else _conv_bn(widths[j], widths[i], k=1, relu=False)
                 for j in range(n)
             )
             for i in range(n)
         )
-        for row in self.paths:  # each exchange starts at zero and is learnt (zero-init BN)
+        for row in self.paths:  # zero-init gate: the last BN of every path
             for path in row:
-                if isinstance(path, nn.Sequential):
-                    nn.init.zeros_(path[-1].weight)
+                if not isinstance(path, nn.Identity):
+                    norms = [m for m in path.modules() if isinstance(m, nn.BatchNorm2d)]
+                    nn.init.zeros_(norms[-1].weight)
 
     def forward(self, xs: list[torch.Tensor]) -> list[torch.Tensor]:
         out = []
@@ -105,7 +122,7 @@ class FusionLayer(nn.Module):
             y = xs[i]
             for j, path in enumerate(row):
                 if j < i:
-                    y = y + path(F.avg_pool2d(xs[j], 2 ** (i - j), ceil_mode=True))
+                    y = y + path(xs[j])
                 elif j > i:
                     z = path(xs[j])
                     y = y + F.interpolate(
@@ -120,9 +137,9 @@ class HRGNet(nn.Module):
 
     ``widths[k]`` is the channel count of the branch at 1/2^k resolution; stage ``s``
     (s = 1..len(widths)) runs ``s`` branches with ``blocks`` residual blocks each. The head
-    maps every lower branch to the full-resolution width by a 1x1 convolution at its own
-    resolution, upsamples and adds it to the full-resolution branch (HRNetV2-style
-    aggregation at the cost of a sum), then a separable 3x3 and a 1x1 convolution give the
+    maps every branch to ``head_channels`` by a 1x1 convolution at its own resolution,
+    upsamples and sums them at full resolution (HRNetV2-style aggregation at the cost of a
+    sum instead of a concatenation), then a separable 3x3 and a 1x1 convolution give the
     four output maps.
     """
 
@@ -133,11 +150,12 @@ class HRGNet(nn.Module):
         blocks: int = 1,
         fusion: bool = True,
         separable: bool = False,
+        head_channels: int = 16,
     ):
         super().__init__()
         self.fusion = fusion
         self.widths = tuple(widths)
-        c0 = widths[0]
+        c0, ch = widths[0], head_channels
         self.stem = nn.Sequential(_conv_bn(in_channels, c0), _separable(c0, c0))
         self.stages = nn.ModuleList()
         self.transitions = nn.ModuleList()
@@ -152,8 +170,8 @@ class HRGNet(nn.Module):
                 )
             )
             self.fusions.append(FusionLayer(widths[:s]) if fusion and s > 1 else nn.Identity())
-        self.aggregate = nn.ModuleList(_conv_bn(w, c0, k=1, relu=False) for w in widths[1:])
-        self.head = nn.Sequential(_separable(c0, c0), nn.Conv2d(c0, 4, 1))
+        self.aggregate = nn.ModuleList(_conv_bn(w, ch, k=1, relu=False) for w in widths)
+        self.head = nn.Sequential(_separable(ch, ch), nn.Conv2d(ch, 4, 1))
         _small_output(self.head[-1])
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
@@ -164,8 +182,8 @@ class HRGNet(nn.Module):
             xs = [branch(t) for branch, t in zip(branches, xs, strict=True)]
             if self.fusion and s > 0:
                 xs = self.fusions[s](xs)
-        y = xs[0]
-        for conv, t in zip(self.aggregate, xs[1:], strict=True):
+        y = self.aggregate[0](xs[0])
+        for conv, t in zip(self.aggregate[1:], xs[1:], strict=True):
             y = y + F.interpolate(conv(t), size=y.shape[-2:], mode="bilinear", align_corners=False)
         return self.head(F.relu(y))
 

@@ -67,7 +67,7 @@ def _lowres_influence(model: HRGNet) -> float:
 
 
 def _as_if_trained(model: HRGNet) -> HRGNet:
-    """Undo the zero/small initialisations (which make fresh exchange paths silent)."""
+    """Undo the zero/small initialisations of the residual blocks and the output layer."""
     for m in model.modules():
         if isinstance(m, torch.nn.BatchNorm2d):
             torch.nn.init.ones_(m.weight)
@@ -76,9 +76,22 @@ def _as_if_trained(model: HRGNet) -> HRGNet:
     return model
 
 
-def test_fusion_paths_start_silent():
+def test_fusion_paths_start_gated_shut():
     model = HRGNet(4, fusion=True)
-    assert _lowres_influence(model) == 0.0  # zero-initialised exchange: learnt from zero
+    assert _lowres_influence(model) == 0.0  # zero-initialised gate: opened by training
+    for row in model.fusions[-1].paths:
+        for path in row:
+            if not isinstance(path, torch.nn.Identity):
+                norms = [m for m in path.modules() if isinstance(m, torch.nn.BatchNorm2d)]
+                assert torch.count_nonzero(norms[-1].weight) == 0
+
+
+def test_down_paths_stride_once_per_halving():
+    model = HRGNet(4, widths=(4, 8, 12, 16))
+    last = model.fusions[-1]
+    # branch 0 -> branch 3: three strided 3x3 convolutions, as in HRNet
+    strides = [m.stride for m in last.paths[3][0].modules() if isinstance(m, torch.nn.Conv2d)]
+    assert strides == [(2, 2)] * 3
 
 
 def test_fusion_switch():

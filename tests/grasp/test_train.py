@@ -11,7 +11,13 @@ import torch
 
 from tamp.grasp.datasets import GraspDataset
 from tamp.grasp.evaluate import evaluate
-from tamp.grasp.train import TrainConfig, load_model, train, train_local_processes
+from tamp.grasp.train import (
+    TrainConfig,
+    learning_rate,
+    load_model,
+    train,
+    train_local_processes,
+)
 
 
 def _cfg(root: Path, out: Path, **kw) -> TrainConfig:
@@ -33,17 +39,48 @@ def test_few_steps_write_checkpoints(jacquard_dir: Path, tmp_path: Path, model: 
                     progress=False)  # fmt: skip
     assert [h["epoch"] for h in summary["history"]] == [1, 2]
     assert summary["test_images"] == 2 and summary["train_images"] == 6
-    for name in ("last.pt", "best.pt", "summary.json"):
+    for name in ("last.pt", "best.pt", "final.pt", "summary.json"):
         assert (tmp_path / model / name).is_file()
     net, meta = load_model(tmp_path / model / "best.pt")
     assert meta["model"] == model and meta["size"] == 32
     assert json.loads((tmp_path / model / "summary.json").read_text())["parameters"] > 0
 
 
+def test_cosine_schedule_anneals_to_zero(jacquard_dir: Path, tmp_path: Path):
+    cfg = _cfg(jacquard_dir, tmp_path)
+    rates = [learning_rate(cfg, t, 100) for t in range(101)]
+    assert rates[0] == cfg.lr and rates[50] == pytest.approx(cfg.lr / 2) and rates[100] == 0.0
+    assert all(a >= b for a, b in zip(rates, rates[1:], strict=False))
+    flat = _cfg(jacquard_dir, tmp_path, schedule="constant")
+    assert {learning_rate(flat, t, 100) for t in range(101)} == {flat.lr}
+    summary = train(_cfg(jacquard_dir, tmp_path / "run", epochs=2), progress=False)
+    lrs = [h["lr"] for h in summary["history"]]  # rate of the last step of each epoch
+    assert lrs == [learning_rate(cfg, 1, 4), learning_rate(cfg, 3, 4)]  # 2 steps an epoch
+    # final.pt holds the weights after the last step, whatever epoch scored best
+    final = torch.load(tmp_path / "run" / "final.pt", weights_only=False)
+    last = torch.load(tmp_path / "run" / "last.pt", weights_only=False)["model"]
+    assert all(torch.equal(final["state_dict"][k], last[k]) for k in last)
+    assert final["meta"]["epoch"] == 2
+    assert summary["final_accuracy"] == summary["history"][-1]["accuracy"]
+
+
+def test_unknown_schedule_is_an_input_error(jacquard_dir: Path, tmp_path: Path):
+    from tamp.errors import InputError
+
+    with pytest.raises(InputError, match="unknown schedule"):
+        train(_cfg(jacquard_dir, tmp_path / "x", schedule="step"), progress=False)
+    assert not (tmp_path / "x").exists()
+
+
 def test_resume_continues_exactly(jacquard_dir: Path, tmp_path: Path):
-    full = train(_cfg(jacquard_dir, tmp_path / "full", epochs=2), progress=False)
-    train(_cfg(jacquard_dir, tmp_path / "part", epochs=1), progress=False)
-    resumed = train(_cfg(jacquard_dir, tmp_path / "part", epochs=2), resume=True, progress=False)
+    # a constant rate, so that a 1-epoch run is the first half of a 2-epoch one (a cosine
+    # rate is a function of the step and the run's length, so it resumes exactly as well)
+    flat = dict(schedule="constant")
+    full = train(_cfg(jacquard_dir, tmp_path / "full", epochs=2, **flat), progress=False)
+    train(_cfg(jacquard_dir, tmp_path / "part", epochs=1, **flat), progress=False)
+    resumed = train(
+        _cfg(jacquard_dir, tmp_path / "part", epochs=2, **flat), resume=True, progress=False
+    )
     assert resumed["history"][0] == full["history"][0] | {
         "train_s": resumed["history"][0]["train_s"]
     }
