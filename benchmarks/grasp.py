@@ -88,7 +88,9 @@ def cpu_time(model, threads: int, size: int = 224, repeats: int = 30) -> dict:
     return time_inference(optimize_for_cpu(model), 4, size, repeats=repeats)
 
 
-def measure(runs: Path, data: Path | None, threads: list[int]) -> list[dict]:
+def measure(
+    runs: Path, data: Path | None, threads: list[int], repeats: int = 30, time_size: int = 224
+) -> list[dict]:
     import torch
 
     from tamp.grasp.datasets import GraspDataset, make_split
@@ -122,7 +124,7 @@ def measure(runs: Path, data: Path | None, threads: list[int]) -> list[dict]:
                                            "lr", "schedule")},
         }  # fmt: skip
         for t in threads:
-            row[f"cpu_{t}t"] = cpu_time(model, t)
+            row[f"cpu_{t}t"] = cpu_time(model, t, time_size, repeats)
         if torch.cuda.is_available():
             row["gpu"] = time_inference(model.cuda(), 4, 224, device="cuda", repeats=50)
         rows.append(row)

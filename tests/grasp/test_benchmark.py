@@ -1,0 +1,45 @@
+"""benchmarks/grasp.py end to end on fixture data: every run for two seeds, accuracies of the
+final weights per seed, their pooled mean, and the target verdicts computed from them."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def bench():
+    spec = importlib.util.spec_from_file_location("grasp_bench", ROOT / "benchmarks" / "grasp.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_two_seeds_pooled_from_final_weights(bench, jacquard_dir: Path, tmp_path: Path, capsys):
+    budget = dict(bench.FULL_BUDGET, size=32, epochs=1, batches_per_epoch=1, batch_size=2)
+    budget["test_fraction"] = 0.25
+    bench.train_all(jacquard_dir, tmp_path, budget, (0, 1), threads=1)
+    rows = bench.measure(tmp_path, None, [1], repeats=1, time_size=32)
+    assert [r["model"] for r in rows] == list(bench.RUNS)
+    for r in rows:
+        assert [s["seed"] for s in r["seeds"]] == [0, 1]
+        assert r["test_images"] == sum(s["images"] for s in r["seeds"])
+        assert r["accuracy"] == sum(s["correct"] for s in r["seeds"]) / r["test_images"]
+        assert r["budget"]["schedule"] == "cosine" and r["budget"]["epochs"] == 1
+        assert r["cpu_1t"]["repeats"] == 1
+    result = bench.report(rows, [1])
+    by = {r["model"]: r["accuracy"] for r in rows}
+    targets = result["targets"]
+    assert targets["fusion on > off"] == (by["hrgnet"] > by["hrgnet_nofusion"])
+    assert targets["hrgnet >= grconvnet"] == (by["hrgnet"] >= by["grconvnet"])
+    out = capsys.readouterr().out
+    assert "seed 0" in out and "seed 1" in out and "mean" in out
+
+
+def test_missing_runs_are_reported(bench, tmp_path: Path):
+    with pytest.raises(SystemExit, match="train the runs first"):
+        bench.measure(tmp_path, None, [1])
