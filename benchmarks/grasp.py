@@ -45,12 +45,16 @@ def _train_one(cfg) -> str:
     from tamp.grasp.train import train
 
     print(f"training {cfg.out}", file=sys.stderr, flush=True)
-    train(cfg, progress=False)
+    train(cfg, progress=False, resume=True)  # a finished run is only re-saved
     return cfg.out
 
 
-def train_all(data: Path, out: Path, budget: dict, seeds, threads: int, jobs: int = 1) -> None:
-    """Every run of :data:`RUNS` for every seed; ``jobs`` runs at a time (processes)."""
+def train_all(
+    data: Path, out: Path, budget: dict, seeds, threads: int, jobs: int = 1, models=tuple(RUNS)
+) -> None:
+    """Every run of ``models`` (keys of :data:`RUNS`) for every seed, ``jobs`` runs at a time
+    (processes). Runs resume from their ``last.pt``, so an interrupted benchmark continues
+    and finished runs cost nothing."""
     from concurrent.futures import ProcessPoolExecutor
     from multiprocessing import get_context
 
@@ -69,6 +73,7 @@ def train_all(data: Path, out: Path, budget: dict, seeds, threads: int, jobs: in
         )  # fmt: skip
         for seed in seeds
         for name, spec in RUNS.items()
+        if name in models
     ]
     if jobs <= 1:
         for cfg in cfgs:
@@ -171,6 +176,13 @@ def main(argv=None) -> int:
     ap.add_argument("--train-threads", type=int, default=1)
     ap.add_argument("--jobs", type=int, default=1, help="training runs at a time (processes)")
     ap.add_argument("--seeds", type=int, nargs="+", default=list(SEEDS))
+    ap.add_argument(
+        "--models",
+        nargs="+",
+        choices=list(RUNS),
+        default=list(RUNS),
+        help="train only these runs (the table always needs all of them)",
+    )
     ap.add_argument("--save", type=Path, help="also write the JSON result to this file")
     args = ap.parse_args(argv)
     if args.quick:
@@ -184,7 +196,10 @@ def main(argv=None) -> int:
     elif args.train:
         if not args.data:
             ap.error("--train needs --data (a set made by `tamp grasp synth`)")
-        train_all(args.data, args.train, FULL_BUDGET, args.seeds, args.train_threads, args.jobs)
+        train_all(args.data, args.train, FULL_BUDGET, args.seeds, args.train_threads, args.jobs,
+                  args.models)  # fmt: skip
+        if set(args.models) != set(RUNS):
+            return 0
         runs, data = args.train, args.data
     elif args.runs:
         runs, data = args.runs, args.data

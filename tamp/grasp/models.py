@@ -6,13 +6,13 @@ All three are fully convolutional and map an ``(N, C, H, W)`` image (C = 1 depth
 
 HRG-Net keeps a full-resolution branch through the whole network; every stage adds a
 branch at half the resolution of the previous lowest one, all branches run in parallel
-(residual blocks), and at the end of every stage the branches exchange information (layer
-fusion: each branch receives the sum of all branches, resampled by strided 3x3
+(residual blocks), and at the end of every exchange unit the branches exchange information
+(layer fusion: each branch receives the sum of all branches, resampled by strided 3x3
 convolutions going down and 1x1 convolutions + bilinear upsampling going up). The head
 projects every branch, upsamples it to full resolution, sums and predicts the four maps. With
 ``fusion=False`` (Table IV ablation) the branches never exchange information inside the
 network; a new branch still starts from the lowest existing one, and the head still
-concatenates them, so the only difference is the repeated exchange.
+sums them, so the only difference is the repeated exchange.
 """
 
 from __future__ import annotations
@@ -58,18 +58,14 @@ def _separable(cin: int, cout: int, relu: bool = True) -> nn.Sequential:
 
 
 class BasicBlock(nn.Module):
-    """Residual block of two 3x3 convolutions (the HRNet/ResNet basic block).
+    """Residual block of two 3x3 convolutions (the HRNet/ResNet basic block), starting as
+    the identity (zero-initialised last batch-norm scale)."""
 
-    ``separable=True`` uses depthwise-separable convolutions, which keeps the
-    full-resolution branch affordable on a CPU.
-    """
-
-    def __init__(self, channels: int, separable: bool = False):
+    def __init__(self, channels: int):
         super().__init__()
-        conv = _separable if separable else _conv_bn
-        self.conv1 = conv(channels, channels)
-        self.conv2 = conv(channels, channels, relu=False)
-        nn.init.zeros_(self.conv2[-1].weight)  # zero-init residual: starts as identity
+        self.conv1 = _conv_bn(channels, channels)
+        self.conv2 = _conv_bn(channels, channels, relu=False)
+        nn.init.zeros_(self.conv2[-1].weight)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return F.relu(x + self.conv2(self.conv1(x)))
@@ -132,56 +128,91 @@ class FusionLayer(nn.Module):
         return out
 
 
+class ExchangeUnit(nn.Module):
+    """HRNet's high-resolution module: residual blocks on every branch in parallel, then
+    (with fusion) one exchange between all branches (Fig. 5).
+
+    ``blocks[b]`` is the number of residual blocks on branch ``b``.
+    """
+
+    def __init__(self, widths: Sequence[int], blocks: Sequence[int], fusion: bool):
+        super().__init__()
+        self.branches = nn.ModuleList(
+            nn.Sequential(*[BasicBlock(w) for _ in range(n)])
+            for w, n in zip(widths, blocks, strict=False)
+        )
+        self.fusion = FusionLayer(widths) if fusion and len(widths) > 1 else None
+
+    def forward(self, xs: list[torch.Tensor]) -> list[torch.Tensor]:
+        xs = [branch(t) for branch, t in zip(self.branches, xs, strict=True)]
+        return self.fusion(xs) if self.fusion is not None else xs
+
+
 class HRGNet(nn.Module):
     """High-resolution grasp network (§IV-B): parallel multi-resolution branches + fusion.
 
-    ``widths[k]`` is the channel count of the branch at 1/2^k resolution; stage ``s``
-    (s = 1..len(widths)) runs ``s`` branches with ``blocks`` residual blocks each. The head
-    maps every branch to ``head_channels`` by a 1x1 convolution at its own resolution,
-    upsamples and sums them at full resolution (HRNetV2-style aggregation at the cost of a
-    sum instead of a concatenation), then a separable 3x3 and a 1x1 convolution give the
-    four output maps.
+    ``widths[k]`` is the channel count of the branch at 1/2^k resolution. Stage ``s``
+    (s = 1..len(widths)) runs ``s`` branches through ``modules[s-1]`` exchange units
+    (:class:`ExchangeUnit`), each with ``blocks[b]`` residual blocks on branch ``b`` and, with
+    fusion, one exchange at its end: HRNet's stage/module layout, which the released HRG-Net
+    code uses with 1, 1, 4 and 3 modules of 4 blocks. ``blocks`` and ``modules`` take one
+    count per branch/stage (an int for all; entries past ``len(widths)`` are ignored, so
+    ``widths=(4, 8)`` is a two-branch network).
+
+    The defaults are a CPU-sized version. As the width doubles when the resolution halves,
+    a 3x3 convolution costs the same multiply-adds on every branch, but the wide
+    low-resolution ones run several times faster per multiply-add on a CPU than the
+    8-channel full-resolution one. So the full-resolution branch has one block per unit, the
+    others two, and stage 3 repeats its unit: four exchanges instead of three.
+
+    The head maps every branch to ``head_channels`` by a 1x1 convolution at its own
+    resolution, upsamples and sums them at full resolution (HRNetV2-style aggregation at the
+    cost of a sum instead of a concatenation), then a separable 3x3 and a 1x1 convolution
+    give the four output maps. With ``fusion=False`` (Table IV ablation) no unit exchanges
+    anything and the head is the only place where the branches meet.
     """
 
     def __init__(
         self,
         in_channels: int = 4,
         widths: Sequence[int] = (8, 16, 32, 64),
-        blocks: int = 1,
+        blocks: int | Sequence[int] = (1, 2, 2, 2),
+        modules: int | Sequence[int] = (1, 1, 2, 1),
         fusion: bool = True,
-        separable: bool = False,
         head_channels: int = 16,
     ):
         super().__init__()
+        n = len(widths)
+        blocks = [blocks] * n if isinstance(blocks, int) else list(blocks)[:n]
+        modules = [modules] * n if isinstance(modules, int) else list(modules)[:n]
+        if len(blocks) < n or len(modules) < n or min(blocks + modules) < 1:
+            raise ValueError(
+                f"blocks and modules need {n} positive counts (one per branch/stage; "
+                f"later ones are ignored), got {blocks} and {modules}"
+            )
         self.fusion = fusion
         self.widths = tuple(widths)
         c0, ch = widths[0], head_channels
         self.stem = nn.Sequential(_conv_bn(in_channels, c0), _separable(c0, c0))
-        self.stages = nn.ModuleList()
-        self.transitions = nn.ModuleList()
-        self.fusions = nn.ModuleList()
-        for s in range(1, len(widths) + 1):
-            if s > 1:  # a new, lower-resolution branch from the lowest existing one
-                self.transitions.append(_conv_bn(widths[s - 2], widths[s - 1], stride=2))
-            self.stages.append(
-                nn.ModuleList(
-                    nn.Sequential(*[BasicBlock(widths[b], separable) for _ in range(blocks)])
-                    for b in range(s)
-                )
+        self.transitions = nn.ModuleList(
+            _conv_bn(widths[s - 1], widths[s], stride=2) for s in range(1, n)
+        )
+        self.stages = nn.ModuleList(
+            nn.Sequential(
+                *[ExchangeUnit(widths[:s], blocks[:s], fusion) for _ in range(modules[s - 1])]
             )
-            self.fusions.append(FusionLayer(widths[:s]) if fusion and s > 1 else nn.Identity())
+            for s in range(1, n + 1)
+        )
         self.aggregate = nn.ModuleList(_conv_bn(w, ch, k=1, relu=False) for w in widths)
         self.head = nn.Sequential(_separable(ch, ch), nn.Conv2d(ch, 4, 1))
         _small_output(self.head[-1])
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         xs = [self.stem(x)]
-        for s, branches in enumerate(self.stages):
-            if s > 0:
-                xs.append(self.transitions[s - 1](xs[-1]))
-            xs = [branch(t) for branch, t in zip(branches, xs, strict=True)]
-            if self.fusion and s > 0:
-                xs = self.fusions[s](xs)
+        for s, stage in enumerate(self.stages):
+            if s > 0:  # a new, lower-resolution branch from the lowest existing one
+                xs = xs + [self.transitions[s - 1](xs[-1])]
+            xs = stage(xs)
         y = self.aggregate[0](xs[0])
         for conv, t in zip(self.aggregate[1:], xs[1:], strict=True):
             y = y + F.interpolate(conv(t), size=y.shape[-2:], mode="bilinear", align_corners=False)
