@@ -292,6 +292,18 @@ class GRConvNet(nn.Module):
         return self.out(self.dropout(y))
 
 
+def full_kwargs(name: str, **kwargs) -> dict:
+    """``kwargs`` completed with the constructor defaults of model ``name`` (without the
+    input channels), so that a weights file rebuilds the same network even after a default
+    changes."""
+    import inspect
+
+    cls = {"hrgnet": HRGNet, "ggcnn": GGCNN, "grconvnet": GRConvNet}[name]
+    params = list(inspect.signature(cls.__init__).parameters.values())[2:]  # self, in_channels
+    out = {p.name: p.default for p in params} | kwargs
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in out.items()}
+
+
 def build_model(name: str, input_mode: str = "rgbd", **kwargs) -> nn.Module:
     """A model by name (:data:`MODELS`) for an input mode of :data:`INPUT_CHANNELS`."""
     if input_mode not in INPUT_CHANNELS:

@@ -33,7 +33,7 @@ import torch.nn.functional as F
 
 from tamp.grasp.datasets import Augment, GraspDataset, make_split
 from tamp.grasp.evaluate import evaluate
-from tamp.grasp.models import build_model, parameter_count
+from tamp.grasp.models import build_model, full_kwargs, parameter_count
 
 
 @dataclass
@@ -106,7 +106,8 @@ def _device(name: str) -> torch.device:
 
 def save_weights(path: Path, model: torch.nn.Module, cfg: TrainConfig, extra: dict) -> None:
     """The deployable file: weights plus what is needed to rebuild the model."""
-    meta = {"model": cfg.model, "input": cfg.input, "size": cfg.size, "kwargs": model_kwargs(cfg)}
+    kwargs = full_kwargs(cfg.model, **model_kwargs(cfg))
+    meta = {"model": cfg.model, "input": cfg.input, "size": cfg.size, "kwargs": kwargs}
     state = {k: v.detach().cpu().contiguous() for k, v in model.state_dict().items()}
     torch.save({"meta": meta | extra, "state_dict": state}, path)
 

@@ -11,6 +11,7 @@ import torch
 
 from tamp.grasp.datasets import GraspDataset
 from tamp.grasp.evaluate import evaluate
+from tamp.grasp.models import full_kwargs
 from tamp.grasp.train import (
     TrainConfig,
     learning_rate,
@@ -43,6 +44,12 @@ def test_few_steps_write_checkpoints(jacquard_dir: Path, tmp_path: Path, model: 
         assert (tmp_path / model / name).is_file()
     net, meta = load_model(tmp_path / model / "best.pt")
     assert meta["model"] == model and meta["size"] == 32
+    # every constructor argument is recorded, so a later change of a default cannot
+    # rebuild a different network from this file
+    assert meta["kwargs"] == full_kwargs(
+        model, **(kwargs | ({"fusion": True} if model == "hrgnet" else {}))
+    )
+    assert set(meta["kwargs"]) >= ({"widths", "blocks", "modules"} if model == "hrgnet" else set())
     assert json.loads((tmp_path / model / "summary.json").read_text())["parameters"] > 0
 
 
