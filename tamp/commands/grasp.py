@@ -52,7 +52,14 @@ def register(subparsers) -> None:
         default="cosine",
         help="cosine annealing to zero over the whole run (default) or a constant rate",
     )
-    p.add_argument("--no-fusion", action="store_true", help="HRG-Net without layer fusion")
+    p.add_argument(
+        "--fusion",
+        choices=("full", "final", "none"),
+        default="full",
+        help="HRG-Net layer fusion: repeated exchange + multi-resolution head (full, default), "
+        "head only (final), or none: the full-resolution branch alone (Table IV ablation)",
+    )
+    p.add_argument("--no-fusion", action="store_true", help="same as --fusion none")
     p.add_argument("--no-augment", action="store_true", help="no rotation/zoom augmentation")
     p.add_argument(
         "--model-arg",
@@ -160,6 +167,10 @@ def run_train(args) -> int:
 
     if args.nproc < 1:
         raise InputError(f"--nproc must be >= 1, got {args.nproc}")
+    if args.no_fusion and args.fusion != "full":
+        raise InputError(f"--no-fusion contradicts --fusion {args.fusion}")
+    if (args.no_fusion or args.fusion != "full") and args.model != "hrgnet":
+        raise InputError(f"--fusion/--no-fusion apply to HRG-Net only, not --model {args.model}")
     kind, path = _kind(args)
     kwargs = _model_args(args.model_arg)
     cfg = TrainConfig(
@@ -179,7 +190,7 @@ def run_train(args) -> int:
         fold=args.fold,
         folds=args.folds,
         seed=args.seed,
-        fusion=not args.no_fusion,
+        fusion="none" if args.no_fusion else args.fusion,
         augment=not args.no_augment,
         device=args.device,
         threads=args.threads,

@@ -9,10 +9,19 @@ branch at half the resolution of the previous lowest one, all branches run in pa
 (residual blocks), and at the end of every exchange unit the branches exchange information
 (layer fusion: each branch receives the sum of all branches, resampled by strided 3x3
 convolutions going down and 1x1 convolutions + bilinear upsampling going up). The head
-projects every branch, upsamples it to full resolution, sums and predicts the four maps. With
-``fusion=False`` (Table IV ablation) the branches never exchange information inside the
-network; a new branch still starts from the lowest existing one, and the head still
-sums them, so the only difference is the repeated exchange.
+projects every branch, upsamples it to full resolution, sums and predicts the four maps.
+
+Layer fusion has three settings (:data:`FUSION_MODES`):
+
+- ``"full"``: the network above.
+- ``"final"``: no exchange inside the network, the head alone sums the branches (HRNet's own
+  ablation of repeated multi-scale fusion, "final fusion only").
+- ``"none"``: no information passes between resolutions at all, the paper's Table IV
+  ablation as its text explains it (layer fusion is what "allows the network to take into
+  account both low-level spatial features and high-level semantic features"), and what the
+  released code's commented head ``last_layer(x[0])`` computes once its exchange is removed.
+  The lower branches could not reach the output, so they are not built: the network is the
+  full-resolution branch alone, with the same blocks, stem and head.
 """
 
 from __future__ import annotations
@@ -24,6 +33,7 @@ import torch.nn.functional as F
 from torch import nn
 
 MODELS = ("hrgnet", "ggcnn", "grconvnet")
+FUSION_MODES = ("full", "final", "none")
 INPUT_CHANNELS = {"d": 1, "rgb": 3, "rgbd": 4}
 
 
@@ -168,20 +178,24 @@ class HRGNet(nn.Module):
     The head maps every branch to ``head_channels`` by a 1x1 convolution at its own
     resolution, upsamples and sums them at full resolution (HRNetV2-style aggregation at the
     cost of a sum instead of a concatenation), then a separable 3x3 and a 1x1 convolution
-    give the four output maps. With ``fusion=False`` (Table IV ablation) no unit exchanges
-    anything and the head is the only place where the branches meet.
+    give the four output maps. ``fusion`` is one of :data:`FUSION_MODES` (module docstring);
+    ``True``/``False`` mean ``"full"``/``"none"``.
     """
 
     def __init__(
         self,
         in_channels: int = 4,
         widths: Sequence[int] = (8, 16, 32, 64),
-        blocks: int | Sequence[int] = (1, 2, 2, 2),
+        blocks: int | Sequence[int] = (1, 2, 3, 3),
         modules: int | Sequence[int] = (1, 1, 2, 1),
-        fusion: bool = True,
+        fusion: str | bool = "full",
         head_channels: int = 16,
     ):
         super().__init__()
+        if isinstance(fusion, bool):
+            fusion = "full" if fusion else "none"
+        if fusion not in FUSION_MODES:
+            raise ValueError(f"unknown fusion {fusion!r}; expected one of {list(FUSION_MODES)}")
         n = len(widths)
         blocks = [blocks] * n if isinstance(blocks, int) else list(blocks)[:n]
         modules = [modules] * n if isinstance(modules, int) else list(modules)[:n]
@@ -191,26 +205,30 @@ class HRGNet(nn.Module):
                 f"later ones are ignored), got {blocks} and {modules}"
             )
         self.fusion = fusion
-        self.widths = tuple(widths)
+        self.widths = tuple(widths) if fusion != "none" else tuple(widths[:1])
+        exchange = fusion == "full"
         c0, ch = widths[0], head_channels
         self.stem = nn.Sequential(_conv_bn(in_channels, c0), _separable(c0, c0))
         self.transitions = nn.ModuleList(
-            _conv_bn(widths[s - 1], widths[s], stride=2) for s in range(1, n)
+            _conv_bn(widths[s - 1], widths[s], stride=2) for s in range(1, len(self.widths))
         )
         self.stages = nn.ModuleList(
             nn.Sequential(
-                *[ExchangeUnit(widths[:s], blocks[:s], fusion) for _ in range(modules[s - 1])]
+                *[
+                    ExchangeUnit(self.widths[:s], blocks[:s], exchange)
+                    for _ in range(modules[s - 1])
+                ]
             )
             for s in range(1, n + 1)
         )
-        self.aggregate = nn.ModuleList(_conv_bn(w, ch, k=1, relu=False) for w in widths)
+        self.aggregate = nn.ModuleList(_conv_bn(w, ch, k=1, relu=False) for w in self.widths)
         self.head = nn.Sequential(_separable(ch, ch), nn.Conv2d(ch, 4, 1))
         _small_output(self.head[-1])
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         xs = [self.stem(x)]
         for s, stage in enumerate(self.stages):
-            if s > 0:  # a new, lower-resolution branch from the lowest existing one
+            if 0 < s < len(self.widths):  # a new, lower-resolution branch from the lowest one
                 xs = xs + [self.transitions[s - 1](xs[-1])]
             xs = stage(xs)
         y = self.aggregate[0](xs[0])

@@ -54,7 +54,7 @@ class TrainConfig:
     fold: int | None = None
     folds: int = 5
     seed: int = 0
-    fusion: bool = True
+    fusion: str = "full"  # HRG-Net only: full, final or none (models.FUSION_MODES)
     augment: bool = True
     device: str = "auto"
     threads: int = 0

@@ -7,6 +7,7 @@ import importlib.util
 from pathlib import Path
 
 import pytest
+import torch
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -36,6 +37,13 @@ def test_two_seeds_pooled_from_final_weights(bench, jacquard_dir: Path, tmp_path
     targets = result["targets"]
     assert targets["fusion on > off"] == (by["hrgnet"] > by["hrgnet_nofusion"])
     assert targets["hrgnet >= grconvnet"] == (by["hrgnet"] >= by["grconvnet"])
+    gain = 100 * (by["hrgnet"] - by["hrgnet_final"])
+    assert result["exchange_gain_points"] == pytest.approx(gain)
+    fusion = {r["model"]: torch.load(tmp_path / r["model"] / "seed0" / "final.pt",
+                                     weights_only=False)["meta"]["kwargs"].get("fusion")
+              for r in rows}  # fmt: skip
+    assert fusion == {"hrgnet": "full", "hrgnet_final": "final", "hrgnet_nofusion": "none",
+                      "grconvnet": None, "ggcnn": None}  # fmt: skip
     out = capsys.readouterr().out
     assert "seed 0" in out and "seed 1" in out and "mean" in out
 

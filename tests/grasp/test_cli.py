@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import torch
 
 from tamp.cli import main
 from tamp.grasp import formats
@@ -62,6 +63,26 @@ def test_bad_model_arg(jacquard_dir: Path, tmp_path: Path, capsys):
     rc = main(["grasp", "train", "--dataset", "jacquard", str(jacquard_dir), "--model-arg",
                "depth=3", "--out", str(tmp_path / "x"), "--quiet"])  # fmt: skip
     assert rc == 2 and "--model-arg" in capsys.readouterr().err
+
+
+def test_fusion_modes(jacquard_dir: Path, tmp_path: Path, capsys):
+    base = ["grasp", "train", "--dataset", "jacquard", str(jacquard_dir), "--size", "32",
+            "--epochs", "1", "--batches-per-epoch", "1", "--batch-size", "2", "--quiet",
+            "--json", "--model-arg", "widths=[4,8]"]  # fmt: skip
+    for flags, mode in ((["--fusion", "final"], "final"), (["--no-fusion"], "none")):
+        rc = main(base + flags + ["--out", str(tmp_path / mode)])
+        assert rc == 0
+        assert json.loads(capsys.readouterr().out)["config"]["fusion"] == mode
+        meta = torch.load(tmp_path / mode / "final.pt", weights_only=False)["meta"]
+        assert meta["kwargs"]["fusion"] == mode
+    for flags, message in (
+        (["--no-fusion", "--fusion", "final"], "--no-fusion contradicts --fusion final"),
+        (["--fusion", "none", "--model", "ggcnn"], "HRG-Net only"),
+        (["--fusion", "half"], "invalid choice"),
+    ):
+        rc = main(base + flags + ["--out", str(tmp_path / "bad")])
+        assert rc == 2 and message in capsys.readouterr().err
+    assert not (tmp_path / "bad").exists()
 
 
 def test_synth_writes_a_jacquard_set(tmp_path: Path, capsys):

@@ -58,7 +58,6 @@ def test_stage_layout_blocks_and_modules():
     default = HRGNet(4)
     assert [len(stage) for stage in default.stages] == [1, 1, 2, 1]
     assert sum(u.fusion is not None for u in _units(default)) == 4
-    assert all(u.fusion is None for u in _units(HRGNet(4, fusion=False)))
     assert len(HRGNet(4, widths=(4, 8)).stages) == 2  # counts past the branches are ignored
     for bad in (dict(blocks=(1, 2)), dict(modules=0)):
         with pytest.raises(ValueError, match="positive counts"):
@@ -113,23 +112,40 @@ def test_down_paths_stride_once_per_halving():
     assert strides == [(2, 2)] * 3
 
 
-def test_fusion_switch():
+def _output_hears_lowest_branch(model: HRGNet) -> float:
+    model.eval()
+    x = torch.randn(1, 4, 32, 32)
+    with torch.no_grad():
+        a = model(x)
+        h = model.transitions[-1].register_forward_hook(lambda m, i, o: o + 5.0)
+        b = model(x)
+        h.remove()
+    return float((a - b).abs().max())
+
+
+def test_fusion_modes():
     torch.manual_seed(0)
-    on, off = _as_if_trained(HRGNet(4, fusion=True)), _as_if_trained(HRGNet(4, fusion=False))
-    assert parameter_count(on) > parameter_count(off)
-    # with fusion the full-resolution branch hears the lowest branch; without, it does not
-    assert _lowres_influence(on) > 1e-3
-    assert _lowres_influence(off) == 0.0
-    # ... but the output still sees every branch through the head in both cases
-    for model in (on, off):
-        model.eval()
-        x = torch.randn(1, 4, 32, 32)
-        with torch.no_grad():
-            a = model(x)
-            h = model.transitions[-1].register_forward_hook(lambda m, i, o: o + 5.0)
-            b = model(x)
-            h.remove()
-        assert float((a - b).abs().max()) > 1e-4
+    full, final, none = (
+        _as_if_trained(HRGNet(4, fusion=mode)) for mode in ("full", "final", "none")
+    )
+    assert parameter_count(full) > parameter_count(final) > parameter_count(none)
+    # full: the full-resolution branch hears the lowest branch inside the network
+    assert _lowres_influence(full) > 1e-3
+    # final fusion only: it does not, but the head still sums every branch
+    assert _lowres_influence(final) == 0.0
+    assert all(u.fusion is None for u in _units(final))
+    for model in (full, final):
+        assert len(model.widths) == 4 and _output_hears_lowest_branch(model) > 1e-4
+    # none: nothing passes between resolutions, so only the full-resolution branch exists,
+    # with the same number of units and blocks on it
+    assert none.widths == (8,) and len(none.transitions) == 0 and len(none.aggregate) == 1
+    assert len(_units(none)) == len(_units(full))
+    assert all(len(u.branches) == 1 and u.fusion is None for u in _units(none))
+    assert none(torch.randn(1, 4, 24, 40)).shape == (1, 4, 24, 40)
+    # booleans name the paper's two settings
+    assert HRGNet(4, fusion=True).fusion == "full" and HRGNet(4, fusion=False).fusion == "none"
+    with pytest.raises(ValueError, match="unknown fusion"):
+        HRGNet(4, fusion="partial")
 
 
 @pytest.mark.parametrize("name", MODELS)
@@ -156,7 +172,7 @@ def test_cpu_inference_copy_gives_the_same_maps(name):
 
 def test_parameter_counts_are_small():
     counts = {name: parameter_count(build_model(name, "rgbd")) for name in MODELS}
-    assert 300_000 < counts["hrgnet"] < 500_000  # real time on a CPU
+    assert 300_000 < counts["hrgnet"] < 600_000  # real time on a CPU
     assert 50_000 < counts["ggcnn"] < 100_000  # GG-CNN is ~62 k (depth input)
     assert 1_500_000 < counts["grconvnet"] < 2_500_000  # GR-ConvNet is ~1.9 M at 32 ch
 

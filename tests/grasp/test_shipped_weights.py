@@ -24,7 +24,7 @@ def predictor() -> GraspPredictor:
 def test_weights_file_is_small_and_describes_itself(predictor):
     assert WEIGHTS.stat().st_size < 3_000_000
     assert predictor.meta["model"] == "hrgnet" and predictor.meta["input"] == "rgbd"
-    assert predictor.meta["kwargs"]["fusion"] is True
+    assert predictor.meta["kwargs"]["fusion"] == "full"
     # fully convolutional: the 128 px network runs at 224 x 224 as well
     out = predictor.model(torch.zeros(1, 4, 224, 224))
     assert out.shape == (1, 4, 224, 224)

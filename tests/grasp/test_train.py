@@ -47,7 +47,7 @@ def test_few_steps_write_checkpoints(jacquard_dir: Path, tmp_path: Path, model: 
     # every constructor argument is recorded, so a later change of a default cannot
     # rebuild a different network from this file
     assert meta["kwargs"] == full_kwargs(
-        model, **(kwargs | ({"fusion": True} if model == "hrgnet" else {}))
+        model, **(kwargs | ({"fusion": "full"} if model == "hrgnet" else {}))
     )
     assert set(meta["kwargs"]) >= ({"widths", "blocks", "modules"} if model == "hrgnet" else set())
     assert json.loads((tmp_path / model / "summary.json").read_text())["parameters"] > 0
