@@ -173,7 +173,8 @@ class HRGNet(nn.Module):
     a 3x3 convolution costs the same multiply-adds on every branch, but the wide
     low-resolution ones run several times faster per multiply-add on a CPU than the
     8-channel full-resolution one. So the full-resolution branch has one block per unit, the
-    others two, and stage 3 repeats its unit: four exchanges instead of three.
+    1/2 branch two and the 1/4 and 1/8 branches three, and stage 3 repeats its unit: four
+    exchanges instead of three.
 
     The head maps every branch to ``head_channels`` by a 1x1 convolution at its own
     resolution, upsamples and sums them at full resolution (HRNetV2-style aggregation at the
