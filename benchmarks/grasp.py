@@ -44,7 +44,7 @@ FULL_BUDGET = dict(
     split="object",
 )  # fmt: skip
 QUICK_BUDGET = dict(FULL_BUDGET, size=64, epochs=3, batches_per_epoch=15)
-SEEDS = (0, 1)
+SEEDS = (0, 1, 2)
 
 
 def _train_one(cfg) -> str:
