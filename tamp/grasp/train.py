@@ -131,6 +131,20 @@ def load_model(path: str | Path, device: str = "cpu") -> tuple[torch.nn.Module, 
     return model.to(device).eval(), meta
 
 
+NETWORK_FIELDS = ("model", "input", "size", "fusion", "model_kwargs")
+
+
+def _check_same_network(saved: dict, cfg: TrainConfig, path: Path) -> None:
+    """--resume continues the run in ``path`` only with the network it was started with."""
+    from tamp.errors import InputError
+
+    now = asdict(cfg)
+    changed = [k for k in NETWORK_FIELDS if saved.get(k) != now[k]]
+    if changed:
+        diff = ", ".join(f"{k} {saved.get(k)!r} -> {now[k]!r}" for k in changed)
+        raise InputError(f"cannot resume a different network ({diff})", file=str(path))
+
+
 def train(
     cfg: TrainConfig,
     *,
@@ -185,6 +199,7 @@ def train(
     last = out / "last.pt"
     if resume and last.is_file():
         ckpt = torch.load(last, map_location=device, weights_only=False)
+        _check_same_network(ckpt["config"], cfg, last)
         model.load_state_dict(ckpt["model"])
         optimizer.load_state_dict(ckpt["optimizer"])
         start_epoch = ckpt["epoch"]

@@ -96,6 +96,20 @@ def test_resume_continues_exactly(jacquard_dir: Path, tmp_path: Path):
     assert all(torch.equal(a[k], b[k]) for k in a)
 
 
+def test_resume_refuses_a_different_network(jacquard_dir: Path, tmp_path: Path):
+    from tamp.errors import InputError
+
+    train(_cfg(jacquard_dir, tmp_path / "run", epochs=1), progress=False)
+    before = (tmp_path / "run" / "last.pt").read_bytes()
+    for change in (dict(fusion="final"), dict(model_kwargs={"widths": [4, 8, 12]}),
+                   dict(size=48)):  # fmt: skip
+        cfg = _cfg(jacquard_dir, tmp_path / "run", epochs=2, **change)
+        with pytest.raises(InputError, match="cannot resume a different network") as err:
+            train(cfg, resume=True, progress=False)
+        assert str(tmp_path / "run" / "last.pt") in str(err.value)
+    assert (tmp_path / "run" / "last.pt").read_bytes() == before  # nothing half-done
+
+
 class _Oracle(torch.nn.Module):
     """Returns the ground-truth maps of the sample it is shown (looked up by input)."""
 
