@@ -34,6 +34,9 @@ def register(subparsers) -> None:
     p.add_argument("--views", type=int, default=4, help="viewpoints per scene (default 4)")
     p.add_argument("--size", type=int, default=128, help="image side in pixels (default 128)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--jobs", type=int, default=1, help="render in N processes (same files; default 1)"
+    )
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.set_defaults(func=run_synth)
 
@@ -151,10 +154,10 @@ def _model_args(items: list[str]) -> dict:
 def run_synth(args) -> int:
     from tamp.grasp.synthetic import SynthConfig, generate
 
-    if args.scenes < 1 or args.views < 1 or args.size < 16:
-        raise InputError("--scenes and --views must be >= 1 and --size >= 16")
+    if args.scenes < 1 or args.views < 1 or args.jobs < 1 or args.size < 16:
+        raise InputError("--scenes, --views and --jobs must be >= 1 and --size >= 16")
     cfg = SynthConfig(size=args.size, views=args.views, seed=args.seed)
-    summary = generate(args.out, args.scenes, cfg, progress=True)
+    summary = generate(args.out, args.scenes, cfg, progress=True, jobs=args.jobs)
     if args.json:
         print_json(summary | {"out": args.out})
     else:

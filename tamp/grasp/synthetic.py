@@ -231,14 +231,20 @@ def generate(
     *,
     progress: bool = True,
     on_scene: Callable[[int], None] | None = None,
+    first: int = 0,
+    jobs: int = 1,
 ) -> dict[str, int]:
-    """Render ``scenes`` scenes into ``out``; returns counts of scenes, images and grasps."""
+    """Render scenes ``first .. first + scenes - 1`` into ``out``; returns counts of scenes,
+    images and grasps. Scene ``i`` depends on ``(seed, i)`` alone, so ``jobs > 1`` renders
+    chunks of scenes in that many processes and writes the same files as one process."""
+    if jobs > 1 and scenes > 1:
+        return _generate_in_processes(Path(out), scenes, cfg, first, jobs, progress, on_scene)
     from tqdm import tqdm
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     images = grasps = 0
-    for i in tqdm(range(scenes), desc="render", unit="scene", disable=not progress):
+    for i in tqdm(range(first, first + scenes), desc="render", unit="scene", disable=not progress):
         rng = np.random.default_rng((cfg.seed, i))
         placements = sample_scene(rng, cfg.max_objects)
         cams = sample_cameras(rng, placements, cfg)
@@ -261,3 +267,45 @@ def generate(
         if on_scene:
             on_scene(i)
     return {"scenes": scenes, "images": images, "grasps": grasps}
+
+
+def _generate_chunk(out: Path, first: int, scenes: int, cfg: SynthConfig) -> dict[str, int]:
+    return generate(out, scenes, cfg, progress=False, first=first)
+
+
+def _generate_in_processes(
+    out: Path,
+    scenes: int,
+    cfg: SynthConfig,
+    first: int,
+    jobs: int,
+    progress: bool,
+    on_scene: Callable[[int], None] | None,
+) -> dict[str, int]:
+    """``generate`` over chunks of scenes (at most 10 each, about four chunks per process so
+    that the work evens out) in ``jobs`` spawned processes, each building its own Drake
+    diagrams (spawned, not forked: a forked VTK/EGL context is unsafe)."""
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from multiprocessing import get_context
+
+    from tqdm import tqdm
+
+    out.mkdir(parents=True, exist_ok=True)
+    size = max(1, min(10, math.ceil(scenes / (4 * jobs))))
+    end = first + scenes
+    chunks = [(s, min(size, end - s)) for s in range(first, end, size)]
+    total = {"scenes": scenes, "images": 0, "grasps": 0}
+    with (
+        ProcessPoolExecutor(jobs, mp_context=get_context("spawn")) as pool,
+        tqdm(total=scenes, desc="render", unit="scene", disable=not progress) as bar,
+    ):
+        futures = {pool.submit(_generate_chunk, out, s, n, cfg): (s, n) for s, n in chunks}
+        for future in as_completed(futures):
+            done = future.result()
+            total["images"] += done["images"]
+            total["grasps"] += done["grasps"]
+            s, n = futures[future]
+            bar.update(n)
+            for i in range(s, s + n) if on_scene else ():
+                on_scene(i)
+    return total

@@ -1,9 +1,11 @@
 """benchmarks/grasp.py end to end on fixture data: every run for two seeds, accuracies of the
-final weights per seed, their pooled mean, and the target verdicts computed from them."""
+final weights per seed, their pooled mean, the target verdicts computed from them, and runs
+that no target compares left out or trained for fewer seeds."""
 
 from __future__ import annotations
 
 import importlib.util
+import shutil
 from pathlib import Path
 
 import pytest
@@ -46,6 +48,22 @@ def test_two_seeds_pooled_from_final_weights(bench, jacquard_dir: Path, tmp_path
                       "grconvnet": None, "ggcnn": None}  # fmt: skip
     out = capsys.readouterr().out
     assert "seed 0" in out and "seed 1" in out and "mean" in out
+
+    # the runs no target compares may be missing, or trained for fewer seeds
+    shutil.rmtree(tmp_path / "hrgnet_final")
+    shutil.rmtree(tmp_path / "ggcnn" / "seed1")
+    rows = bench.measure(tmp_path, None, [1], repeats=1, time_size=32)
+    assert [r["model"] for r in rows] == ["hrgnet", "hrgnet_nofusion", "grconvnet", "ggcnn"]
+    result = bench.report(rows, [1])
+    assert "exchange_gain_points" not in result
+    assert result["targets"]["fusion on > off"] == targets["fusion on > off"]
+    ggcnn = capsys.readouterr().out.splitlines()[-5]
+    assert ggcnn.startswith("ggcnn") and ggcnn.endswith("(seeds 0 only)")
+    # ... but the compared runs must share their seeds
+    shutil.rmtree(tmp_path / "grconvnet" / "seed1")
+    rows = bench.measure(tmp_path, None, [1], repeats=1, time_size=32)
+    with pytest.raises(SystemExit, match="the compared runs need the same seeds"):
+        bench.report(rows, [1])
 
 
 def test_missing_runs_are_reported(bench, tmp_path: Path):

@@ -64,12 +64,14 @@ def rendered(tmp_path_factory) -> Path:
 
     out = tmp_path_factory.mktemp("synth")
     summary = generate(out / "a", 3, SynthConfig(size=64, views=2, seed=7), progress=False)
-    generate(out / "b", 3, SynthConfig(size=64, views=2, seed=7), progress=False)
+    # the same set rendered by two processes (chunks of scenes): the same files
+    twice = generate(out / "b", 3, SynthConfig(size=64, views=2, seed=7), progress=False, jobs=2)
     assert summary["images"] > 0 and summary["grasps"] >= summary["images"]
+    assert twice == summary
     return out
 
 
-def test_deterministic_with_a_seed(rendered: Path):
+def test_deterministic_with_a_seed_in_one_or_two_processes(rendered: Path):
     files_a = sorted(p.relative_to(rendered / "a") for p in (rendered / "a").rglob("*.*"))
     files_b = sorted(p.relative_to(rendered / "b") for p in (rendered / "b").rglob("*.*"))
     assert files_a == files_b
