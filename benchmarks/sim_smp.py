@@ -28,9 +28,9 @@ os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
 
 def run_drake(scenario, time_step: float) -> dict:
     from tamp.rg import plan
-    from tamp.sim.builder import build_diagram
-    from tamp.sim.runner import SimRunner
-    from tamp.sim.smp import make_tree
+    from tamp.sim.smp.builder import build_diagram
+    from tamp.sim.smp.runner import SimRunner
+    from tamp.sim.smp.simulate import make_tree
 
     sc = dataclasses.replace(scenario, time_step=time_step)
     tree = make_tree(sc, plan(sc.demo, sc.cost))
@@ -56,7 +56,7 @@ def run_drake(scenario, time_step: float) -> dict:
 def run_symbolic(scenario) -> dict:
     from tamp.bt import SymbolicWorld
     from tamp.rg import plan
-    from tamp.sim.smp import make_tree, verification_events
+    from tamp.sim.smp.simulate import make_tree, verification_events
 
     tree = make_tree(scenario, plan(scenario.demo, scenario.cost))
     world = SymbolicWorld(scenario.demo.initial_world(), events=verification_events(scenario))
@@ -78,8 +78,8 @@ def main() -> int:
     ap.add_argument("--no-peer", action="store_true", help="skip the 5 ms and symbolic runs")
     args = ap.parse_args()
 
-    from tamp.sim.scenario import load_scenario, scenario_path
-    from tamp.sim.smp import prepare
+    from tamp.sim.smp.scenario import load_scenario, scenario_path
+    from tamp.sim.smp.simulate import prepare
 
     rows = []
     for case in args.cases:

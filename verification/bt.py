@@ -14,7 +14,7 @@ Choices written down here:
 - Failures are bounded: at most ``max_failures`` skill failures per execution (default 1).
   With unbounded failures no controller reaches its goal on every path (a skill can fail
   forever); the executor's own retry limit still applies inside that budget.
-- Scripted interference uses `tamp.bt.symbolic`'s `Appear` and `Move` events: an object
+- Scripted interference uses `tamp.world.symbolic`'s `Appear` and `Move` events: an object
   appears when the robot first comes within reach of it (Case 3's O_a at l_1), or at a
   given tick; a person moves an object at a given tick.
 - The exploration is bounded by ``max_states``; when the bound is hit the verdict says so
@@ -562,12 +562,12 @@ def executor_for(demo, order: Sequence[str] | None = None, *, domain=None):
 
 
 def appear_event(obj: str, where: Point, at_tick: int | None = None):
-    from tamp.bt.symbolic import Appear
+    from tamp.world.symbolic import Appear
 
     return Appear(obj, where, at_tick)
 
 
 def move_event(obj: str, where: Point, at_tick: int):
-    from tamp.bt.symbolic import Move
+    from tamp.world.symbolic import Move
 
     return Move(obj, where, at_tick)

@@ -35,7 +35,7 @@ def gate(
 
     ``state`` (BT only): the initial `WorldState` the tree will run from. ``properties``
     (BT only): LTL properties, default `verification.bt.DEFAULT_PROPERTIES`. ``events``
-    (BT only): scripted interference (`tamp.bt.symbolic.Appear` / `Move`).
+    (BT only): scripted interference (`tamp.world.symbolic.Appear` / `Move`).
     ``max_failures`` (BT only): skill failures per execution. ``graph`` (RG only): also
     model-check the whole reachability graph.
     """

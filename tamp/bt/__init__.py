@@ -17,7 +17,7 @@ from tamp.bt.nodes import (
     ReactiveSequence,
     Sequence,
 )
-from tamp.bt.symbolic import Appear, Move, ScriptedFailure, SymbolicWorld
+from tamp.world.symbolic import Appear, Move, ScriptedFailure, SymbolicWorld
 
 __all__ = [
     "ActionNode",

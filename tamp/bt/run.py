@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from tamp.bt.executor import PaBtExecutor
-from tamp.bt.symbolic import Appear, Move, ScriptedFailure, SymbolicWorld
 from tamp.world.actions import Action, Domain
 from tamp.world.interface import Status
 from tamp.world.predicates import Predicate
 from tamp.world.state import WorldState
+from tamp.world.symbolic import Appear, Move, ScriptedFailure, SymbolicWorld
 
 
 @dataclass

@@ -1,7 +1,7 @@
 """`tamp plan DEMO.yaml`: demonstration → goals + constraints → RG → cheapest order (§IV-A/B).
 
 With ``--execute`` the chosen order is run as a behavior tree grown at run time in the
-symbolic world (the BT layer's options are added by `tamp.bt.cli_args` when it is present).
+symbolic world (the BT layer's options are added by `tamp.commands.execute_args` when it is present).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.add_argument("--dot", metavar="FILE", help="write the RG (chosen path highlighted) as DOT")
     try:
-        from tamp.bt.cli_args import add_execute_arguments
+        from tamp.commands.execute_args import add_execute_arguments
     except ImportError:
         pass
     else:
@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     if args.dot:
         _write_dot(demo, result, args.dot)
     if execute:
-        from tamp.bt.cli_args import run_execute
+        from tamp.commands.execute_args import run_execute
 
         return run_execute(args, demo, result)
     if args.json:

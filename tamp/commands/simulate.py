@@ -43,8 +43,8 @@ def run(args: argparse.Namespace) -> int:
     import math
 
     from tamp.errors import InputError
-    from tamp.sim.scenario import load_scenario, scenario_path
-    from tamp.sim.smp import simulate_smp_mro
+    from tamp.sim.smp.scenario import load_scenario, scenario_path
+    from tamp.sim.smp.simulate import simulate_smp_mro
 
     if args.max_sim_time is not None and not (
         math.isfinite(args.max_sim_time) and args.max_sim_time > 0

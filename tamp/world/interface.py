@@ -1,6 +1,6 @@
 """The interface every executor (BT, LOTS) ticks against, and its skill status values.
 
-Two implementations exist: ``tamp.bt.symbolic.SymbolicWorld`` (effects applied after a
+Two implementations exist: ``tamp.world.symbolic.SymbolicWorld`` (effects applied after a
 configurable number of ticks; scripted failures and interference) and the Drake world in
 ``tamp.sim`` (state read from the MultibodyPlant, skills drive joints). The same
 controller object runs on both, so what is verified symbolically is what the simulated

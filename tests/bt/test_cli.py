@@ -8,7 +8,12 @@ import json
 import pytest
 
 from tamp import scenarios
-from tamp.bt.cli_args import add_execute_arguments, parse_failure, parse_obstacle, run_execute
+from tamp.commands.execute_args import (
+    add_execute_arguments,
+    parse_failure,
+    parse_obstacle,
+    run_execute,
+)
 from tamp.demo import load_demonstration
 from tamp.errors import InputError
 from tamp.rg import plan

@@ -158,7 +158,7 @@ def test_persistent_failure_stops_with_a_reason_after_max_retries() -> None:
 
 def test_cancelled_skills_are_reported_and_never_overlap() -> None:
     state, free = case3_by_hand()
-    from tamp.bt.symbolic import Move
+    from tamp.world.symbolic import Move
 
     c_goal = [IsObjectAt("O1", "L1")]
     report = execute(

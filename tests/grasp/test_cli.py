@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from tamp.cli import main
+from tamp.commands.main import main
 from tamp.grasp import formats
 
 

@@ -4,12 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from tamp.lots.task import load_events, load_task
-from tamp.scenarios import path
+from tamp.lots.task import load_task
 
-
-def scenario(name: str):
-    return path(f"lots/{name}")
+from .helpers import scenario
 
 
 @pytest.fixture(scope="session")
@@ -25,7 +22,3 @@ def tower():
 @pytest.fixture(scope="session")
 def model_building():
     return load_task(scenario("model_building.yaml"))
-
-
-def events(name: str, task):
-    return load_events(scenario(name), task)

@@ -6,9 +6,9 @@ import json
 
 import pytest
 
-from tamp.cli import main
+from tamp.commands.main import main
 
-from .conftest import scenario
+from .helpers import scenario
 
 
 def run_json(capsys, *argv):

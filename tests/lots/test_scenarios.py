@@ -7,7 +7,7 @@ import pytest
 from tamp.lots.run import run_task
 from tamp.lots.task import Event
 
-from .conftest import events
+from .helpers import events
 
 
 def keys(report):

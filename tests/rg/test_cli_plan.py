@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from tamp.cli import main
+from tamp.commands.main import main
 
 
 def _run(capsys, *argv: str) -> tuple[int, str, str]:
@@ -70,7 +70,7 @@ def test_missing_file_and_unknown_option_exit_2(capsys) -> None:
 
 def test_console_script_exit_status() -> None:
     proc = subprocess.run(
-        [sys.executable, "-m", "tamp.cli", "plan", "case1.yaml", "--json"],
+        [sys.executable, "-m", "tamp.commands.main", "plan", "case1.yaml", "--json"],
         capture_output=True,
         text=True,
         check=False,

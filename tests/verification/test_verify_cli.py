@@ -6,8 +6,8 @@ import json
 
 import pytest
 
+from tamp.commands.verify import main
 from tamp.scenarios import path
-from verification.cli import main
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:

@@ -21,9 +21,9 @@ import re
 import sys
 from typing import Any
 
-from tamp.bt.symbolic import Appear, ScriptedFailure
 from tamp.errors import EXIT_INFEASIBLE, EXIT_OK, InputError
 from tamp.world.geometry import Point
+from tamp.world.symbolic import Appear, ScriptedFailure
 
 _NAME = r"[A-Za-z_][\w\-]*"
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"

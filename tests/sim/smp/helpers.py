@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from tamp.sim.scenario import SIM_DIR
+from tamp.sim.smp.scenario import SIM_DIR
 
 # One bottle at robot-frame (1.0, 0.0), one goal at (1.0, 0.7): a short pick-and-place.
 ONE_BOTTLE_DEMO = """\

@@ -14,7 +14,7 @@ import os
 
 from pydrake.multibody.parsing import Parser
 
-from tamp.sim.models import PACKAGE_XML
+from tamp.sim.core.models import PACKAGE_XML
 
 
 def make_parser(plant) -> Parser:

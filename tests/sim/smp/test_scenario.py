@@ -6,10 +6,10 @@ import math
 
 import pytest
 
-from tamp.cli import main
+from tamp.commands.main import main
 from tamp.errors import InputError
-from tamp.sim.models import OBJECT_KINDS
-from tamp.sim.scenario import load_scenario, parse_action
+from tamp.sim.core.models import OBJECT_KINDS
+from tamp.sim.smp.scenario import load_scenario, parse_action
 
 from .helpers import packaged, write_one_bottle
 

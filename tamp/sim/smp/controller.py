@@ -31,10 +31,10 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.framework import EventStatus, LeafSystem
 
-from tamp.sim.ik import ArmIK, grasp_rotation
-from tamp.sim.messages import GraspRequest, SkillCommand, SkillStatus
-from tamp.sim.models import HOME_ARM, ROBOT, ObjectKind
-from tamp.sim.motion import (
+from tamp.sim.core.messages import GraspRequest, SkillCommand, SkillStatus
+from tamp.sim.core.models import HOME_ARM, ROBOT, ObjectKind
+from tamp.sim.smp.ik import ArmIK, grasp_rotation
+from tamp.sim.smp.motion import (
     STANDOFF,
     BasePlanner,
     Disc,
@@ -44,7 +44,7 @@ from tamp.sim.motion import (
     standoff_pose,
     wrap,
 )
-from tamp.sim.scenario import BaseLimits
+from tamp.sim.smp.scenario import BaseLimits
 from tamp.world.geometry import Area
 from tamp.world.interface import Status
 

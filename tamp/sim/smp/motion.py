@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tamp.sim.scenario import BaseLimits
+from tamp.sim.smp.scenario import BaseLimits
 
 STANDOFF = 0.40  # base centre to the object or area centre when picking or placing (m)
 GRID = 0.05  # base planning grid (m)

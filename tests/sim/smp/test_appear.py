@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import math
 
-from tamp.sim.builder import build_diagram
-from tamp.sim.runner import SimRunner
-from tamp.sim.scenario import load_scenario
-from tamp.sim.smp import prepare
+from tamp.sim.smp.builder import build_diagram
+from tamp.sim.smp.runner import SimRunner
+from tamp.sim.smp.scenario import load_scenario
+from tamp.sim.smp.simulate import prepare
 
 from .helpers import write_one_bottle
 

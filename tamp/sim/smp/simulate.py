@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tamp.sim.scenario import SimScenario
+from tamp.sim.smp.scenario import SimScenario
 
 
 @dataclass
@@ -83,8 +83,8 @@ def simulate_smp_mro(
     ``record``: write a self-contained Meshcat animation (HTML) of the run there
     (a local Meshcat server is started when ``meshcat`` is None).
     """
-    from tamp.sim.builder import build_diagram
-    from tamp.sim.runner import SimRunner
+    from tamp.sim.smp.builder import build_diagram
+    from tamp.sim.smp.runner import SimRunner
 
     prepared = prepare(scenario, verify=verify)
     if record is not None and meshcat is None:

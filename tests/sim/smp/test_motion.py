@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from tamp.sim.motion import (
+from tamp.sim.smp.motion import (
     CLEARANCE,
     BasePlanner,
     Disc,
@@ -18,7 +18,7 @@ from tamp.sim.motion import (
     quintic,
     standoff_pose,
 )
-from tamp.sim.scenario import BaseLimits
+from tamp.sim.smp.scenario import BaseLimits
 
 WS = (-1.0, 4.0, -2.0, 2.0)
 

@@ -7,8 +7,8 @@ import math
 import pytest
 from pydrake.math import RigidTransform
 
-from tamp.sim.builder import build_diagram
-from tamp.sim.scenario import load_scenario
+from tamp.sim.smp.builder import build_diagram
+from tamp.sim.smp.scenario import load_scenario
 from tamp.world.interface import Status
 from tamp.world.predicates import IsAreaFree, IsHandFree, IsObjectAt, IsRobotCloseTo
 

@@ -30,10 +30,10 @@ from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator, SimulatorConfig
 
-from tamp.sim.builder import SimSystem
-from tamp.sim.executor import ActionLog
-from tamp.sim.ik import grasp_transform
-from tamp.sim.models import ROBOT
+from tamp.sim.core.executor import ActionLog
+from tamp.sim.core.models import ROBOT
+from tamp.sim.smp.builder import SimSystem
+from tamp.sim.smp.ik import grasp_transform
 from tamp.world.interface import Status
 
 

@@ -19,10 +19,10 @@ class CaseRuns:
 
     def get(self, name: str):
         if name not in self._runs:
-            from tamp.sim.builder import build_diagram
-            from tamp.sim.runner import SimRunner
-            from tamp.sim.scenario import load_scenario, scenario_path
-            from tamp.sim.smp import prepare
+            from tamp.sim.smp.builder import build_diagram
+            from tamp.sim.smp.runner import SimRunner
+            from tamp.sim.smp.scenario import load_scenario, scenario_path
+            from tamp.sim.smp.simulate import prepare
 
             from .helpers import Track
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from tamp.sim.executor import ExecutorState, PortWorld
-from tamp.sim.messages import SkillStatus
+from tamp.sim.core.executor import ExecutorState, PortWorld
+from tamp.sim.core.messages import SkillStatus
 from tamp.world import Area, Point, Pose, WorldState, default_domain
 from tamp.world.interface import Status, World
 

@@ -90,7 +90,7 @@ def test_domain_errors_name_the_field(tmp_path, body: str, field: str) -> None:
 
 @pytest.mark.parametrize("content", [b"\xff\xfe\x00binary", b"version: 1\nrobot: [unclosed\n", b""])
 def test_unreadable_files_are_bad_input(tmp_path, content: bytes) -> None:
-    from tamp.cli import main
+    from tamp.commands.main import main
 
     p = tmp_path / "demo.yaml"
     p.write_bytes(content)

@@ -9,8 +9,8 @@ import pytest
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import DiagramBuilder
 
-from tamp.sim.models import HOME_ARM, OBJECT_KINDS, ROBOT, model_url
-from tamp.sim.parsing import make_parser
+from tamp.sim.core.models import HOME_ARM, OBJECT_KINDS, ROBOT, model_url
+from tamp.sim.core.parsing import make_parser
 
 
 def new_plant():

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from tamp.cli import main
+from tamp.commands.main import main
 
 from .helpers import write_one_bottle
 

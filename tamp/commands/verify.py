@@ -20,7 +20,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from tamp.cli import run as run_cli
+from tamp.commands.main import run as run_cli
 from tamp.errors import EXIT_INFEASIBLE, EXIT_OK, InputError
 
 

@@ -33,7 +33,7 @@ from typing import Any, Protocol
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, LeafSystem
 
-from tamp.sim.messages import SkillCommand, SkillStatus
+from tamp.sim.core.messages import SkillCommand, SkillStatus
 from tamp.world.actions import Action
 from tamp.world.geometry import Area, Point, Pose
 from tamp.world.interface import Status

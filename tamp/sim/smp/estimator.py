@@ -15,7 +15,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.systems.framework import LeafSystem
 
-from tamp.sim.messages import GraspRequest
+from tamp.sim.core.messages import GraspRequest
 from tamp.world.geometry import Area, Point, Pose, Quaternion
 from tamp.world.state import ObjectState, WorldState
 

@@ -12,9 +12,9 @@ are driven by the plant's PD-controlled actuators (`PdControllerGains`, implicit
 tracking the controller's desired state; gravity is switched off for the robot only
 (ideal gravity compensation, as the real youBot's controllers provide), objects fall.
 
-Grasps are weld constraints: two per graspable object (`tamp.sim.ik.grasp_transform`),
+Grasps are weld constraints: two per graspable object (`tamp.sim.smp.ik.grasp_transform`),
 added before `Finalize`, all inactive at the start. They are switched between simulation
-steps by `SimRunner` (see `tamp.sim.runner`), never inside an event.
+steps by `SimRunner` (see `tamp.sim.smp.runner`), never inside an event.
 """
 
 from __future__ import annotations
@@ -41,13 +41,13 @@ from pydrake.multibody.plant import (
 from pydrake.multibody.tree import PdControllerGains
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
-from tamp.sim.controller import SkillController
-from tamp.sim.estimator import WorldStateEstimator
-from tamp.sim.executor import BtExecutor, Policy
-from tamp.sim.ik import grasp_transform
-from tamp.sim.models import HOME_ARM, MODELS_DIR, ROBOT, model_url
-from tamp.sim.parsing import make_parser
-from tamp.sim.scenario import SimScenario
+from tamp.sim.core.executor import BtExecutor, Policy
+from tamp.sim.core.models import HOME_ARM, MODELS_DIR, ROBOT, model_url
+from tamp.sim.core.parsing import make_parser
+from tamp.sim.smp.controller import SkillController
+from tamp.sim.smp.estimator import WorldStateEstimator
+from tamp.sim.smp.ik import grasp_transform
+from tamp.sim.smp.scenario import SimScenario
 from tamp.world.geometry import Area
 
 
