@@ -1,7 +1,7 @@
 """`tamp plan DEMO.yaml`: demonstration → goals + constraints → RG → cheapest order (§IV-A/B).
 
 With ``--execute`` the chosen order is run as a behavior tree grown at run time in the
-symbolic world (the BT layer's options are added by `tamp.commands.execute_args` when it is present).
+symbolic world (options from `tamp.commands.execute_args`).
 """
 
 from __future__ import annotations
