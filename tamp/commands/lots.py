@@ -33,17 +33,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _resolve(name: str):
-    from tamp.scenarios import resolve
-
-    p = resolve(name)
-    if not p.exists() and not name.startswith("lots/"):
-        alt = resolve(f"lots/{name}")
-        if alt.exists():
-            return alt
-    return p
-
-
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -56,8 +45,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("must be >= 1", field="--max-waits")
     if args.dot:
         output_file(args.dot, "--dot")
-    task = load_task(_resolve(args.task))
-    events = load_events(_resolve(args.interference), task) if args.interference else []
+    task = load_task(args.task)
+    events = load_events(args.interference, task) if args.interference else []
     from verification import gate
 
     report = run_task(
