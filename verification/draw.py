@@ -13,10 +13,10 @@ from __future__ import annotations
 import shutil
 import subprocess
 
-import buddy
-import spot
-
-from verification import ltl
+from tamp import ltl
+from tamp.ltl.automata import edges, live_states
+from tamp.ltl.formula import Formula, as_formula
+from tamp.ltl.letters import aps, label, letter_bdd, meets
 from verification.words import Word
 
 
@@ -24,14 +24,11 @@ def _esc(text: str) -> str:
     return text.replace("\\", "\\\\").replace('"', '\\"')
 
 
-def trace_dot(
-    formula: str | spot.formula, word: Word, *, finite: bool = False, title: str = ""
-) -> str:
+def trace_dot(formula: str | Formula, word: Word, *, finite: bool = False, title: str = "") -> str:
     """DOT text of the automaton of ``formula`` with ``word``'s walk highlighted."""
-    f = formula if isinstance(formula, spot.formula) else ltl.parse_formula(formula)
-    aut = ltl.finite_automaton(f) if finite else ltl.buchi(f)
-    d = aut.get_dict()
-    live = ltl.live_states(aut, finite=finite)
+    f = as_formula(formula)
+    aut = ltl.translate(f, ltl.FINITE if finite else ltl.BUCHI)
+    live = live_states(aut, finite=finite)
     letters = list(word.prefix)
     if word.cycle is not None:
         letters += list(word.cycle) * 2
@@ -42,16 +39,16 @@ def trace_dot(
     visited = set(cur)
     failed: tuple[list[int], frozenset[str]] | None = None
     for letter in letters:
-        b = ltl.letter_bdd(aut, letter)
+        b = letter_bdd(aut, letter)
         nxt = set()
         for s in cur:
-            for e in aut.out(s):
-                if (e.cond & b) == buddy.bddfalse:
+            for src, dst, cond in edges(aut, s):
+                if not meets(cond, b):
                     continue
-                key = (e.src, e.dst, spot.bdd_format_formula(d, e.cond))
-                if e.dst in live:
+                key = (src, dst, label(aut, cond))
+                if dst in live:
                     green.add(key)
-                    nxt.add(e.dst)
+                    nxt.add(dst)
                 else:
                     red.add(key)
         visited |= nxt
@@ -76,22 +73,20 @@ def trace_dot(
             style = ""
         lines.append(f'  q{s} [shape={shape}, label="q{s}"{", " + style if style else ""}];')
     lines.append(f"  start -> q{init};")
-    for s in range(aut.num_states()):
-        for e in aut.out(s):
-            label = spot.bdd_format_formula(d, e.cond)
-            key = (e.src, e.dst, label)
-            attrs = f'label="{_esc(label)}"'
-            if key in red:
-                attrs += ', color="#d62728", fontcolor="#d62728", penwidth=2.5'
-            elif key in green:
-                attrs += ', color="#2ca02c", penwidth=2.5'
-            else:
-                attrs += ', color="#999999", fontcolor="#999999"'
-            lines.append(f"  q{e.src} -> q{e.dst} [{attrs}];")
+    for src, dst, cond in edges(aut):
+        text = label(aut, cond)
+        key = (src, dst, text)
+        attrs = f'label="{_esc(text)}"'
+        if key in red:
+            attrs += ', color="#d62728", fontcolor="#d62728", penwidth=2.5'
+        elif key in green:
+            attrs += ', color="#2ca02c", penwidth=2.5'
+        else:
+            attrs += ', color="#999999", fontcolor="#999999"'
+        lines.append(f"  q{src} -> q{dst} [{attrs}];")
     if failed is not None:  # the letter that leaves every accepting continuation
         states, letter = failed
-        aps = [a.ap_name() for a in aut.ap()]
-        text = " & ".join(a if a in letter else f"!{a}" for a in aps) or "1"
+        text = " & ".join(a if a in letter else f"!{a}" for a in aps(aut)) or "1"
         lines.append(
             '  dead [shape=box, style="filled,dashed", fillcolor="#f8d0d0", '
             'label="no accepting\\ncontinuation"];'

@@ -1,7 +1,7 @@
 """Model checking an explicit transition system: does *every* path satisfy an LTL formula?
 
-The system (RG, explored BT executions, a LOTS table) becomes a Spot Kripke structure
-(``spot.make_kripke_graph``): one state per system state, labelled with the full valuation
+The system (RG, explored BT executions, a LOTS table) becomes a Kripke structure
+(`tamp.ltl.kripke`): one state per system state, labelled with the full valuation
 of the formula's propositions there. It satisfies ``f`` on all paths iff it has no run
 accepted by the Büchi automaton of ``!f``; Spot's ``intersecting_run`` returns such a run
 as a lasso of Kripke states, which is the counterexample.
@@ -25,11 +25,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import buddy
-import spot
-
-from verification import ltl
-from verification.traces import as_formula, check_trace, explain
+from tamp import ltl
+from tamp.ltl.formula import Formula
+from tamp.ltl.kripke import intersecting_lasso, kripke
+from verification.traces import MAX_CONJUNCTS_FOR_WHOLE, as_formula, check_trace, explain
 from verification.verdict import Verdict
 from verification.words import Word
 
@@ -63,39 +62,16 @@ class TransitionSystem:
         return sum(len(s) for s in self.succ)
 
 
-def to_kripke(
-    ts: TransitionSystem, aps: list[str], bdict, *, stutter_unexpanded: bool = True
-) -> spot.kripke_graph:
-    """The Kripke structure of ``ts`` over ``aps`` (dead ends get a self-loop; unexpanded
-    ones only with ``stutter_unexpanded``)."""
-    k = spot.make_kripke_graph(bdict)
-    varnums = {}
-    for name in aps:
-        f = spot.formula.ap(name)
-        k.register_ap(f)
-        varnums[name] = bdict.varnum(f)
-    cache: dict[frozenset[str], buddy.bdd] = {}
-    for label in ts.labels:
-        key = label & frozenset(aps)
-        b = cache.get(key)
-        if b is None:
-            b = buddy.bddtrue
-            for name, v in varnums.items():
-                b = b & (buddy.bdd_ithvar(v) if name in key else buddy.bdd_nithvar(v))
-            cache[key] = b
-        k.new_state(b)
-    for s, succ in enumerate(ts.succ):
-        if not succ and (stutter_unexpanded or s not in ts.unexpanded):
-            k.new_edge(s, s)
-        for d in dict.fromkeys(succ):
-            k.new_edge(s, d)
-    k.set_init_state(ts.init)
-    return k
+def to_kripke(ts: TransitionSystem, aps: list[str], aut, *, stutter_unexpanded: bool = True):
+    """The Kripke structure of ``ts`` over ``aps`` in ``aut``'s BDD dictionary (dead ends
+    get a self-loop; unexpanded ones only with ``stutter_unexpanded``)."""
+    stutter = None if stutter_unexpanded else set(range(ts.num_states)) - ts.unexpanded
+    return kripke(ts.labels, ts.succ, aps, aut, init=ts.init, stutter=stutter)
 
 
 def model_check(
     ts: TransitionSystem,
-    formula: str | spot.formula,
+    formula: str | Formula,
     *,
     subject: str = "system",
     accepting_word: Word | None = None,
@@ -103,28 +79,27 @@ def model_check(
     """Verdict "every path of ``ts`` satisfies ``formula``", with a counterexample run."""
     f = as_formula(formula)
     aps = ltl.ap_names(f)
-    bdict = spot.make_bdd_dict()
-    k = to_kripke(ts, aps, bdict)
     parts = ltl.conjuncts(f)
     # One product with the automaton of !f. Its translation uses Spot's low optimisation
     # level: the negation of a conjunction is a disjunction whose automaton is small, but
     # the 'high' simplifications take seconds to minutes on it (12 F-conjuncts: ~12 s).
-    neg = spot.translate(spot.formula.Not(f), "Buchi", "SBAcc", "any", "low", dict=bdict)
+    neg = ltl.translate(ltl.negate(f), ltl.NEGATION)
+    k = to_kripke(ts, aps, neg)
     states = ts.num_states
-    lasso = _lasso(k, neg)
+    lasso = intersecting_lasso(k, neg)
     if lasso is not None and len(lasso[1]) == 1 and lasso[1][0] in ts.unexpanded:
         prefix, cycle = lasso
         word = Word.lasso([ts.labels[s] for s in prefix + cycle], [ts.labels[cycle[0]]])
         bad = explain(f, word, finite=False).position
         if bad is None or bad >= len(word.prefix):  # not a bad prefix: stutter at the bound
-            k = to_kripke(ts, aps, bdict, stutter_unexpanded=False)
-            lasso = _lasso(k, neg)
+            k = to_kripke(ts, aps, neg, stutter_unexpanded=False)
+            lasso = intersecting_lasso(k, neg)
     if lasso is None:
         return Verdict(subject, str(f), "all paths", True, states)
     prefix, cycle = lasso
     word = Word.lasso([ts.labels[s] for s in prefix], [ts.labels[s] for s in cycle])
     violated = [c for c in parts if not check_trace(c, word).holds] if len(parts) > 1 else [f]
-    whole = len(parts) <= ltl.MAX_CONJUNCTS_FOR_WHOLE
+    whole = len(parts) <= MAX_CONJUNCTS_FOR_WHOLE
     ce = explain(f if whole else violated[0], word, finite=False)
     if not whole:
         ce.accepting_word = None
@@ -135,16 +110,3 @@ def model_check(
     ce.aps = aps
     ce.reason = f"a path of {subject} violates the formula: " + ce.reason
     return Verdict(subject, str(f), "all paths", False, states, ce)
-
-
-def _lasso(k: spot.kripke_graph, neg: spot.twa_graph) -> tuple[list[int], list[int]] | None:
-    """A run of ``k`` accepted by ``neg`` as (prefix, cycle) state numbers, shortest form."""
-    run = k.intersecting_run(neg)
-    if run is None:
-        return None
-    prefix = [k.state_number(st.s) for st in run.prefix]
-    cycle = [k.state_number(st.s) for st in run.cycle]
-    while prefix and prefix[-1] == cycle[-1]:  # shortest equivalent lasso
-        prefix.pop()
-        cycle = cycle[-1:] + cycle[:-1]
-    return prefix, cycle

@@ -1,66 +1,99 @@
-"""LOTS plans (Zhou et al. §IV, Alg. 1-3): the planned run and every entry of the table T.
+"""LOTS plans (Zhou et al. §IV, Alg. 1-3): every table T the controller builds, where it starts.
 
-Two checks, both on infinite words (the task is an ω-regular LTL formula):
+A table is built from a planned run that starts at a pair ``(q, s^B)``: ``(q_0, s^B_0)`` for
+the initial table, the automaton state and observed W^B counts of a replan otherwise
+(`tamp.lots.controller.Build`). Two checks per build, both on infinite words:
 
-1. The planned run ``prefix · cycle^ω`` (`tamp.lots.planner.Plan`, letters = the
-   propositions delivered at each step, ∅ for idle/removal steps) satisfies the task
-   formula. The verdict is computed from the formula by our own translation, so it does not
-   rely on the planner's automaton.
+1. The planned run ``prefix · cycle^ω`` (letters = the propositions delivered at each step,
+   ∅ for idle/removal steps) is accepted by the task automaton *from q* (Spot product
+   emptiness on a copy started in q). It is cross-checked against the formula itself by our
+   own translation (`check_trace`), on ``history · prefix · cycle^ω`` where ``history`` is
+   a word leading the automaton from ``q_0`` to ``q``: the verdict then does not rely on the
+   planner's automaton. A disagreement is reported as a violation.
 2. Every entry of T leads, when followed, to acceptance: from W^B state ``b`` the robot
-   executes ``T[b]`` (a delivery changes ``b`` by one object of the proposition's class, a
-   removal takes one out), looks the new state up (the run's next entry while W^B is where
-   the run expects it, else ``T[b']`` — the controller's own rule, Alg. 1 line 12), and so
-   on until ``done``; then the plan's accepting cycle repeats. The letters produced,
-   read from the automaton state ``q`` the entry is paired with, must be accepted by the
-   task automaton (Spot product emptiness on a copy of it started in ``q``). Following T
-   into a W^B state that T does not cover, or around a loop that never reaches ``done``,
-   is a violation too: the table does not lead the robot to acceptance by itself.
+   follows T (each action changes W^B, the next state's entry is looked up) until ``done``;
+   then the plan's accepting cycle repeats. The letters produced, read from the automaton
+   state ``q`` the entry is paired with, must be accepted (product emptiness on a copy
+   started in ``q``). Following T into a W^B state that T does not cover, or around a loop
+   that never reaches ``done``, is a violation too.
 
 Idle steps of a plan (∅ letters where nothing moves) are not entries of T, so a followed
 entry produces only the letters of actions, exactly like ``tamp.lots.planner.follow_table``.
+
+Entry points: `check_build` (one table, typed), `check_controller` (the table in use),
+`check_run` / `check_table` (the two checks), `check_task_file` (``tamp-verify lots``: the
+controller run over the symbolic world with an interference script, every table checked).
 """
 
 from __future__ import annotations
 
-import spot
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
-from verification import ltl
-from verification.traces import check_trace, explain_on, word_automaton
+from tamp.ltl.automata import accepts_lasso, started_at
+from verification.traces import check_trace, explain_on
 from verification.verdict import Counterexample, Report, Verdict
 from verification.words import Word
 
+if TYPE_CHECKING:
+    from tamp.lots.automaton import Automaton, Letter
+    from tamp.lots.controller import Build, LotsController
+    from tamp.lots.lots import Lots
+    from tamp.lots.planner import Table
+    from tamp.lots.task import Event
 
-def check_run(aut, prefix, cycle, *, subject: str = "LOTS planned run") -> Verdict:
-    """The planned lasso against the task automaton (``aut``: `tamp.lots.automaton.Automaton`).
 
-    The verdict is Spot's product emptiness with the planner's own automaton; it is
-    cross-checked against our translation of the formula (`check_trace`), which also gives
-    the explanation (violated conjuncts, shortest bad prefix). A disagreement between the
-    two automata is reported as a violation: the planner's automaton is then not the task.
+def check_run(
+    aut: Automaton,
+    prefix: Sequence[Letter],
+    cycle: Sequence[Letter],
+    *,
+    start: int | None = None,
+    history: Sequence[Letter] = (),
+    subject: str = "LOTS planned run",
+) -> Verdict:
+    """The planned lasso read from automaton state ``start`` (default ``q_0``).
+
+    ``history`` leads ``aut`` from ``q_0`` to ``start``; the formula is checked on
+    ``history · prefix · cycle^ω`` by our own translation (see module docstring).
     """
-    word = Word.lasso(prefix, cycle)
-    prod = spot.product(aut.spot_aut, word_automaton(word, aut.spot_aut))
-    accepted = not prod.is_empty()
-    ours = check_trace(aut.spot_formula, word, subject=subject)
-    ours.states_explored += prod.num_states()
-    if accepted == ours.holds:
+    q = aut.initial if start is None else start
+    accepted, explored = accepts_lasso(aut.spot_aut, prefix, cycle, start=q)
+    reached = _read(aut, history)
+    ours = check_trace(aut.spot_formula, Word.lasso([*history, *prefix], cycle), subject=subject)
+    ours.states_explored += explored
+    if q in reached and accepted == ours.holds:
         return ours
-    ce = explain_on(aut.spot_aut, word, finite=False) if not accepted else ours.counterexample
-    ce.reason = (
-        f"the task automaton {'rejects' if not accepted else 'accepts'} the run but the "
-        f"formula {'holds' if ours.holds else 'does not hold'} on it: " + ce.reason
-    )
+    word = Word.lasso(prefix, cycle)
+    if not accepted:
+        ce = explain_on(started_at(aut.spot_aut, q), word, finite=False)
+    elif not ours.holds:
+        ce = ours.counterexample
+    else:
+        ce = Counterexample(word, "", accepting_word=None)
+    if q not in reached:
+        ce.reason = (
+            f"the run starts in automaton state q{q}, which the recorded history does not "
+            f"reach (it reaches {sorted(reached)}): " + ce.reason
+        )
+    else:
+        ce.reason = (
+            f"the task automaton {'rejects' if not accepted else 'accepts'} the run from q{q} "
+            f"but the formula {'holds' if ours.holds else 'does not hold'} on it: " + ce.reason
+        )
     ce.aps = list(aut.ap)
     return Verdict(subject, str(aut.spot_formula), "infinite", False, ours.states_explored, ce)
 
 
-def _started_at(spot_aut: spot.twa_graph, q: int) -> spot.twa_graph:
-    copy = spot.make_twa_graph(spot_aut, spot.twa_prop_set.all())
-    copy.set_init_state(q)
-    return copy
+def _read(aut: Automaton, letters: Sequence[Letter]) -> set[int]:
+    """Automaton states reached from ``q_0`` by executable ``letters``."""
+    cur = {aut.initial}
+    for x in letters:
+        cur = {n for q in cur for n in aut.successors(q, frozenset(x))}
+    return cur
 
 
-def follow(table, lots, b) -> tuple[list, list[str], str | None]:
+def follow(table: Table, lots: Lots, b) -> tuple[list, list[str], str | None]:
     """Follow T from W^B state ``b``: (letters, step descriptions, problem or None)."""
     e = table.get(b)
     if e is None:
@@ -98,20 +131,26 @@ def follow(table, lots, b) -> tuple[list, list[str], str | None]:
     return letters, steps, None
 
 
-def check_table(aut, table, lots, cycle, *, subject: str = "LOTS table T") -> Verdict:
-    """Every entry of ``table`` leads to acceptance (see module docstring)."""
+def check_table(
+    aut: Automaton,
+    table: Table,
+    lots: Lots,
+    cycle: Sequence[Letter],
+    *,
+    subject: str = "LOTS table T",
+) -> Verdict:
+    """Every entry of ``table`` leads to acceptance from its own automaton state."""
     aps = list(aut.ap)
     explored = 0
     for b, e in sorted(table.entries.items()):
         letters, steps, problem = follow(table, lots, b)
-        start = _started_at(aut.spot_aut, e.q)
         if problem is None:
-            word = Word.lasso(letters, cycle)
-            prod = spot.product(start, word_automaton(word, start))
-            explored += prod.num_states()
-            if not prod.is_empty():
+            ok, n = accepts_lasso(aut.spot_aut, letters, cycle, start=e.q)
+            explored += n
+            if ok:
                 continue
-            ce = explain_on(start, word, finite=False)
+            word = Word.lasso(letters, cycle)
+            ce = explain_on(started_at(aut.spot_aut, e.q), word, finite=False)
             ce.reason = (
                 f"following T from W^B {lots.format(b)} (automaton state q{e.q}) is not "
                 "accepted: " + ce.reason
@@ -132,23 +171,76 @@ def check_table(aut, table, lots, cycle, *, subject: str = "LOTS table T") -> Ve
     return Verdict(name, str(aut.spot_formula), "infinite", True, explored)
 
 
-def check_controller(controller) -> Report:
-    """A `tamp.lots.controller.LotsController`: its current plan and its table T."""
-    prefix, cycle = controller.plan_letters()
+def check_build(aut: Automaton, lots: Lots, build: Build) -> Report:
+    """One table the controller built: its planned run from where it starts, and every entry.
+
+    The initial build keeps the subjects ``LOTS planned run`` / ``LOTS table T``; a replan's
+    subjects name it (``… (replan 1 at W^B …)``).
+    """
+    tag = "" if build.label == "initial" else f" ({build.label})"
+    q, _ = build.start
+    plan = build.plan
     return Report(
         [
-            check_run(controller.aut, prefix, cycle),
-            check_table(controller.aut, controller.table, controller.lots, cycle),
+            check_run(
+                aut,
+                plan.prefix,
+                plan.cycle,
+                start=q,
+                history=build.history,
+                subject="LOTS planned run" + tag,
+            ),
+            check_table(aut, build.table, lots, plan.cycle, subject="LOTS table T" + tag),
         ]
     )
 
 
-def check_task_file(path) -> Report:
-    """``tamp-verify lots TASK.yaml``: build the LOTS controller of a task file and check it."""
-    from tamp.lots.controller import LotsController
-    from tamp.lots.task import load_task
-
-    return check_controller(LotsController(load_task(path)))
+def check_controller(controller: LotsController) -> Report:
+    """The controller's table in use (`LotsController.build`), from where it was built."""
+    return check_build(controller.aut, controller.lots, controller.build)
 
 
-__all__ = ["check_controller", "check_run", "check_table", "check_task_file", "follow", "ltl"]
+def check_task_file(path, interference=None) -> Report:
+    """``tamp-verify lots TASK.yaml [--interference EVENTS.yaml]``.
+
+    Runs the controller over the symbolic world with the interference script and checks
+    every table it builds, each before it is used; the run stops at the first that fails.
+    """
+    from tamp.lots.task import load_events, load_task
+
+    task = load_task(path)
+    events = load_events(interference, task) if interference is not None else []
+    return check_run_of(task, events)
+
+
+def check_run_of(task, events: Sequence[Event] = ()) -> Report:
+    """Every table the controller builds while running ``task`` against ``events``."""
+    from tamp.lots.run import run_task
+
+    verdicts: list[Verdict] = []
+
+    class _Stop(Exception):
+        pass
+
+    def check(controller: LotsController) -> None:
+        report = check_controller(controller)
+        verdicts.extend(report.verdicts)
+        if not report.holds:
+            raise _Stop
+
+    try:
+        run_task(task, events, check=check)
+    except _Stop:
+        pass
+    return Report(verdicts)
+
+
+__all__ = [
+    "check_build",
+    "check_controller",
+    "check_run",
+    "check_run_of",
+    "check_table",
+    "check_task_file",
+    "follow",
+]

@@ -16,9 +16,9 @@ from collections.abc import Sequence
 from functools import lru_cache
 
 import networkx as nx
-import spot
 
 from tamp.errors import InputError
+from tamp.ltl.formula import Formula
 from verification.kripke import TransitionSystem, model_check
 from verification.traces import check_trace
 from verification.verdict import Report, Verdict
@@ -31,12 +31,12 @@ def goal_prop(gid: str) -> str:
     return gid.lower() if re.fullmatch(r"G\d+", gid) else f"reached_{gid}"
 
 
-def constraint_formula(goal_ids: Sequence[str], constraints) -> spot.formula:
+def constraint_formula(goal_ids: Sequence[str], constraints) -> Formula:
     """``∧ (!g_j U g_i)`` over ``G_i ≤ G_j`` in C, ``∧ F g_i`` over the goals."""
     parts = [f"(!{goal_prop(j)} U {goal_prop(i)})" for i, j in sorted(constraints)] + [
         f"F {goal_prop(g)}" for g in goal_ids
     ]
-    return spot.formula(" & ".join(parts) if parts else "1")
+    return Formula(" & ".join(parts) if parts else "1")
 
 
 def order_word(order: Sequence[str]) -> Word:

@@ -1,10 +1,9 @@
 """Checking one trace against an LTL formula, with a shortest-bad-prefix explanation.
 
 Two semantics:
-- infinite words (a lasso ``prefix · cycle^ω``): the verdict is Spot's product emptiness
-  ``L(A_f) ∩ {w} ≠ ∅`` with ``A_f`` the Büchi automaton of ``f`` and ``{w}`` the word
-  automaton of ``spot.parse_word`` (sharing the automaton's BDD dictionary);
-- finite words (LTLf): the NFA of ``from_ltlf``/``to_finite`` is run on the letters.
+- infinite words (a lasso ``prefix · cycle^ω``): the verdict is lasso acceptance by the Büchi
+  automaton of ``f`` (`tamp.ltl.automata.accepts_lasso`: Spot's product emptiness);
+- finite words (LTLf): the NFA of ``f`` read with LTLf semantics is run on the letters.
 
 Every letter is a full valuation over the formula's propositions: a proposition the
 letter does not name is false. Propositions the trace names but the formula does not
@@ -22,22 +21,23 @@ conjunct whose bad prefix is shortest.
 
 from __future__ import annotations
 
-import spot
-
+from tamp import ltl
 from tamp.errors import InputError
-from verification import ltl
+from tamp.ltl.automata import Automaton, Stepper, accepting_continuation, accepts_lasso
+from tamp.ltl.formula import Formula, as_formula
 from verification.verdict import Counterexample, Verdict
 from verification.words import Word
 
+#: Above this many top-level conjuncts the whole-formula automaton is not built (it can be
+#: exponential in the number of conjuncts while each conjunct alone is tiny): the verdict is
+#: then computed conjunct by conjunct, which is sound for a conjunction.
+MAX_CONJUNCTS_FOR_WHOLE = 8
 
-def as_formula(formula: str | spot.formula, *, field: str = "formula") -> spot.formula:
-    if isinstance(formula, spot.formula):
-        return formula
-    return ltl.parse_formula(formula, field=field)
+__all__ = ["MAX_CONJUNCTS_FOR_WHOLE", "as_formula", "check_trace", "explain", "explain_on"]
 
 
 def check_trace(
-    formula: str | spot.formula,
+    formula: str | Formula,
     word: Word,
     *,
     finite: bool | None = None,
@@ -65,9 +65,9 @@ def check_trace(
         )
     parts = ltl.conjuncts(f)
     semantics = "finite" if finite else "infinite"
-    whole = len(parts) <= ltl.MAX_CONJUNCTS_FOR_WHOLE
+    whole = len(parts) <= MAX_CONJUNCTS_FOR_WHOLE
 
-    def holds(g: spot.formula) -> tuple[bool, int]:
+    def holds(g: Formula) -> tuple[bool, int]:
         return _holds_finite(g, word) if finite else _holds_lasso(g, word)
 
     explored = 0
@@ -101,9 +101,9 @@ def check_trace(
     return Verdict(subject, str(f), semantics, False, explored, ce)
 
 
-def _holds_finite(f: spot.formula, word: Word) -> tuple[bool, int]:
-    aut = ltl.finite_automaton(f)
-    st = ltl.Stepper(aut, finite=True)
+def _holds_finite(f: Formula, word: Word) -> tuple[bool, int]:
+    aut = ltl.translate(f, ltl.FINITE)
+    st = Stepper(aut, finite=True)
     cur = st.initial()
     explored = len(cur)
     for letter in word.prefix:
@@ -114,33 +114,22 @@ def _holds_finite(f: spot.formula, word: Word) -> tuple[bool, int]:
     return any(aut.state_is_accepting(s) for s in cur), explored
 
 
-def word_automaton(word: Word, aut: spot.twa_graph) -> spot.twa_graph:
-    """Spot's automaton of a lasso, letters as full valuations over ``aut``'s propositions."""
-    aps = [ap.ap_name() for ap in aut.ap()]
-    text = "; ".join(ltl.formula_letter_text(x, aps) for x in word.prefix)
-    cyc = "cycle{" + "; ".join(ltl.formula_letter_text(x, aps) for x in word.cycle) + "}"
-    text = f"{text}; {cyc}" if text else cyc
-    return spot.parse_word(text, aut.get_dict()).as_automaton()
+def _holds_lasso(f: Formula, word: Word) -> tuple[bool, int]:
+    return accepts_lasso(ltl.translate(f), word.prefix, word.cycle)
 
 
-def _holds_lasso(f: spot.formula, word: Word) -> tuple[bool, int]:
-    aut = ltl.buchi(f)
-    prod = spot.product(aut, word_automaton(word, aut))
-    return prod.is_empty() is False, prod.num_states()
-
-
-def explain(f: spot.formula, word: Word, *, finite: bool) -> Counterexample:
+def explain(f: Formula, word: Word, *, finite: bool) -> Counterexample:
     """Shortest bad prefix of ``word`` for ``f`` and an accepted word for comparison.
 
     Assumes ``word`` violates ``f`` (the caller checked).
     """
-    aut = ltl.finite_automaton(f) if finite else ltl.buchi(f)
+    aut = ltl.translate(f, ltl.FINITE if finite else ltl.BUCHI)
     return explain_on(aut, word, finite=finite)
 
 
-def explain_on(aut: spot.twa_graph, word: Word, *, finite: bool) -> Counterexample:
+def explain_on(aut: Automaton, word: Word, *, finite: bool) -> Counterexample:
     """`explain` on a given automaton (e.g. a task automaton started in some state)."""
-    st = ltl.Stepper(aut, finite=finite)
+    st = Stepper(aut, finite=finite)
     cur = st.initial()
     if not cur:
         what = "no non-empty finite trace" if finite else "no infinite word"
@@ -148,7 +137,7 @@ def explain_on(aut: spot.twa_graph, word: Word, *, finite: bool) -> Counterexamp
 
     def compare(prefix: tuple, states: frozenset[int]) -> Word:
         q = min(states)
-        letters, cycle = ltl.accepting_continuation(aut, q, finite=finite)
+        letters, cycle = accepting_continuation(aut, q, finite=finite)
         if finite:
             return Word.finite(list(prefix) + letters)
         return Word.lasso(list(prefix) + letters, cycle)

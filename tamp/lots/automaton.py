@@ -1,8 +1,7 @@
-"""The task automaton: an LTL formula translated by Spot into a state-based Büchi automaton.
+"""The task automaton: an LTL formula as a state-based Büchi automaton (Zhou et al. Def. 2).
 
-Zhou et al. §III-A, Def. 2: ``B = (Q, Q_0, Σ, δ, F)``. Spot 2.13 translates with
-``spot.translate(f, 'Buchi', 'SBAcc', 'small', 'high')``; the plain ``'BA'`` option loses
-state-based acceptance in this build (its option parser drops the flag), so it is never used.
+``B = (Q, Q_0, Σ, δ, F)``, translated by `tamp.ltl` (cached, guarded; fresh proposition
+names so that the automaton depends on the formula text only, see `tamp.ltl.translate`).
 
 The robot does one thing at a time, so only *executable* letters are read: the empty letter
 (no delivery this step) and the singletons ``{p}``. :class:`Automaton` precomputes
@@ -15,16 +14,16 @@ This wrapper is also what ``verification`` consumes (stable API): ``spot_aut``, 
 
 from __future__ import annotations
 
-import itertools
-import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from tamp.errors import InputError
+from tamp import ltl
+from tamp.ltl import automata, letters
+from tamp.ltl.formula import check_aps
+from tamp.ltl.letters import EMPTY, Letter
 
-Letter = frozenset[str]
-EMPTY: Letter = frozenset()
+__all__ = ["EMPTY", "Automaton", "Edge", "Letter"]
 
 
 @dataclass(frozen=True)
@@ -45,68 +44,34 @@ class Automaton:
     """
 
     def __init__(self, formula: str, props: Sequence[str], *, file: str | None = None):
-        import spot  # heavy import kept local (CLI start-up stays fast)
-
         self.formula = formula
         self.props: tuple[str, ...] = tuple(props)
-        try:
-            f = spot.formula(formula)
-        except SyntaxError as exc:
-            first = str(exc).strip().splitlines()
-            raise InputError(
-                f"formula does not parse: {first[-1] if first else exc}", file=file, field="formula"
-            ) from None
-        unknown = sorted(str(a) for a in spot.atomic_prop_collect(f) if str(a) not in self.props)
-        if unknown:
-            raise InputError(
-                f"unknown proposition(s) {unknown} (declared: {list(self.props)})",
-                file=file,
-                field="formula",
-            )
+        f = ltl.parse(formula, file=file)
+        check_aps(f, self.props, file=file)
         self.spot_formula = f
-        aut = _translate(formula, {str(a) for a in spot.atomic_prop_collect(f)})
-        for p in self.props:  # every task proposition is part of the alphabet
-            aut.register_ap(p)
+        aut = automata.copy(ltl.translate(formula, ltl.Options(fresh=True), file=file))
+        automata.register_aps(aut, self.props)  # every task proposition is in the alphabet
         self.spot_aut = aut
-        self._dict = aut.get_dict()
-        self.ap: tuple[str, ...] = tuple(str(a) for a in aut.ap())
+        self.ap: tuple[str, ...] = tuple(letters.aps(aut))
         self.num_states: int = aut.num_states()
         self.initial: int = aut.get_init_state_number()
-        self.accepting: frozenset[int] = frozenset(
-            s for s in range(self.num_states) if aut.state_is_accepting(s)
-        )
+        self.accepting: frozenset[int] = automata.accepting_states(aut)
         self.edges: tuple[Edge, ...] = tuple(
-            Edge(e.src, e.dst, spot.bdd_format_formula(self._dict, e.cond), e.cond)
-            for s in range(self.num_states)
-            for e in aut.out(s)
+            Edge(src, dst, letters.label(aut, cond), cond) for src, dst, cond in automata.edges(aut)
         )
         #: executable letters, ∅ first then singletons in declaration order
         self.letters: tuple[Letter, ...] = (EMPTY,) + tuple(frozenset({p}) for p in self.props)
         self._succ: list[dict[Letter, tuple[int, ...]]] = [{} for _ in range(self.num_states)]
-        import buddy
-
         for letter in self.letters:
-            valuation = self._valuation_bdd(letter)  # a full minterm: meets cond iff implies it
+            valuation = letters.letter_bdd(aut, letter)  # a full minterm: meets cond iff implies
             for edge in self.edges:
-                if (valuation & edge.cond) != buddy.bddfalse:
+                if letters.meets(valuation, edge.cond):
                     cur = self._succ[edge.src].get(letter, ())
                     if edge.dst not in cur:
                         self._succ[edge.src][letter] = tuple(sorted(cur + (edge.dst,)))
         self.live_accepting = self._live_accepting()
 
     # ------------------------------------------------------------------ letters
-    def _valuation_bdd(self, letter: Iterable[str]) -> Any:
-        """BDD of the full valuation: the letter's propositions true, all others false."""
-        import buddy
-        import spot
-
-        true_set = set(letter)
-        v = buddy.bddtrue
-        for p in self.ap:
-            var = buddy.bdd_ithvar(self._dict.varnum(spot.formula.ap(p)))
-            v = v & (var if p in true_set else buddy.bdd_not(var))
-        return v
-
     def successors(self, q: int, letter: Letter) -> tuple[int, ...]:
         """``δ(q, σ)`` for an executable letter (sorted; empty when the letter is blocked)."""
         return self._succ[q].get(letter, ())
@@ -132,24 +97,11 @@ class Automaton:
         return frozenset(live)
 
     # ------------------------------------------------------------------ checks
-    def word(self, prefix: Sequence[Letter], cycle: Sequence[Letter]) -> str:
-        """Spot's ω-word syntax for ``prefix · cycle^ω`` (full valuations over ``ap``)."""
-
-        def lit(letter: Letter) -> str:
-            return " & ".join(p if p in letter else f"!{p}" for p in self.ap) or "1"
-
-        pre = "; ".join(lit(x) for x in prefix)
-        cyc = "; ".join(lit(x) for x in cycle)
-        return f"{pre}; cycle{{{cyc}}}" if pre else f"cycle{{{cyc}}}"
-
-    def accepts_lasso(self, prefix: Sequence[Letter], cycle: Sequence[Letter]) -> bool:
-        """True when the ω-word ``prefix · cycle^ω`` satisfies the task (Spot's own check)."""
-        import spot
-
-        if not cycle:
-            raise ValueError("a lasso needs a non-empty cycle")
-        w = spot.parse_word(self.word(prefix, cycle), self._dict)
-        return bool(self.spot_aut.intersects(w.as_automaton()))
+    def accepts_lasso(
+        self, prefix: Sequence[Letter], cycle: Sequence[Letter], *, start: int | None = None
+    ) -> bool:
+        """True when ``prefix · cycle^ω`` is accepted from ``start`` (default ``q_0``)."""
+        return automata.accepts_lasso(self.spot_aut, prefix, cycle, start=start)[0]
 
     # ------------------------------------------------------------------ views
     def to_networkx(self) -> Any:
@@ -190,41 +142,6 @@ class Automaton:
             "accepting": sorted(self.accepting),
             "edges": [{"src": e.src, "dst": e.dst, "label": e.label} for e in self.edges],
         }
-
-
-_FRESH = itertools.count()
-_IDENT = re.compile(r"\b[a-z_][a-z0-9_]*\b")
-
-
-def _translate(text: str, aps: set[str]) -> Any:
-    """Spot translation that does not depend on what this process translated before.
-
-    Spot orders the operands of ``&`` by the creation order of their subformulas (atomic
-    propositions are interned process-wide), and that order decides in which order the
-    degeneralized automaton serves the conjuncts of ``GF p1 & GF p2 & …``. Translating a copy
-    whose propositions are brand-new names, created in order of first appearance in the text,
-    and a fresh BDD dictionary makes the automaton a function of the formula text only; the
-    names are then relabelled back.
-    """
-    import spot
-
-    tag = next(_FRESH)
-    order: list[str] = []
-    for m in _IDENT.finditer(text):
-        if m.group(0) in aps and m.group(0) not in order:
-            order.append(m.group(0))
-    fresh = {name: f"lotsap{tag}x{i}" for i, name in enumerate(order)}
-    renamed = _IDENT.sub(lambda m: fresh.get(m.group(0), m.group(0)), text)
-    for name in order:  # create the fresh atoms in text order
-        spot.formula.ap(fresh[name])
-    aut = spot.translate(
-        spot.formula(renamed), "Buchi", "SBAcc", "small", "high", dict=spot.make_bdd_dict()
-    )
-    back = spot.relabeling_map()
-    for name, new in fresh.items():
-        back[spot.formula.ap(new)] = spot.formula.ap(name)
-    spot.relabel_here(aut, back)
-    return aut
 
 
 def _esc(text: str) -> str:

@@ -12,10 +12,16 @@ surplus scissors of Fig. 8, the tower body of Fig. 10).
 When the task can no longer be completed (Assumption 1 broken: every hammer taken away, a
 W^B state no run can finish from), the robot waits a bounded number of times and then
 raises `InfeasibleError` with the reason; it never loops forever.
+
+Every table the controller builds (the initial one, Alg. 1 line 3, and each rebuilt after an
+unforeseen W^B state, line 20) is described by a :class:`Build` — the plan, the table and the
+pair ``(q, s^B)`` it starts from — and handed to the optional ``check`` (the verification
+gate) *before* it is used: a check that raises stops the controller before the robot acts.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -62,6 +68,27 @@ class ActionRecord:
             "dest": self.dest,
             "text": self.text(),
         }
+
+
+@dataclass(frozen=True)
+class Build:
+    """One table ``T`` the controller built, and where its run starts.
+
+    ``plan.start`` is the pair ``(q, s^B)`` the table was planned from: ``(q_0, s^B_0)`` for
+    the initial table, the automaton state and observed W^B counts of the replan otherwise.
+    ``history`` is a word of executable letters that leads the automaton from ``q_0`` to
+    that ``q`` (the tree path to the pair), so ``history · plan.prefix · plan.cycle^ω`` can
+    be checked against the formula itself. ``label``: ``initial`` or ``replan N at W^B …``.
+    """
+
+    label: str
+    plan: Plan
+    table: Table
+    history: tuple[Letter, ...] = ()
+
+    @property
+    def start(self) -> tuple[int, Counts]:
+        return self.plan.start
 
 
 class Belief:
@@ -137,7 +164,8 @@ class LotsController:
 
     ``mode``: tree update variant (``bfs`` deterministic, ``random`` as in Alg. 3, seeded by
     ``seed``). ``max_waits``: consecutive waits after which the task is declared infeasible
-    (at least 1).
+    (at least 1). ``check``: called with the controller after every table it builds, before
+    the table is used (``self.build`` is then the new one); it raises to stop the robot.
     """
 
     def __init__(
@@ -148,6 +176,7 @@ class LotsController:
         seed: int = 0,
         max_waits: int = 3,
         automaton: Automaton | None = None,
+        check: Callable[[LotsController], Any] | None = None,
     ):
         self.task = task
         self.aut = automaton or Automaton(task.formula, task.props, file=task.file)
@@ -169,6 +198,16 @@ class LotsController:
         self.replans = 0
         self.belief = Belief(self.lots.vector(task.initial_a), b0)
         self._last: Entry | None = None  # the entry whose action was executed last
+        self.check = check
+        if check is not None:
+            check(self)
+
+    @property
+    def build(self) -> Build:
+        """The table in use (``self.table``), its plan and where that plan starts."""
+        start = self.plan.start
+        history = tuple(self.tree.letters_to(start)) if start in self.tree else ()
+        return Build(self.tables[-1][0], self.plan, self.table, history)
 
     # ------------------------------------------------------------------ Alg. 1 lines 12-24
     def decide(self, b: Counts) -> Entry | None:
@@ -193,13 +232,14 @@ class LotsController:
         self.tree.add_plan(plan)
         self.plan = plan
         self.table = Table.from_plan(plan, self.lots)
-        self.tables.append(
-            (f"replan {self.replans} at W^B {self.lots.format(b)}", self.table.rows())
-        )
+        label = f"replan {self.replans} at W^B {self.lots.format(b)}"
+        self.tables.append((label, self.table.rows()))
+        if self.check is not None:
+            self.check(self)  # before the new table is used
         return self.table.get(b)
 
     def plan_letters(self) -> tuple[list[Letter], list[Letter]]:
-        """The current planned run as (prefix, cycle) letters (for verification)."""
+        """The current planned run as (prefix, cycle) letters, read from ``self.plan.start``."""
         return self.plan.prefix, self.plan.cycle
 
     def _still_needed(self, i: int, b: Counts) -> bool:

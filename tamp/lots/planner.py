@@ -233,6 +233,18 @@ class Planner:
                 for nq in self._empty[q]:
                     yield (nq, nb)
 
+    def letter_between(self, a: Pair, b: Pair) -> Letter:
+        """The executable letter of one step ``a → b`` (a delivery gives ``{p}``, else ∅)."""
+        (q, x), (nq, y) = a, b
+        for p, ci in self.lots.prop_class.items():
+            if y == x[:ci] + (x[ci] + 1,) + x[ci + 1 :] and nq in self.aut.successors(
+                q, frozenset({p})
+            ):
+                return frozenset({p})
+        if nq in self.aut.successors(q, EMPTY):
+            return EMPTY
+        raise ValueError(f"no executable step from {a} to {b}")
+
     def plan_from(self, q: int, b: Counts) -> Plan | None:
         """Cheapest run from ``(q, b)`` to an accepting ``q_F`` with ``b = s^B_final``, or None.
 
@@ -497,6 +509,14 @@ class Tree:
             nxt = (s.q_next, s.b_next)
             self.add(nxt, prev)
             prev = nxt
+
+    def letters_to(self, pair: Pair) -> list[Letter]:
+        """Letters of the tree path from the root to ``pair``: a word reaching its ``q``."""
+        path = [pair]
+        while self.parent[path[-1]] is not None:
+            path.append(self.parent[path[-1]])
+        path.reverse()
+        return [self.planner.letter_between(a, b) for a, b in zip(path, path[1:], strict=False)]
 
     def _pop(self) -> Pair:
         if self.mode == "bfs":

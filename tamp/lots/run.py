@@ -73,19 +73,36 @@ def run_task(
 ) -> Report:
     """Run Alg. 1 to the end. Infeasibility is reported (``satisfied`` False, ``reason``).
 
-    ``check`` is called with the freshly planned controller before the robot acts: the
-    front ends pass `verification.gate`, which raises when the planned run or a table entry
-    does not lead to acceptance (the verification gate of the architecture).
+    ``check`` is called with the controller after every table it builds (the initial one and
+    each replan), before the robot acts on it: the front ends pass `verification.gate`, which
+    raises when the planned run or a table entry does not lead to acceptance (the
+    verification gate of the architecture). What ``check`` raises propagates, even an
+    `InfeasibleError` such as `VerificationError`: a rejected table is not an infeasible task.
     """
-    controller = LotsController(task, mode=mode, seed=seed, max_waits=max_waits)
-    if check is not None:
-        check(controller)
+    rejected: list[BaseException] = []
+
+    def guarded(c: LotsController) -> None:
+        try:
+            check(c)
+        except BaseException as exc:
+            rejected.append(exc)
+            raise
+
+    controller = LotsController(
+        task,
+        mode=mode,
+        seed=seed,
+        max_waits=max_waits,
+        check=guarded if check is not None else None,
+    )
     world = SymbolicLotsWorld(task, events, policy=policy)
     limit = max_actions if max_actions is not None else controller.default_limit(len(events) + 4)
     actions: list[ActionRecord] = []
     try:
         outcome = controller.run(world, max_actions=limit, record_into=actions)
     except InfeasibleError as exc:
+        if rejected:
+            raise
         return Report(task, controller, world, actions, False, str(exc), controller.tables)
     truth = controller.lots.vector(world.observe("B"))  # ground truth, not the belief
     ok = outcome.satisfied and truth == controller.lots.final

@@ -1,0 +1,80 @@
+"""Letters (sets of true propositions) as BDDs and as Spot word text; lasso words.
+
+A letter is a *full* valuation: propositions of the automaton that the letter does not name
+are false. Names the automaton does not use are ignored (the runtime-monitor convention).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+import buddy
+import spot
+
+from tamp.ltl.formula import atom
+
+Letter = frozenset[str]
+EMPTY: Letter = frozenset()
+#: a BDD (Spot's edge conditions); opaque to every other layer
+Bdd = buddy.bdd
+
+
+def aps(aut: spot.twa_graph) -> list[str]:
+    """The automaton's propositions, in its own order."""
+    return [ap.ap_name() for ap in aut.ap()]
+
+
+def letter_bdd(aut: spot.twa_graph, true_props: Iterable[str]) -> Bdd:
+    """The BDD of the full valuation: ``true_props`` true, every other proposition false."""
+    d = aut.get_dict()
+    true_props = set(true_props)
+    b = buddy.bddtrue
+    for ap in aut.ap():
+        v = d.varnum(ap)
+        b = b & (buddy.bdd_ithvar(v) if ap.ap_name() in true_props else buddy.bdd_nithvar(v))
+    return b
+
+
+def bdd_letter(aut: spot.twa_graph, cond: Bdd) -> Letter:
+    """One full valuation inside ``cond`` (free propositions false: the smallest that fits)."""
+    d = aut.get_dict()
+    cube = buddy.bdd_satone(cond)
+    out = set()
+    for ap in aut.ap():
+        if (cube & buddy.bdd_nithvar(d.varnum(ap))) == buddy.bddfalse:
+            out.add(ap.ap_name())
+    return frozenset(out)
+
+
+def meets(a: Bdd, b: Bdd) -> bool:
+    """Some valuation satisfies both (``a & b`` is not false)."""
+    return (a & b) != buddy.bddfalse
+
+
+def label(aut: spot.twa_graph, cond: Bdd) -> str:
+    """An edge condition as readable formula text (``p1 & !p2``)."""
+    return spot.bdd_format_formula(aut.get_dict(), cond)
+
+
+def letter_text(props: Iterable[str], names: Iterable[str]) -> str:
+    """A letter as Spot word syntax over ``names``: ``p1 & !p2`` (``1`` when none)."""
+    props = set(props)
+    parts = [atom(n) if n in props else f"!{atom(n)}" for n in sorted(names)]
+    return " & ".join(parts) if parts else "1"
+
+
+def word_text(prefix: Sequence[Iterable[str]], cycle: Sequence[Iterable[str]], names) -> str:
+    """Spot's ω-word syntax for ``prefix · cycle^ω`` (full valuations over ``names``)."""
+    names = list(names)
+    pre = "; ".join(letter_text(x, names) for x in prefix)
+    cyc = "cycle{" + "; ".join(letter_text(x, names) for x in cycle) + "}"
+    return f"{pre}; {cyc}" if pre else cyc
+
+
+def word_automaton(
+    aut: spot.twa_graph, prefix: Sequence[Iterable[str]], cycle: Sequence[Iterable[str]]
+) -> spot.twa_graph:
+    """The automaton of the lasso over ``aut``'s propositions and BDD dictionary."""
+    if not cycle:
+        raise ValueError("a lasso needs a non-empty cycle")
+    return spot.parse_word(word_text(prefix, cycle, aps(aut)), aut.get_dict()).as_automaton()
