@@ -17,7 +17,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description=__doc__,
     )
     p.add_argument("task", help="LTL task file (YAML, version 1) or a packaged scenario name")
-    p.add_argument("--interference", metavar="EVENTS.yaml", help="human interference script")
+    add_interference_argument(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the random tree update")
     p.add_argument(
         "--tree",
@@ -31,6 +31,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--dot", metavar="automaton.dot", help="write the Büchi automaton as DOT")
     p.set_defaults(func=run)
+
+
+def add_interference_argument(p: argparse.ArgumentParser) -> None:
+    """``--interference EVENTS.yaml``, the same on ``tamp lots`` and ``tamp-verify lots``."""
+    p.add_argument("--interference", metavar="EVENTS.yaml", help="human interference script")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -167,12 +167,18 @@ def _add_bt(sub) -> None:
 def _cmd_lots(args) -> int:
     from verification.lots import check_task_file
 
-    return _emit(check_task_file(args.task), args)
+    return _emit(check_task_file(args.task, args.interference), args)
 
 
 def _add_lots(sub) -> None:
-    p = sub.add_parser("lots", help="check a LOTS planned run and every entry of its table T")
+    from tamp.commands.lots import add_interference_argument
+
+    p = sub.add_parser(
+        "lots",
+        help="check every LOTS table the controller builds (planned run and every entry of T)",
+    )
     p.add_argument("task", metavar="TASK.yaml", help="LTL task file")
+    add_interference_argument(p)
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_lots)
 

@@ -65,13 +65,14 @@ def accepts_lasso(
 def live_states(aut: Automaton, *, finite: bool) -> set[int]:
     """States from which some continuation is accepted.
 
-    Büchi: states in an SCC that can reach an accepting cycle (Spot's ``is_useful_scc``).
+    Büchi: reachable states in an SCC that can reach an accepting cycle (Spot's
+    ``is_useful_scc``; asking it about an unreachable state crashes Spot 2.13).
     Finite: states that reach an accepting (final) state, by backward search.
     """
     n = aut.num_states()
-    if not finite:
+    if not finite:  # states not reachable from the initial one have no SCC (scc_of: -1)
         si = spot.scc_info(aut)
-        return {s for s in range(n) if si.is_useful_scc(si.scc_of(s))}
+        return {s for s in range(n) if si.reachable_state(s) and si.is_useful_scc(si.scc_of(s))}
     preds: dict[int, list[int]] = {s: [] for s in range(n)}
     for src, dst, _ in edges(aut):
         preds[dst].append(src)

@@ -120,11 +120,13 @@ def translate(
 ) -> spot.twa_graph:
     """The state-based Büchi automaton (or, ``options.finite``, the NFA) of ``f``; cached.
 
-    ``f`` as text is translated as written (with ``options.fresh``, its text fixes the
-    proposition order); a formula object by its printed form. A formula that exceeds
+    The cache key is the formula's printed form, or with ``options.fresh`` the text as
+    written (its order of first appearance fixes the proposition order). A formula that exceeds
     ``limits`` is an `InputError` (``file``/``field`` name where it came from).
     """
-    text = f if isinstance(f, str) else str(f)
+    formula = spot.formula(f) if isinstance(f, str) else f
+    # fresh names follow the text as written; otherwise the formula's printed form is the key
+    text = f if isinstance(f, str) and options.fresh else str(formula)
     key = (text, options)
     aut = _CACHE.get(key)
     if aut is not None:
@@ -132,13 +134,13 @@ def translate(
         _CACHE.move_to_end(key)
         return aut
     _INFO.misses += 1
-    formula = spot.formula(text) if isinstance(f, str) else f
-    _check_size(formula, text, options, limits, file, field)
+    written = f if isinstance(f, str) else text  # what errors quote
+    _check_size(formula, written, options, limits, file, field)
     job = _job(text, formula, options)
     if _inline(formula, limits) or not hasattr(os, "fork"):
         aut = job()
     else:
-        aut = _in_child(job, text, options, limits, file, field)
+        aut = _in_child(job, written, options, limits, file, field)
     _CACHE[key] = aut
     if len(_CACHE) > _CACHE_MAX:
         _CACHE.popitem(last=False)

@@ -153,3 +153,48 @@ def test_unwritable_dot_exits_2(capsys, tmp_path):
         assert main(["lots", "tower.yaml", "--dot", str(target)]) == 2
         err = capsys.readouterr().err
         assert "--dot" in err and "internal error" not in err
+
+
+GF40_TASK = (
+    "version: 1\nname: gf40\nformula: "
+    + '"'
+    + " & ".join(f"GF p{i}" for i in range(1, 41))
+    + '"\npropositions:\n'
+    + "".join(f"  p{i}: {{class: c{i}}}\n" for i in range(1, 41))
+    + "initial:\n  A: {"
+    + ", ".join(f"c{i}: 1" for i in range(1, 41))
+    + "}\n  B: {}\n"
+)
+
+
+@pytest.mark.parametrize("command", ["tamp", "tamp-verify"])
+def test_a_formula_too_large_to_translate_exits_2_at_once(capsys, tmp_path, command):
+    """40 GF conjuncts used to hang both commands in Spot; the size guard refuses them."""
+    import time
+
+    from tamp.commands.verify import main as verify_main
+
+    task = write(tmp_path, "gf40.yaml", GF40_TASK)
+    t = time.perf_counter()
+    code = main(["lots", task]) if command == "tamp" else verify_main(["lots", task])
+    assert time.perf_counter() - t < 2.0
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "gf40.yaml: formula: formula 'GF p1 & GF p2" in err
+    assert "40 temporal conjuncts (limit 16" in err
+
+
+def test_verify_lots_checks_every_table_of_the_run_with_interference(capsys):
+    from tamp.commands.verify import main as verify_main
+
+    code = verify_main(
+        ["lots", "example1.yaml", "--interference", "example1_interference.yaml", "--json"]
+    )
+    doc = json.loads(capsys.readouterr().out)
+    assert code == 0 and doc["holds"] is True
+    subjects = [v["subject"] for v in doc["checks"]]
+    assert len(subjects) == 4
+    assert subjects[0] == "LOTS planned run"
+    assert subjects[2] == "LOTS planned run (replan 1 at W^B hammer^0 screw^0 screwdriver^1)"
+    assert verify_main(["lots", "example1.yaml"]) == 0  # no interference: the initial table
+    assert capsys.readouterr().out.count("holds") == 2
