@@ -222,10 +222,11 @@ def _in_child(
         _, status = os.waitpid(pid, 0)
     if os.waitstatus_to_exitcode(status) != 0:
         raise RuntimeError(f"translating {short(text)!r} failed in the child process")
-    parsed = spot.automaton_stream_parser(
-        b"".join(chunks).decode(), "<translation>", spot.automaton_parser_options()
-    ).parse(spot.make_bdd_dict())
-    return parsed.aut
+    hoa = b"".join(chunks).decode()
+    if not options.fresh:  # Spot's default BDD dictionary, like an in-process translation
+        return spot.automaton(hoa)
+    parser = spot.automaton_stream_parser(hoa, "<translation>", spot.automaton_parser_options())
+    return parser.parse(spot.make_bdd_dict()).aut
 
 
 # -- the translation itself -------------------------------------------------------------------

@@ -116,3 +116,10 @@ def test_a_negated_big_conjunction_translates_fast_at_low_level():
     aut = translate(f, ltl.NEGATION)
     assert time.perf_counter() - t < 1.0
     assert aut.num_states() == 31
+
+
+def test_forked_automata_share_the_default_dictionary_like_inline_ones():
+    clear_cache()
+    inline = translate("G(a -> F b)")
+    forked = translate(GF4, limits=FORK)
+    assert forked.get_dict() == inline.get_dict()

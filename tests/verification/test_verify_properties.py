@@ -15,6 +15,7 @@ import spot
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tamp import ltl
 from tests.verification.ltlf_oracle import lasso_violates, ltlf_holds, prefix_is_bad
 from verification.traces import check_trace
 from verification.words import Word
@@ -120,7 +121,7 @@ def systems(draw):
 
 def _hoa_violates(props, labels, succ, f: spot.formula) -> bool:
     """Oracle: the system as a HOA automaton (all runs accepting), product with A(!f)."""
-    neg = spot.translate(spot.formula.Not(f), "Buchi", "SBAcc", "small", "high")
+    neg = ltl.translate(ltl.negate(f), ltl.Options(level="high", pref="small"))
     ap = sorted(props)
 
     def lab(x):

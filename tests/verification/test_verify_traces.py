@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 import spot
 
+from tamp import ltl
 from tamp.errors import InputError
 from tests.verification.ltlf_oracle import lasso_violates, ltlf_holds, prefix_is_bad
-from verification import ltl
 from verification.traces import check_trace
 from verification.words import Word, load_trace, parse_word
 
@@ -180,8 +180,8 @@ def test_parse_word_rejects(text: str) -> None:
 
 def test_formula_parse_errors_and_comparisons() -> None:
     with pytest.raises(InputError, match="does not parse"):
-        ltl.parse_formula("G (a &")
-    f = ltl.parse_formula("G (holding_count <= 1) & F goal")
+        ltl.parse("G (a &")
+    f = ltl.parse("G (holding_count <= 1) & F goal")
     assert ltl.ap_names(f) == ["goal", "holding_count<=1"]
 
 
