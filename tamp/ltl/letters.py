@@ -58,16 +58,30 @@ def label(aut: spot.twa_graph, cond: Bdd) -> str:
 
 def letter_text(props: Iterable[str], names: Iterable[str]) -> str:
     """A letter as Spot word syntax over ``names``: ``p1 & !p2`` (``1`` when none)."""
-    props = set(props)
-    parts = [atom(n) if n in props else f"!{atom(n)}" for n in sorted(names)]
-    return " & ".join(parts) if parts else "1"
+    return _Letters(names).text(props)
+
+
+class _Letters:
+    """Word-syntax text of letters over fixed names (quoted once, each letter written once)."""
+
+    def __init__(self, names: Iterable[str]):
+        self.quoted = [(n, atom(n)) for n in sorted(names)]
+        self.memo: dict[Letter, str] = {}
+
+    def text(self, props: Iterable[str]) -> str:
+        key = frozenset(props)
+        out = self.memo.get(key)
+        if out is None:
+            parts = [q if n in key else f"!{q}" for n, q in self.quoted]
+            out = self.memo[key] = " & ".join(parts) if parts else "1"
+        return out
 
 
 def word_text(prefix: Sequence[Iterable[str]], cycle: Sequence[Iterable[str]], names) -> str:
     """Spot's ω-word syntax for ``prefix · cycle^ω`` (full valuations over ``names``)."""
-    names = list(names)
-    pre = "; ".join(letter_text(x, names) for x in prefix)
-    cyc = "cycle{" + "; ".join(letter_text(x, names) for x in cycle) + "}"
+    w = _Letters(names)
+    pre = "; ".join(w.text(x) for x in prefix)
+    cyc = "cycle{" + "; ".join(w.text(x) for x in cycle) + "}"
     return f"{pre}; {cyc}" if pre else cyc
 
 
