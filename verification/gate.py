@@ -12,7 +12,7 @@ imports a layer that the caller did not use:
 - `tamp.lots.controller.LotsController` (``.plan_letters()`` and ``.table``): the planned
   run and every entry of T (`verification.lots.check_controller`);
 - `tamp.bt.PaBtExecutor` (``.root`` and ``.c_goal``): every execution from ``state``
-  (required) with the safety properties and ``F goal`` (`verification.bt.check_executor`).
+  (required) with the safety properties and ``F goal`` (`verification.bt.check_tree`).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ def gate(
 
     ``state`` (BT only): the initial `WorldState` the tree will run from. ``properties``
     (BT only): LTL properties, default `verification.bt.DEFAULT_PROPERTIES`. ``events``
-    (BT only): scripted interference (`tamp.world.symbolic.Appear` / `Move`).
+    (BT only): scripted interference (`tamp.world.events.Appear`).
     ``max_failures`` (BT only): skill failures per execution. ``graph`` (RG only): also
     model-check the whole reachability graph.
     """
@@ -48,11 +48,11 @@ def gate(
 
         report = check_controller(plan)
     elif hasattr(plan, "root") and hasattr(plan, "c_goal"):
-        from verification.bt import DEFAULT_PROPERTIES, check_executor
+        from verification.bt import DEFAULT_PROPERTIES, check_tree
 
         if state is None:
             raise ValueError("gate(executor) needs state=<the initial WorldState>")
-        report = check_executor(
+        report = check_tree(
             plan,
             state,
             properties if properties is not None else DEFAULT_PROPERTIES,

@@ -22,8 +22,8 @@ import sys
 from typing import Any
 
 from tamp.errors import EXIT_INFEASIBLE, EXIT_OK, InputError
+from tamp.world.events import Appear, AtTick, Fail
 from tamp.world.geometry import Point
-from tamp.world.symbolic import Appear, ScriptedFailure
 
 _NAME = r"[A-Za-z_][\w\-]*"
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
@@ -72,12 +72,12 @@ def parse_obstacle(text: str, known: set[str] | None = None) -> Appear:
     return Appear(
         name,
         Point(float(x), float(y), float(z) if z is not None else 0.0),
-        int(tick) if tick is not None else None,
+        AtTick(int(tick)) if tick is not None else None,
     )
 
 
-def parse_failure(text: str, domain: Any = None) -> ScriptedFailure:
-    """``NAME[:ARG,ARG][:TIMES]`` -> `ScriptedFailure`; InputError names ``--fail``."""
+def parse_failure(text: str, domain: Any = None) -> Fail:
+    """``NAME[:ARG,ARG][:TIMES]`` -> `Fail`; InputError names ``--fail``."""
     m = _FAIL.match(text.strip())
     if not m:
         raise InputError(f"expected NAME[:ARGS][:TIMES], got {text!r}", field="--fail")
@@ -94,7 +94,7 @@ def parse_failure(text: str, domain: Any = None) -> ScriptedFailure:
     count = int(times) if times is not None else 1
     if count < 1:
         raise InputError("TIMES must be at least 1", field="--fail")
-    return ScriptedFailure(name, parsed, count)
+    return Fail(name, parsed, count)
 
 
 def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any):
@@ -128,7 +128,7 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any):
     report = execute_plan(
         demo,
         plan_result.c_goal,
-        obstacles=obstacles,
+        events=obstacles,
         failures=failures,
         skill_ticks=args.skill_ticks,
         domain=domain,

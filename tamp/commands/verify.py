@@ -156,13 +156,8 @@ def _event_args(text: str, flag: str, state, *, need_tick: bool):
 
 def _cmd_bt(args) -> int:
     from tamp.demo import load_demonstration
-    from verification.bt import (
-        DEFAULT_PROPERTIES,
-        appear_event,
-        check_executor,
-        executor_for,
-        move_event,
-    )
+    from tamp.world.events import Appear, AtTick, Fail
+    from verification.bt import DEFAULT_PROPERTIES, check_tree, executor_for
     from verification.rg import check_order_ids
 
     demo = load_demonstration(_scenario(args.demo))
@@ -175,10 +170,11 @@ def _cmd_bt(args) -> int:
         order = _order(args.order)
         check_order_ids(demo.goal_ids, order)
     state = demo.initial_world()
-    events = [
-        appear_event(*_event_args(t, "--appear", state, need_tick=False)) for t in args.appear
-    ]
-    events += [move_event(*_event_args(t, "--move", state, need_tick=True)) for t in args.move]
+    events = []
+    for flag, texts in (("--appear", args.appear), ("--move", args.move)):
+        for t in texts:
+            obj, pos, at = _event_args(t, flag, state, need_tick=flag == "--move")
+            events.append(Appear(obj, pos, None if at is None else AtTick(at)))
     may_fail = None
     if args.may_fail is not None:
         may_fail = [a.strip() for a in args.may_fail.split(",") if a.strip()]
@@ -188,12 +184,12 @@ def _cmd_bt(args) -> int:
                 raise InputError(
                     f"unknown action {a!r} (known: {', '.join(sorted(known))})", field="--may-fail"
                 )
-    report = check_executor(
+    report = check_tree(
         executor_for(demo, order),
         state,
         args.property or list(DEFAULT_PROPERTIES),
         events=events,
-        may_fail=may_fail,
+        failures=None if may_fail is None else [Fail(a) for a in may_fail],
         max_failures=args.max_failures,
         max_states=args.max_states,
     )
