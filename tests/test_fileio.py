@@ -59,7 +59,8 @@ def test_deep_nesting_is_refused(tmp_path):
 def test_numbers_must_be_finite_and_sane(tmp_path, value):
     text = (
         "version: 1\nframe: {robot_position: [0, 0, 0]}\narea_radius: 0.15\n"
-        f"objects: [{{id: O0, position: [{value}, 0, 0]}}]\nsteps: [{{object: O0, to: [1, 0, 0]}}]\n"
+        f"objects: [{{id: O0, position: [{value}, 0, 0]}}]\n"
+        "steps: [{object: O0, to: [1, 0, 0]}]\n"
     )
     with pytest.raises(InputError) as err:
         load_demonstration(_write(tmp_path, text))
