@@ -109,9 +109,18 @@ class ExecutorStats:
 
 @dataclass(frozen=True)
 class ExecutorSnapshot:
-    """A point of an executor's run to continue from, with `PaBtExecutor.restore`."""
+    """A point of an executor's run to continue from (`resume`, `PaBtExecutor.restore`).
+
+    `PaBtExecutor.snapshot` makes one by copying. Wrapping an executor directly,
+    ``ExecutorSnapshot(ex)``, is the copy-free form for an executor that is not ticked any
+    more (what the verification explorer does with each new state).
+    """
 
     executor: PaBtExecutor = field(repr=False)
+
+    def resume(self) -> PaBtExecutor:
+        """A new executor continuing from this point (the snapshot stays usable)."""
+        return copy.deepcopy(self.executor)
 
 
 class PaBtExecutor(TreeGrowth):
@@ -485,15 +494,19 @@ class PaBtExecutor(TreeGrowth):
         """
         twin = copy.deepcopy(self)
         if not history:
-            twin.log = []
-            twin.attempts = [r for r in twin.attempts if r.status is None]
+            twin.forget_history()
         return ExecutorSnapshot(twin)
 
     def restore(self, snapshot: ExecutorSnapshot) -> None:
         """Continue from ``snapshot``: the tree and every counter become a copy of it."""
-        twin = copy.deepcopy(snapshot.executor)
+        twin = snapshot.resume()
         self.__dict__.clear()
         self.__dict__.update(twin.__dict__)
+
+    def forget_history(self) -> None:
+        """Drop the report-only history (growth log, finished action records)."""
+        self.log = []
+        self.attempts = [r for r in self.attempts if r.status is None]
 
     def state_key(self) -> tuple:
         """A hashable value of everything that decides what this executor does next.

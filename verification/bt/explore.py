@@ -2,14 +2,14 @@
 
 SMP-MRO grows its tree at run time (§IV-C, Alg. 2-3), so what must be verified is the
 *executor* (`tamp.bt.PaBtExecutor`: tree + growth rules), not one static tree. The
-exploration runs a copy of the real executor, tick by tick, against the one
+exploration runs copies of the real executor, tick by tick, against the one
 `tamp.world.SymbolicWorld` configured for it: every skill takes one tick and then either
 succeeds (effects applied, §IV-C1 ``a.eef``) or fails (state unchanged), as chosen by a
 `BranchingOutcomes` source. Each tick is replayed from the executor's snapshot
-(`PaBtExecutor.snapshot` / `restore`) and a copy of the world once per combination of
-skill outcomes, so the graph holds every execution the executor can produce. A state is
-keyed by (`PaBtExecutor.state_key`, `SymbolicWorld.fingerprint`, label); equal keys are
-merged, which makes the graph finite and the count meaningful.
+(`ExecutorSnapshot.resume`) and a copy of the world once per combination of skill
+outcomes, so the graph holds every execution the executor can produce. A state is keyed by
+(`PaBtExecutor.state_key`, `SymbolicWorld.fingerprint`, label); equal keys are merged,
+which makes the graph finite and the count meaningful.
 
 Choices written down here:
 - Failures are bounded: at most ``max_failures`` skill failures per execution (default 1),
@@ -32,7 +32,7 @@ from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-from tamp.bt.executor import PaBtExecutor
+from tamp.bt.executor import ExecutorSnapshot, PaBtExecutor
 from tamp.world.events import Appear, Fail
 from tamp.world.interface import Status
 from tamp.world.outcomes import BranchingOutcomes
@@ -86,7 +86,7 @@ def explore(
     """
     labeller = Labeller(aps, state)
     world = branching_world(state, events=events, failures=failures, max_failures=max_failures)
-    work = copy.deepcopy(executor)
+    start = executor.snapshot(history=False)
     ts = TransitionSystem()
     index: dict[tuple, int] = {}
 
@@ -99,9 +99,9 @@ def explore(
         index[key] = i
         return i, True
 
-    root, _ = add(work, world, "start")
+    root, _ = add(start.executor, world, "start")
     ts.init = root
-    queue = deque([(root, work.snapshot(history=False), world, work.result is not None)])
+    queue = deque([(root, start, world, start.executor.result is not None)])
     complete = True
     terminal = 0
     ticks = 0
@@ -113,7 +113,7 @@ def explore(
         pending: list[list[Status]] = [[]]
         while pending:
             choices = pending.pop()
-            work.restore(snap)
+            work = snap.resume()
             w2 = copy.deepcopy(w)
             outcomes = w2.outcomes
             assert isinstance(outcomes, BranchingOutcomes)
@@ -132,8 +132,10 @@ def explore(
                     ts.unexpanded = {j, *(q[0] for q in queue)}
                     queue.clear()
                     break
+                work.forget_history()
                 w2.clear_history()
-                queue.append((j, work.snapshot(history=False), w2, work.result is not None))
+                # ``work`` is not ticked again: it becomes the new state's snapshot as is
+                queue.append((j, ExecutorSnapshot(work), w2, work.result is not None))
     return Exploration(ts, complete, terminal, ticks)
 
 
