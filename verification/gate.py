@@ -59,16 +59,15 @@ def gate_tree(
     `verification.bt.DEFAULT_PROPERTIES`); ``events``: appearances; ``failures``: the skills
     that may fail (None: every skill), at most ``max_failures`` per execution.
     """
-    from verification.bt import DEFAULT_PROPERTIES, check_executor
+    from verification.bt import DEFAULT_PROPERTIES, check_tree
 
-    may_fail = None if failures is None else sorted({f.action for f in failures})
     return _passed(
-        check_executor(
+        check_tree(
             executor,
             state,
             properties if properties is not None else DEFAULT_PROPERTIES,
             events=events,
-            may_fail=may_fail,
+            failures=failures,
             max_failures=max_failures,
         )
     )

@@ -8,6 +8,7 @@ Exit status: 0 task satisfied, 1 infeasible (with the reason), 2 bad input.
 from __future__ import annotations
 
 import argparse
+import sys
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -90,5 +91,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"final: W^A {counts['A']}  W^B {counts['B']}  waste {counts['waste']}")
         print("task satisfied" if report.satisfied else f"task infeasible: {report.reason}")
     if not report.satisfied:
+        if args.json:  # the JSON document above already says why; no second document
+            print(f"tamp lots: error: {report.reason or 'task not satisfied'}", file=sys.stderr)
+            return InfeasibleError.exit_code
         raise InfeasibleError(report.reason or "task not satisfied")
     return 0

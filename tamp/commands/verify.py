@@ -113,7 +113,7 @@ def _add_plan(sub) -> None:
 def _cmd_bt(args) -> int:
     from tamp.commands.events_args import demo_events
     from tamp.demo import load_demonstration
-    from verification.bt import DEFAULT_PROPERTIES, check_executor, executor_for
+    from verification.bt import DEFAULT_PROPERTIES, check_tree, executor_for
     from verification.rg import check_order_ids
 
     demo = load_demonstration(args.demo)
@@ -126,7 +126,7 @@ def _cmd_bt(args) -> int:
         order = _order(args.order)
         check_order_ids(demo.goal_ids, order)
     appear, fail = demo_events(args, demo)
-    report = check_executor(
+    report = check_tree(
         executor_for(demo, order),
         demo.initial_world(),
         args.property or list(DEFAULT_PROPERTIES),

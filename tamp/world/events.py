@@ -23,7 +23,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from tamp.errors import InputError
+from tamp.errors import InputError, short_repr
 from tamp.world.geometry import Point
 
 _NAME = r"[A-Za-z_][\w\-]*"
@@ -261,7 +261,5 @@ def _point_text(p: Point) -> str:
     return f"{p.x:g},{p.y:g},{p.z:g}"
 
 
-def _short(value: object, limit: int = 60) -> str:
-    """A short quoted prefix of a value for error messages (never the whole of a huge line)."""
-    text = repr(str(value))
-    return text if len(text) <= limit else text[: limit - 4] + "...'"
+def _short(value: object) -> str:
+    return short_repr(str(value))
