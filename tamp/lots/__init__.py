@@ -3,7 +3,8 @@
 Modules (importing this package loads no Spot; each module imports it where it is needed):
 
 - ``task``        task and interference files (YAML, version 1), strictly validated
-- ``automaton``   Spot translation to a state-based Büchi automaton, executable letters, views
+- ``automaton``   the task's state-based Büchi automaton (from `tamp.ltl`), executable letters,
+                  views
 - ``lots``        LOTS counts, Lemma 1 (``|S^B| = ∏(n'_i + 1)``)
 - ``planner``     initial lasso, Dijkstra/A* on (automaton state, W^B counts) pairs (Alg. 2),
                   the table ``T`` and the tree ``TR`` with its update (Alg. 3)

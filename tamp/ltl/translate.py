@@ -26,7 +26,9 @@ formula and the limit) when a cheap size check fails (`Limits.max_aps`,
 `Limits.max_temporal_conjuncts`), and a formula above the small "inline" size is translated
 in a forked child that has `Limits.seconds` to send back its HOA text (killed otherwise).
 Measured on this machine: GF × 13 takes 4.7 s at ``'high'``, ``F p0 & … & F p10`` 4.7 s;
-forking costs ~7 ms, so small formulas (all packaged tasks) translate in-process.
+forking costs ~7 ms, so small formulas (all packaged tasks) translate in-process. Where
+``os.fork`` does not exist (Windows) every translation runs in-process, with the size check
+only. The child's automaton is parsed back from HOA (same states, edges and labels: tested).
 """
 
 from __future__ import annotations
