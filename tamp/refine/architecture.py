@@ -31,7 +31,7 @@ Architecture file::
     name: pioneer_pair
     wait_margin: 0.005          # s above the unloaded worst wait that counts as "delayed"
     rate_step_hz: 1.0           # Fig. 5: P grows by this step
-    probe_window: 1.0           # s of sensor data judged at each rate
+    probe_window: 4.0           # s of sensor data judged at each rate
     categories:
       I:   {main_cpu: {sensor: s, command: s}, sub_cpu: {sensor: s, command: s}}
       II:  {main_cpu: {...}, sub_cpu: {...}, channel: {sensor: s, command: s}}
