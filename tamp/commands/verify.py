@@ -39,7 +39,7 @@ def _emit(report, args) -> int:
 
 
 def _cmd_trace(args) -> int:
-    from verification.ltl import parse_formula
+    from tamp.ltl.formula import parse as parse_formula
     from verification.traces import check_trace
     from verification.verdict import Report
     from verification.words import load_trace, parse_word

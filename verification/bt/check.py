@@ -4,12 +4,10 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
-import spot
-
 from tamp.bt.executor import PaBtExecutor
+from tamp.ltl.formula import Formula, ap_names, as_formula
 from tamp.world.events import Appear, Fail
 from tamp.world.state import WorldState
-from verification import ltl
 from verification.bt.explore import explore
 from verification.bt.labels import DEFAULT_PROPERTIES
 from verification.kripke import model_check
@@ -19,7 +17,7 @@ from verification.verdict import Report
 def check_tree(
     executor: PaBtExecutor,
     state: WorldState,
-    properties: Sequence[str | spot.formula] = DEFAULT_PROPERTIES,
+    properties: Sequence[str | Formula] = DEFAULT_PROPERTIES,
     *,
     events: Iterable[Appear] = (),
     failures: Iterable[Fail] | None = None,
@@ -34,11 +32,8 @@ def check_tree(
     ``executor`` is not ticked (the exploration works on copies). Properties use the
     propositions of `verification.bt.labels`; an unknown one is an `InputError`.
     """
-    formulas = [
-        p if isinstance(p, spot.formula) else ltl.parse_formula(p, field="--property")
-        for p in properties
-    ]
-    aps = sorted({a for f in formulas for a in ltl.ap_names(f)})
+    formulas = [as_formula(p, field="--property") for p in properties]
+    aps = sorted({a for f in formulas for a in ap_names(f)})
     ex = explore(
         executor,
         state,

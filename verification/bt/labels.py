@@ -18,12 +18,12 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from tamp.errors import InputError
+from tamp.ltl.formula import COMPARISON_AP
 from tamp.world.events import parse_call
 from tamp.world.interface import Status
 from tamp.world.predicates import PREDICATES, IsRobotCloseTo, Predicate
 from tamp.world.state import WorldState
 from tamp.world.symbolic import SymbolicWorld
-from verification import ltl
 
 DEFAULT_PROPERTIES = ("G !placed_in_occupied", "G (holding_count <= 1)", "F goal")
 FLAGS = ("goal", "failed", "running", "action_failed", "holding", "placed_in_occupied")
@@ -70,7 +70,7 @@ class Labeller:
     def _compile(self, ap: str, state: WorldState) -> Evaluator:
         if ap in FLAGS:
             return lambda e, w, name=ap: _flag(name, e, w)
-        m = ltl.COMPARISON_AP.match(ap)
+        m = COMPARISON_AP.match(ap)
         if m:
             counter, op, value = m.group(1), m.group(2), int(m.group(3))
             get = _counter(counter)
