@@ -8,19 +8,18 @@ makes each effect true in the listed order (``a.eef(s)`` of §IV-C1).
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
+from tamp.world.events import parse_call
 from tamp.world.predicates import DEFAULT_REACH, PREDICATES, IsRobotCloseTo, Predicate
 from tamp.world.state import WorldState
 
 PARAM_KINDS = ("object", "area", "place")  # place = an object or an area
 DOMAINS_DIR = Path(__file__).parent / "domains"
-_PATTERN = re.compile(r"^\s*([A-Za-z_]\w*)\s*\(\s*([^()]*)\)\s*$")
 
 
 @dataclass(frozen=True, slots=True)
@@ -43,15 +42,11 @@ class CondPattern:
 
 def parse_pattern(text: str, params: Mapping[str, str], file: str, field: str) -> CondPattern:
     """Parse ``Name(a, b)`` against the template's parameters, checking kinds."""
-    m = _PATTERN.match(str(text))
-    if not m:
-        raise InputError(f"expected Predicate(arg, ...), got {text!r}", file=file, field=field)
-    name, arglist = m.group(1), m.group(2)
+    name, args = parse_call(text, field=field, file=file)
     if name not in PREDICATES:
         raise InputError(
             f"unknown predicate {name!r} (known: {', '.join(PREDICATES)})", file=file, field=field
         )
-    args = tuple(a.strip() for a in arglist.split(",") if a.strip())
     _, kinds = PREDICATES[name]
     if len(args) != len(kinds):
         raise InputError(
