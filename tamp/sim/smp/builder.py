@@ -42,11 +42,12 @@ from pydrake.multibody.tree import PdControllerGains
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from tamp.sim.core.executor import BtExecutor, Policy
-from tamp.sim.core.models import HOME_ARM, MODELS_DIR, ROBOT, model_url
+from tamp.sim.core.models import model_url, sdf_path
 from tamp.sim.core.parsing import make_parser
 from tamp.sim.smp.controller import SkillController
 from tamp.sim.smp.estimator import WorldStateEstimator
 from tamp.sim.smp.ik import grasp_transform
+from tamp.sim.smp.robot import HOME_ARM, ROBOT
 from tamp.sim.smp.scenario import SimScenario
 from tamp.world.geometry import Area
 
@@ -79,7 +80,7 @@ def scenario_areas(scenario: SimScenario) -> dict[str, Area]:
 
 
 def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
-    text = (MODELS_DIR / "sdf" / "area_marker.sdf").read_text()
+    text = sdf_path("area_marker").read_text()
     text = text.replace('<model name="area_marker">', f'<model name="area_{name}">')
     text = re.sub(r"<radius>[^<]*</radius>", f"<radius>{radius:.4f}</radius>", text, count=1)
     if free:
@@ -133,7 +134,7 @@ def build_diagram(
     palm = plant.GetBodyByName(ROBOT.palm_body, robot)
     parser.SetAutoRenaming(True)
     for i, obj in enumerate(scenario.objects):
-        text = (MODELS_DIR / "sdf" / f"{obj.kind.name}.sdf").read_text()
+        text = sdf_path(obj.kind.name).read_text()
         text = text.replace(f'<model name="{obj.kind.name}">', f'<model name="{obj.id}">')
         (m,) = parser.AddModelsFromString(text, "sdf")
         body = plant.GetBodyByName(obj.kind.body, m)

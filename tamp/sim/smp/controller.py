@@ -32,7 +32,6 @@ from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from tamp.sim.core.messages import GraspRequest, SkillCommand, SkillStatus
-from tamp.sim.core.models import HOME_ARM, ROBOT, ObjectKind
 from tamp.sim.smp.ik import ArmIK, grasp_rotation
 from tamp.sim.smp.motion import (
     STANDOFF,
@@ -44,6 +43,7 @@ from tamp.sim.smp.motion import (
     standoff_pose,
     wrap,
 )
+from tamp.sim.smp.robot import HOME_ARM, ROBOT, ObjectKind
 from tamp.sim.smp.scenario import BaseLimits
 from tamp.world.geometry import Area
 from tamp.world.interface import Status

@@ -31,9 +31,9 @@ from pydrake.multibody.math import SpatialVelocity
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator, SimulatorConfig
 
 from tamp.sim.core.executor import ActionLog
-from tamp.sim.core.models import ROBOT
 from tamp.sim.smp.builder import SimSystem
 from tamp.sim.smp.ik import grasp_transform
+from tamp.sim.smp.robot import ROBOT
 from tamp.world.interface import Status
 
 

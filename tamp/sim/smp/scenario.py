@@ -29,7 +29,7 @@ from tamp import scenarios
 from tamp.demo import Demonstration, load_demonstration
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
-from tamp.sim.core.models import OBJECT_KINDS, ROBOT, ObjectKind
+from tamp.sim.smp.robot import OBJECT_KINDS, ROBOT, ObjectKind
 
 COSTS = ("distance", "time", "success")
 CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")

@@ -8,7 +8,7 @@ import pytest
 
 from tamp.commands.main import main
 from tamp.errors import InputError
-from tamp.sim.core.models import OBJECT_KINDS
+from tamp.sim.smp.robot import OBJECT_KINDS
 from tamp.sim.smp.scenario import load_scenario, parse_action
 
 from .helpers import packaged, write_one_bottle
