@@ -71,14 +71,6 @@ class SimSystem:
     q_start: np.ndarray = field(default_factory=lambda: np.zeros(len(ROBOT.joints)))
 
 
-def scenario_areas(scenario: SimScenario) -> dict[str, Area]:
-    """Goal areas L_k and free areas of the demonstration, by name."""
-    demo = scenario.demo
-    areas = {g.area.name: g.area for g in demo.goals}
-    areas.update({a.name: a for a in demo.free_areas})
-    return areas
-
-
 def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
     text = sdf_path("area_marker").read_text()
     text = text.replace('<model name="area_marker">', f'<model name="area_{name}">')
@@ -103,7 +95,7 @@ def build_diagram(
 
     (floor,) = parser.AddModelsFromUrl(model_url("floor"))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("floor", floor))
-    areas = scenario_areas(scenario)
+    areas = scenario.areas
     free_names = {a.name for a in scenario.demo.free_areas}
     for name, area in areas.items():
         (m,) = parser.AddModelsFromString(
@@ -167,7 +159,6 @@ def build_diagram(
         name = plant.get_joint_actuator(index).joint().name()
         actuator_order.append(ROBOT.joints.index(name))
 
-    failures = {f.action: f.attempts for f in scenario.failures}
     estimator = builder.AddSystem(
         WorldStateEstimator(
             bodies={k: int(b.index()) for k, b in bodies.items()},
@@ -187,7 +178,7 @@ def build_diagram(
             q_start=q_start,
             base_limits=scenario.base,
             workspace=scenario.workspace,
-            failures=failures,
+            failures=scenario.failures,
         )
     )
     executor = builder.AddSystem(BtExecutor(policy, period=scenario.bt_period))

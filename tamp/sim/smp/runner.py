@@ -10,8 +10,10 @@ longer than one chunk before it lifts, so the weld is always on when the lift st
 (FIELD_NOTES: a weld switched on with the bodies apart snaps them together).
 
 Appearances. An object that "appears" (Case 3's O_a) waits outside the workspace; at its
-time, or when the named skill succeeds, the runner puts it down at its area centre and
-zeroes its velocity. This is a person putting an object down (scripted), not the robot.
+WHEN (`tamp.world.events`: a tick, a time, right after a named skill succeeds, or, without
+one, when the robot first comes within reach of the place) the runner puts it down at the
+place (an area's centre or a point) and zeroes its velocity. This is a person putting an
+object down (scripted), not the robot.
 
 The run ends when the BtExecutor's tree returns SUCCESS or FAILURE, or at
 ``max_sim_time``. `SimResult` has the executed actions with sim start/end times, final
@@ -34,6 +36,7 @@ from tamp.sim.core.executor import ActionLog
 from tamp.sim.smp.builder import SimSystem
 from tamp.sim.smp.ik import grasp_transform
 from tamp.sim.smp.robot import ROBOT
+from tamp.world.events import AfterAction, Appear, AtTick, AtTime, format_call
 from tamp.world.interface import Status
 
 
@@ -115,6 +118,7 @@ class SimRunner:
         #: (time, object, variant, gap m, gap rad) each time a weld was switched on
         self.weld_log: list[tuple[float, str, int, float, float]] = []
         self.appeared: dict[str, float] = {}
+        self.reach = system.scenario.demo.domain().reach  # IsRobotCloseTo's d (§V-A2)
         self.base_path: list[tuple[float, float, float]] = []
 
     # -- between-step work -------------------------------------------------------------------
@@ -147,22 +151,29 @@ class SimRunner:
         s = self.system
         done = {a.action for a in log if a.status == "SUCCESS"}
         for obj in s.scenario.objects:
-            ap = obj.appear
-            if ap is None or obj.id in self.appeared:
+            if obj.appear is None or obj.id in self.appeared:
                 continue
-            if ap.time is not None:
-                due = t >= ap.time
-            else:
-                name, args = ap.after
-                due = f"{name}({', '.join(args)})" in done
-            if not due:
+            if not self._due(obj.appear, t, done):
                 continue
-            area = s.areas[ap.area]
-            X = RigidTransform([area.pos.x, area.pos.y, obj.kind.half_height + 0.003])
+            p = s.scenario.place_of(obj.appear)
+            X = RigidTransform([p.x, p.y, obj.kind.half_height + 0.003])
             body = s.bodies[obj.id]
             s.plant.SetFreeBodyPose(self.plant_context, body, X)
             s.plant.SetFreeBodySpatialVelocity(self.plant_context, body, SpatialVelocity.Zero())
             self.appeared[obj.id] = t
+
+    def _due(self, appear: Appear, t: float, done: set[str]) -> bool:
+        """Whether ``appear``'s WHEN has come (`tamp.world.events`: tick, time, after, reach)."""
+        when = appear.when
+        if isinstance(when, AtTime):
+            return t >= when.seconds
+        if isinstance(when, AtTick):
+            return t >= when.tick * self.system.scenario.bt_period - 1e-9
+        if isinstance(when, AfterAction):
+            return format_call(when.name, when.args) in done
+        x, y, _ = self.robot_pose()  # no WHEN: when the robot first comes within reach
+        p = self.system.scenario.place_of(appear)
+        return math.hypot(p.x - x, p.y - y) <= self.reach
 
     def object_poses(self) -> dict[str, ObjectPose]:
         s = self.system
@@ -194,6 +205,7 @@ class SimRunner:
         wall0 = time.perf_counter()
         cpu0 = time.process_time()
         t = self.root.get_time()
+        self._appearances(t, [])  # what is there from the start (tick 0, t=0)
         next_path = t
         status, reason = "TIMEOUT", f"no result within {limit:g} s of sim time"
         n = 0

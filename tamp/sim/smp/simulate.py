@@ -42,10 +42,8 @@ def verification_events(scenario: SimScenario) -> list:
     """The scenario's appearances as symbolic events, for the tree's verification."""
     from tamp.bt import Appear
 
-    areas = {g.area.name: g.area for g in scenario.demo.goals}
-    areas.update({a.name: a for a in scenario.demo.free_areas})
     return [
-        Appear(o.id, areas[o.appear.area].pos) for o in scenario.objects if o.appear is not None
+        Appear(o.id, scenario.place_of(o.appear)) for o in scenario.objects if o.appear is not None
     ]
 
 

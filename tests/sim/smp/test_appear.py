@@ -15,7 +15,7 @@ from .helpers import write_one_bottle
 
 def test_obstacle_appearing_at_a_time_is_cleared_from_the_goal(tmp_path):
     path = write_one_bottle(
-        tmp_path, "objects:\n  - {id: Oa, model: obstacle, appear: {area: L0, time: 3.0}}\n"
+        tmp_path, "objects:\n  - {id: Oa, model: obstacle}\nappear: ['Oa@L0@t=3']\n"
     )
     scenario = load_scenario(path)
     prepared = prepare(scenario)

@@ -13,7 +13,7 @@ from .helpers import Track, write_one_bottle
 
 
 def test_failed_grasp_is_retried(tmp_path):
-    path = write_one_bottle(tmp_path, "failures:\n  - {action: 'Pick(O0)', attempts: [1]}\n")
+    path = write_one_bottle(tmp_path, "fail: ['Pick(O0)']\n")
     scenario = load_scenario(path)
     prepared = prepare(scenario)
     system = build_diagram(scenario, prepared.policy)
