@@ -24,14 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from pydrake.geometry import (
-    CollisionFilterDeclaration,
-    GeometrySet,
-    Meshcat,
-    MeshcatVisualizer,
-    MeshcatVisualizerParams,
-    Role,
-)
+from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import (
     AddMultibodyPlant,
@@ -44,6 +37,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from tamp.sim.core.executor import BtExecutor, Policy
 from tamp.sim.core.models import model_url, sdf_path
 from tamp.sim.core.parsing import make_parser
+from tamp.sim.core.recording import add_visualizer
 from tamp.sim.smp.controller import SkillController
 from tamp.sim.smp.estimator import WorldStateEstimator
 from tamp.sim.smp.ik import grasp_transform
@@ -67,7 +61,7 @@ class SimSystem:
     estimator: WorldStateEstimator
     areas: dict[str, Area]
     visualizer: Any = None
-    meshcat: Meshcat | None = None
+    meshcat: Any = None  # pydrake.geometry.Meshcat
     q_start: np.ndarray = field(default_factory=lambda: np.zeros(len(ROBOT.joints)))
 
 
@@ -80,9 +74,7 @@ def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
     return text
 
 
-def build_diagram(
-    scenario: SimScenario, policy: Policy, *, meshcat: Meshcat | None = None
-) -> SimSystem:
+def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None) -> SimSystem:
     """The named Diagram of ``scenario`` with ``policy`` (the grown BT) in the BtExecutor."""
     builder = DiagramBuilder()
     config = MultibodyPlantConfig(
@@ -195,8 +187,7 @@ def build_diagram(
 
     visualizer = None
     if meshcat is not None:
-        params = MeshcatVisualizerParams(publish_period=1.0 / 30.0, role=Role.kIllustration)
-        visualizer = MeshcatVisualizer.AddToBuilder(builder, scene_graph, meshcat, params)
+        visualizer = add_visualizer(builder, scene_graph, meshcat)
 
     diagram = builder.Build()
     diagram.set_name(f"smp_mro_{scenario.name}")

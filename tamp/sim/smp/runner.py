@@ -1,13 +1,14 @@
-"""SimRunner: advances the simulator and does what must happen *between* steps.
+"""SimRunner: runs the SMP-MRO diagram and does what must happen *between* steps.
 
-Weld toggling. A weld constraint's active status lives in the plant's context and is not
-an output of any system, so no LeafSystem event can switch it. The runner therefore
-advances the simulator in chunks of one controller period (`Simulator.AdvanceTo`) and,
-between chunks, reads the SkillController's ``grasp`` output and switches the matching
-weld on (or every weld off) with `MultibodyPlant.SetConstraintActiveStatus`. The controller
-asks for a weld only once the fingers have closed at the grasp pose, and waits a dwell
-longer than one chunk before it lifts, so the weld is always on when the lift starts
-(FIELD_NOTES: a weld switched on with the bodies apart snaps them together).
+It advances the simulator in chunks of one controller period (`tamp.sim.core.runner`).
+
+Weld toggling. A weld constraint's active status lives in the plant's context and is not an
+output of any system, so no LeafSystem event can switch it. Between chunks the runner reads
+the SkillController's ``grasp`` output and switches the matching weld on (or every weld
+off) with `MultibodyPlant.SetConstraintActiveStatus`. The controller asks for a weld only
+once the fingers have closed at the grasp pose, and waits a dwell longer than one chunk
+before it lifts, so the weld is always on when the lift starts (FIELD_NOTES: a weld
+switched on with the bodies apart snaps them together).
 
 Appearances. An object that "appears" (Case 3's O_a) waits outside the workspace; at its
 WHEN (`tamp.world.events`: a tick, a time, right after a named skill succeeds, or, without
@@ -23,16 +24,15 @@ plant poses of the objects, sim time, wall time and the real-time factor.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
-from pydrake.systems.analysis import ApplySimulatorConfig, Simulator, SimulatorConfig
 
 from tamp.sim.core.executor import ActionLog
+from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.smp.builder import SimSystem
 from tamp.sim.smp.ik import grasp_transform
 from tamp.sim.smp.robot import ROBOT
@@ -104,11 +104,7 @@ class SimRunner:
     def __init__(self, system: SimSystem, *, realtime_rate: float = 0.0):
         """``realtime_rate``: 0 runs as fast as possible; 1.0 paces a live Meshcat view."""
         self.system = system
-        self.simulator = Simulator(system.diagram)
-        ApplySimulatorConfig(
-            SimulatorConfig(target_realtime_rate=realtime_rate, publish_every_time_step=False),
-            self.simulator,
-        )
+        self.simulator = make_simulator(system.diagram, realtime_rate=realtime_rate)
         root = self.simulator.get_mutable_context()
         self.root = root
         self.plant_context = system.plant.GetMyMutableContextFromRoot(root)
@@ -199,20 +195,12 @@ class SimRunner:
     ) -> SimResult:
         s = self.system
         limit = s.scenario.max_sim_time if max_sim_time is None else max_sim_time
-        chunk = s.scenario.controller_period
         ex_context = s.executor.GetMyContextFromRoot(self.root)
-        self.simulator.Initialize()
-        wall0 = time.perf_counter()
-        cpu0 = time.process_time()
-        t = self.root.get_time()
-        self._appearances(t, [])  # what is there from the start (tick 0, t=0)
-        next_path = t
-        status, reason = "TIMEOUT", f"no result within {limit:g} s of sim time"
-        n = 0
-        while t < limit - 1e-9:
-            n += 1
-            t = min(chunk * n, limit)
-            self.simulator.AdvanceTo(t)
+        self._appearances(self.root.get_time(), [])  # what is there from the start (tick 0)
+        next_path = self.root.get_time()
+
+        def between(t: float) -> bool:
+            nonlocal next_path
             self._sync_grasp()
             ex = s.executor.state(ex_context)
             self._appearances(t, ex.log)
@@ -221,16 +209,19 @@ class SimRunner:
                 next_path += path_every
             if on_chunk is not None:
                 on_chunk(t)
-            if ex.result is not None:
-                status = ex.result.value
-                policy = s.executor.policy(ex_context)
-                reason = getattr(policy, "reason", "") or (
-                    "every goal reached" if ex.result is Status.SUCCESS else "tree failed"
-                )
-                break
-        wall = time.perf_counter() - wall0
-        cpu = time.process_time() - cpu0
+            return ex.result is not None
+
+        run = run_in_chunks(
+            self.simulator, chunk=s.scenario.controller_period, limit=limit, between=between
+        )
         ex = s.executor.state(ex_context)
+        status, reason = "TIMEOUT", f"no result within {limit:g} s of sim time"
+        if ex.result is not None:
+            status = ex.result.value
+            policy = s.executor.policy(ex_context)
+            reason = getattr(policy, "reason", "") or (
+                "every goal reached" if ex.result is Status.SUCCESS else "tree failed"
+            )
         poses = self.object_poses()
         return SimResult(
             scenario=s.scenario.name,
@@ -238,9 +229,9 @@ class SimRunner:
             reason=reason,
             actions=[a for a in ex.log],
             final_poses=poses,
-            sim_time=t,
-            wall_time=wall,
-            cpu_time=cpu,
+            sim_time=run.sim_time,
+            wall_time=run.wall_time,
+            cpu_time=run.cpu_time,
             base_path=list(self.base_path),
             appeared=dict(self.appeared),
             goals=self.goals_on_plant(poses),
