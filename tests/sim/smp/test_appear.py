@@ -5,22 +5,18 @@ from __future__ import annotations
 
 import math
 
-from tamp.sim.smp.builder import build_diagram
-from tamp.sim.smp.runner import SimRunner
-from tamp.sim.smp.scenario import load_scenario
-from tamp.sim.smp.simulate import prepare
+import pytest
 
-from .helpers import write_one_bottle
+from .helpers import verified_runner, write_one_bottle
+
+pytestmark = pytest.mark.slow  # Drake simulation runs
 
 
 def test_obstacle_appearing_at_a_time_is_cleared_from_the_goal(tmp_path):
     path = write_one_bottle(
         tmp_path, "objects:\n  - {id: Oa, model: obstacle}\nappear: ['Oa@L0@t=3']\n"
     )
-    scenario = load_scenario(path)
-    prepared = prepare(scenario)
-    system = build_diagram(scenario, prepared.policy)
-    runner = SimRunner(system)
+    scenario, system, runner = verified_runner(path)
     seen: list[tuple[float, bool]] = []
     est_ctx = system.estimator.GetMyContextFromRoot(runner.root)
 
@@ -47,10 +43,7 @@ def test_obstacle_appearing_at_a_time_is_cleared_from_the_goal(tmp_path):
 def test_object_without_when_appears_once_the_robot_is_within_reach(tmp_path):
     """``--appear Y@L0`` (no WHEN): a person puts Y on l_0 when the robot gets there (§V-D2)."""
     path = write_one_bottle(tmp_path, "objects:\n  - {id: Y, model: obstacle}\nappear: ['Y@L0']\n")
-    scenario = load_scenario(path)
-    prepared = prepare(scenario)
-    system = build_diagram(scenario, prepared.policy)
-    runner = SimRunner(system)
+    scenario, system, runner = verified_runner(path)
     reach = scenario.demo.domain().reach
     l0 = system.areas["L0"].pos
     distance: list[tuple[float, float]] = []
