@@ -33,7 +33,7 @@ from tamp.rg import build_rg  # noqa: E402
 from tamp.scenarios import path  # noqa: E402
 from tamp.world import Point  # noqa: E402
 from verification import ltl  # noqa: E402
-from verification.bt import check_executor, executor_for  # noqa: E402
+from verification.bt import check_tree, executor_for  # noqa: E402
 from verification.kripke import to_kripke  # noqa: E402
 from verification.rg import constraint_formula, rg_system  # noqa: E402
 from verification.traces import check_trace  # noqa: E402
@@ -222,7 +222,7 @@ def bench_bt() -> list[dict]:
     rows = []
     for k in (0, 1, 2):
         t, r = timed(
-            lambda k=k: check_executor(exe, demo.initial_world(), events=events, max_failures=k),
+            lambda k=k: check_tree(exe, demo.initial_world(), events=events, max_failures=k),
             repeat=1,
         )
         rows.append(

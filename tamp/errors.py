@@ -7,9 +7,24 @@ enough context (file, field) for one clear line of output.
 
 from __future__ import annotations
 
+import reprlib
+
 EXIT_OK = 0
 EXIT_INFEASIBLE = 1
 EXIT_BAD_INPUT = 2
+
+
+def short_repr(value: object, limit: int = 60) -> str:
+    """A quoted prefix of ``value`` for error messages: never a huge input line whole.
+
+    Bounded work too: `reprlib` stops at a few levels and items, so a YAML alias bomb
+    (shared sub-lists, exponential when printed in full) costs nothing here.
+    """
+    r = reprlib.Repr()
+    r.maxlevel, r.maxlist, r.maxtuple, r.maxdict, r.maxset = 3, 6, 6, 6, 6
+    r.maxstring = r.maxother = r.maxlong = limit
+    text = r.repr(value)
+    return text if len(text) <= limit else f"{text[: limit - 3]}..."
 
 
 class TampError(Exception):

@@ -2,6 +2,11 @@
 
 Every loader in the project goes through `load_yaml` and `Fields`, so unknown keys, missing
 fields and wrong types all produce the same kind of message: ``FILE: dotted.field: reason``.
+What is refused before any field is read: duplicate keys (YAML would keep the last one
+silently), more than `MAX_ALIASES` aliases or `MAX_DEPTH` levels of nesting (an alias bomb
+would otherwise hang the loader), files over `MAX_BYTES`, and a ``version`` that is not the
+integer 1 (``true`` is not 1). Numbers must be finite and, unless a field says otherwise,
+within ±`MAX_MAGNITUDE`; messages quote at most a short prefix of a bad value.
 """
 
 from __future__ import annotations
@@ -13,9 +18,59 @@ from typing import Any
 
 import yaml
 
-from tamp.errors import InputError
+from tamp.errors import InputError, short_repr
 
 SUPPORTED_VERSIONS = (1,)
+MAX_BYTES = 16 * 1024 * 1024
+MAX_ALIASES = 1000
+MAX_DEPTH = 64
+#: Default bound on any number of a file: far beyond any workcell (metres, seconds, Hz).
+MAX_MAGNITUDE = 1e6
+
+
+class _LimitError(Exception):
+    """Raised by the strict loader; `load_yaml` turns it into an `InputError`."""
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """PyYAML's safe loader that refuses duplicate keys and bounds aliases and nesting."""
+
+    def __init__(self, stream) -> None:
+        super().__init__(stream)
+        self._aliases = 0
+        self._depth = 0
+
+    def compose_node(self, parent, index):  # type: ignore[override]
+        if self.check_event(yaml.AliasEvent):
+            self._aliases += 1
+            if self._aliases > MAX_ALIASES:
+                raise _LimitError(f"more than {MAX_ALIASES} YAML aliases")
+        self._depth += 1
+        if self._depth > MAX_DEPTH:
+            raise _LimitError(f"nested deeper than {MAX_DEPTH} levels")
+        try:
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+
+    def construct_mapping(self, node, deep=False):  # type: ignore[override]
+        seen: set = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            try:
+                duplicate = key in seen
+            except TypeError:  # an unhashable key: the base class reports it
+                break
+            if duplicate:
+                line = key_node.start_mark.line + 1
+                raise _LimitError(f"duplicate key {short_repr(key)} (line {line})")
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+_StrictLoader.add_constructor(
+    yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _StrictLoader.construct_mapping
+)
 
 
 def load_yaml(path: str | Path, *, kind: str) -> tuple[dict[str, Any], str]:
@@ -24,6 +79,8 @@ def load_yaml(path: str | Path, *, kind: str) -> tuple[dict[str, Any], str]:
     name = str(path)
     if not p.is_file():
         raise InputError(f"{kind} file not found", file=name)
+    if p.stat().st_size > MAX_BYTES:
+        raise InputError(f"larger than {MAX_BYTES // (1024 * 1024)} MiB", file=name)
     try:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
@@ -31,7 +88,11 @@ def load_yaml(path: str | Path, *, kind: str) -> tuple[dict[str, Any], str]:
     except OSError as exc:
         raise InputError(f"cannot read: {exc.strerror}", file=name) from None
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=_StrictLoader)  # noqa: S506 - a SafeLoader subclass
+    except _LimitError as exc:
+        raise InputError(str(exc), file=name) from None
+    except RecursionError:
+        raise InputError(f"nested deeper than {MAX_DEPTH} levels", file=name) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark else ""
@@ -41,9 +102,9 @@ def load_yaml(path: str | Path, *, kind: str) -> tuple[dict[str, Any], str]:
     version = data.get("version")
     if version is None:
         raise InputError("missing field", file=name, field="version")
-    if version not in SUPPORTED_VERSIONS:
+    if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
         raise InputError(
-            f"unsupported version {version!r} (supported: {list(SUPPORTED_VERSIONS)})",
+            f"unsupported version {short_repr(version)} (supported: {list(SUPPORTED_VERSIONS)})",
             file=name,
             field="version",
         )
@@ -70,7 +131,10 @@ class Fields:
         allowed = set(allowed)
         for key in self.data:
             if key not in allowed:
-                raise self.error(str(key), f"unknown key (allowed: {', '.join(sorted(allowed))})")
+                raise self.error(
+                    short_repr(str(key), 40).strip("'"),
+                    f"unknown key (allowed: {', '.join(sorted(allowed))})",
+                )
 
     def has(self, key: str) -> bool:
         return key in self.data and self.data[key] is not None
@@ -101,9 +165,9 @@ class Fields:
     def str(self, key: str, default: Any = ..., *, choices: Iterable[str] | None = None) -> str:
         value = self.raw(key, default)
         if not isinstance(value, str) or not value:
-            raise self.error(key, f"expected a non-empty string, got {value!r}")
+            raise self.error(key, f"expected a non-empty string, got {short_repr(value)}")
         if choices is not None and value not in set(choices):
-            raise self.error(key, f"expected one of {sorted(choices)}, got {value!r}")
+            raise self.error(key, f"expected one of {sorted(choices)}, got {short_repr(value)}")
         return value
 
     def float(
@@ -121,7 +185,9 @@ class Fields:
     def int(self, key: str, default: Any = ..., *, min: int | None = None) -> int:
         value = self.raw(key, default)
         if isinstance(value, bool) or not isinstance(value, int):
-            raise self.error(key, f"expected an integer, got {value!r}")
+            raise self.error(key, f"expected an integer, got {short_repr(value)}")
+        if abs(value) > 10**12:
+            raise self.error(key, f"out of range: {short_repr(value)}")
         if min is not None and value < min:
             raise self.error(key, f"must be >= {min}, got {value}")
         return value
@@ -129,7 +195,7 @@ class Fields:
     def bool(self, key: str, default: Any = ...) -> bool:
         value = self.raw(key, default)
         if not isinstance(value, bool):
-            raise self.error(key, f"expected true or false, got {value!r}")
+            raise self.error(key, f"expected true or false, got {short_repr(value)}")
         return value
 
     def vector(self, key: str, n: int, default: Any = ...) -> tuple[float, ...]:
@@ -145,9 +211,18 @@ def check_number(
     max: float | None = None,
     strict_min: bool = False,
 ) -> float:
-    """A finite real number within bounds, or an `InputError` naming file and field."""
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise InputError(f"expected a finite number, got {value!r}", file=file, field=field)
+    """A finite real number within bounds, or an `InputError` naming file and field.
+
+    Without ``min``/``max`` the number must lie within ±`MAX_MAGNITUDE`.
+    """
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InputError(f"expected a number, got {short_repr(value)}", file=file, field=field)
+    if not math.isfinite(value) or abs(value) > MAX_MAGNITUDE:
+        raise InputError(
+            f"expected a finite number within ±{MAX_MAGNITUDE:g}, got {short_repr(value)}",
+            file=file,
+            field=field,
+        )
     if min is not None and (value <= min if strict_min else value < min):
         op = ">" if strict_min else ">="
         raise InputError(f"must be {op} {min}, got {value}", file=file, field=field)
@@ -159,5 +234,7 @@ def check_number(
 def check_vector(value: Any, n: int, file: str, field: str) -> tuple[float, ...]:
     """A list of exactly ``n`` finite numbers."""
     if not isinstance(value, list | tuple) or len(value) != n:
-        raise InputError(f"expected a list of {n} numbers, got {value!r}", file=file, field=field)
+        raise InputError(
+            f"expected a list of {n} numbers, got {short_repr(value)}", file=file, field=field
+        )
     return tuple(check_number(v, file, f"{field}[{i}]") for i, v in enumerate(value))

@@ -1,69 +1,109 @@
-"""`gate(plan)`: the check every planner front end runs before execution or simulation.
+"""The verification gate: what every front end runs before a plan executes or is simulated.
 
-ARCHITECTURE "Verification gate": a failing check raises `VerificationError` (an
-`InfeasibleError`, so the CLIs exit 1) carrying the `Report` and its counterexample; a
-passing check returns the `Report` (what ``--json`` front ends can print).
+ARCHITECTURE "Verification gate". One typed entry point per kind of plan; each returns the
+`Report` (what ``--json`` front ends print) or raises `VerificationError` (an
+`InfeasibleError`: the CLIs exit 1) carrying the report and its counterexample:
 
-Dispatch is on the plan's type, by duck typing so that importing `verification` never
-imports a layer that the caller did not use:
+- `gate_order` — the RG planner's `tamp.rg.PlanResult`: the order trace against the LTL
+  encoding of C, and every path of the plan's reachability graph (`verification.rg`);
+- `gate_tree` — a `tamp.bt.PaBtExecutor` before it ticks: every execution of the grown tree
+  from ``state`` (appearances, bounded skill failures) against the safety properties and
+  ``F goal`` (`verification.bt`); the executor itself is not ticked;
+- `gate_table` — a `tamp.lots.controller.LotsController`: the planned run and every entry
+  of its current table T, from where that table was built (`verification.lots`).
 
-- `tamp.rg.PlanResult` (``.order`` and ``.demo``): the order trace against the
-  constraint encoding, and every path of the RG (`verification.rg.check_plan`);
-- `tamp.lots.controller.LotsController` (``.plan_letters()`` and ``.table``): the planned
-  run and every entry of T (`verification.lots.check_controller`);
-- `tamp.bt.PaBtExecutor` (``.root`` and ``.c_goal``): every execution from ``state``
-  (required) with the safety properties and ``F goal`` (`verification.bt.check_executor`).
+`gate(plan, ...)` dispatches on the plan's type to the same three functions.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from functools import singledispatch
+from typing import TYPE_CHECKING
 
 from verification.verdict import Report, VerificationError
 
+if TYPE_CHECKING:
+    from tamp.bt.executor import PaBtExecutor
+    from tamp.lots.controller import LotsController
+    from tamp.rg.plan import PlanResult
+    from tamp.world.events import Appear, Fail
+    from tamp.world.state import WorldState
 
-def gate(
-    plan,
-    *,
-    state=None,
-    properties: Sequence[str] | None = None,
-    events: Iterable = (),
-    max_failures: int = 1,
-    graph: bool = True,
-) -> Report:
-    """Verify ``plan``; return its `Report`, or raise `VerificationError` when it fails.
 
-    ``state`` (BT only): the initial `WorldState` the tree will run from. ``properties``
-    (BT only): LTL properties, default `verification.bt.DEFAULT_PROPERTIES`. ``events``
-    (BT only): scripted interference (`tamp.world.symbolic.Appear` / `Move`).
-    ``max_failures`` (BT only): skill failures per execution. ``graph`` (RG only): also
-    model-check the whole reachability graph.
-    """
-    if hasattr(plan, "order") and hasattr(plan, "demo"):
-        from verification.rg import check_plan
-
-        report = check_plan(plan, graph=graph)
-    elif hasattr(plan, "plan_letters") and hasattr(plan, "table"):
-        from verification.lots import check_controller
-
-        report = check_controller(plan)
-    elif hasattr(plan, "root") and hasattr(plan, "c_goal"):
-        from verification.bt import DEFAULT_PROPERTIES, check_executor
-
-        if state is None:
-            raise ValueError("gate(executor) needs state=<the initial WorldState>")
-        report = check_executor(
-            plan,
-            state,
-            properties if properties is not None else DEFAULT_PROPERTIES,
-            events=events,
-            max_failures=max_failures,
-        )
-    else:
-        raise TypeError(
-            f"gate() does not know how to verify a {type(plan).__name__} "
-            "(expected an RG PlanResult, a LotsController or a PaBtExecutor)"
-        )
+def _passed(report: Report) -> Report:
     if not report.holds:
         raise VerificationError(report)
     return report
+
+
+def gate_order(plan: PlanResult, *, graph: bool = True) -> Report:
+    """The chosen goal order (and, when ``graph``, the whole RG) against C's encoding."""
+    from verification.rg import check_plan
+
+    return _passed(check_plan(plan, graph=graph))
+
+
+def gate_tree(
+    executor: PaBtExecutor,
+    state: WorldState,
+    *,
+    properties: Sequence[str] | None = None,
+    events: Iterable[Appear] = (),
+    failures: Sequence[Fail] | None = None,
+    max_failures: int = 1,
+) -> Report:
+    """Every execution of ``executor``'s grown tree from ``state`` (it is not ticked).
+
+    ``properties``: LTL over the exploration's propositions (default
+    `verification.bt.DEFAULT_PROPERTIES`); ``events``: appearances; ``failures``: the skills
+    that may fail (None: every skill), at most ``max_failures`` per execution.
+    """
+    from verification.bt import DEFAULT_PROPERTIES, check_tree
+
+    return _passed(
+        check_tree(
+            executor,
+            state,
+            properties if properties is not None else DEFAULT_PROPERTIES,
+            events=events,
+            failures=failures,
+            max_failures=max_failures,
+        )
+    )
+
+
+def gate_table(controller: LotsController) -> Report:
+    """The LOTS controller's planned run and every entry of its table T."""
+    from verification.lots import check_controller
+
+    return _passed(check_controller(controller))
+
+
+@singledispatch
+def gate(plan: object, **options) -> Report:
+    """Verify ``plan`` with the entry point for its type (see the module docstring)."""
+    raise TypeError(
+        f"gate() does not know how to verify a {type(plan).__name__} "
+        "(expected an RG PlanResult, a PaBtExecutor or a LotsController)"
+    )
+
+
+def _register() -> None:
+    """Bind the dispatcher to the layers' types (imported here: they import no Drake)."""
+    from tamp.bt.executor import PaBtExecutor
+    from tamp.lots.controller import LotsController
+    from tamp.rg.plan import PlanResult
+
+    gate.register(PlanResult, lambda plan, **kw: gate_order(plan, **kw))
+    gate.register(LotsController, lambda plan, **kw: gate_table(plan, **kw))
+
+    def _tree(plan, *, state=None, **kw):
+        if state is None:
+            raise ValueError("gate(executor) needs state=<the initial WorldState>")
+        return gate_tree(plan, state, **kw)
+
+    gate.register(PaBtExecutor, _tree)
+
+
+_register()

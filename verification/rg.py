@@ -149,5 +149,7 @@ def check_plan(
                 f"whole-RG check skipped: {states} states > {graph_limit} (use tamp-verify plan)"
             )
         else:
+            if rg is None and hasattr(result, "graph"):
+                rg = result.graph()  # the plan's own enumeration: the RG is built once
             verdicts.append(check_graph(demo, rg))
     return Report(verdicts, notes=notes)

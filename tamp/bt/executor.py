@@ -6,7 +6,8 @@ later goal moves the same object again). ``tick(world)`` observes the world, tic
 once, and when the tree fails grows it before returning (l. 8-10):
 
 - GetFailedNode: breadth-first, the first Condition that failed in this tick and has not
-  been expanded yet; it is replaced by its expansion (`tamp.bt.expand`).
+  been expanded yet; it is replaced by its expansion (`expand`, Alg. 3, a method this
+  class inherits from `tamp.bt.expand.TreeGrowth`).
 - No such condition but an action failed in this tick (a skill failure): the tree is
   ticked again next time, which restarts that action, at most ``max_retries`` times per
   action node. A failed alternative's priority in its PriorityFallback is multiplied by
@@ -32,7 +33,7 @@ from dataclasses import asdict, dataclass, field
 from tamp.bt.expand import (
     ExpansionError,
     PriorityFn,
-    expand,
+    TreeGrowth,
     success_rate_priority,
 )
 from tamp.bt.free_area import choose_free_area
@@ -106,7 +107,23 @@ class ExecutorStats:
     free_areas_found: list[str] = field(default_factory=list)
 
 
-class PaBtExecutor:
+@dataclass(frozen=True)
+class ExecutorSnapshot:
+    """A point of an executor's run to continue from (`resume`, `PaBtExecutor.restore`).
+
+    `PaBtExecutor.snapshot` makes one by copying. Wrapping an executor directly,
+    ``ExecutorSnapshot(ex)``, is the copy-free form for an executor that is not ticked any
+    more (what the verification explorer does with each new state).
+    """
+
+    executor: PaBtExecutor = field(repr=False)
+
+    def resume(self) -> PaBtExecutor:
+        """A new executor continuing from this point (the snapshot stays usable)."""
+        return copy.deepcopy(self.executor)
+
+
+class PaBtExecutor(TreeGrowth):
     """Grows and ticks a behavior tree for C_goal against any `World` (Alg. 2)."""
 
     def __init__(
@@ -249,7 +266,7 @@ class PaBtExecutor:
         if node is not None:
             try:
                 self.state = state
-                expand(self, node, why=f"{node.pred} failed")
+                self.expand(node, why=f"{node.pred} failed")
             except ExpansionError as exc:
                 return self._stop(str(exc), world)
             if self.stats.expansions > self.max_expansions:
@@ -468,6 +485,50 @@ class PaBtExecutor:
 
         return to_btcpp_xml(self.root)
 
+    # -- snapshots (what verification explores with) ----------------------------------------
+    def snapshot(self, *, history: bool = True) -> ExecutorSnapshot:
+        """This point of the run, to `restore` later (any number of times).
+
+        ``history=False`` leaves out the report-only history (growth log, finished action
+        records): it never influences a tick, and long explorations keep snapshots small.
+        """
+        twin = copy.deepcopy(self)
+        if not history:
+            twin.forget_history()
+        return ExecutorSnapshot(twin)
+
+    def restore(self, snapshot: ExecutorSnapshot) -> None:
+        """Continue from ``snapshot``: the tree and every counter become a copy of it."""
+        twin = snapshot.resume()
+        self.__dict__.clear()
+        self.__dict__.update(twin.__dict__)
+
+    def forget_history(self) -> None:
+        """Drop the report-only history (growth log, finished action records)."""
+        self.log = []
+        self.attempts = [r for r in self.attempts if r.status is None]
+
+    def state_key(self) -> tuple:
+        """A hashable value of everything that decides what this executor does next.
+
+        The tree (per node: kind, description, child count, last status and whether this
+        tick set it, running skill, cursors, priorities, failure counts; no uids or tick
+        numbers), the result, the running action, and the growth bookkeeping (livelock and
+        fruitless-growth counters, expansions, reserved and found free areas). Executors
+        with equal keys, ticked against equal worlds, do the same thing.
+        """
+        tick = self.tick_id
+        return (
+            tuple(n.state_key(tick) for n in self.root.walk()),
+            None if self.result is None else self.result.value,
+            None if self.running is None else self.running.describe(),
+            frozenset(self._completed_from.items()),
+            self._fruitless,
+            self.stats.expansions,
+            tuple(self.reserved),
+            tuple(sorted(self.extra_areas)),
+        )
+
     def __deepcopy__(self, memo: dict) -> PaBtExecutor:
         """Copy the tree and the executor's mutable bookkeeping; share what never changes
         (domain, predicates, actions, logged events, the last observed state)."""
@@ -535,4 +596,11 @@ def _cursor(root: Node) -> int:
     return root.cursor if isinstance(root, SequenceNode) else 0
 
 
-__all__ = ["ActionRecord", "ExecutorStats", "GrowthEvent", "PaBtExecutor", "guard_of"]
+__all__ = [
+    "ActionRecord",
+    "ExecutorSnapshot",
+    "ExecutorStats",
+    "GrowthEvent",
+    "PaBtExecutor",
+    "guard_of",
+]

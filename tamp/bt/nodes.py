@@ -156,6 +156,32 @@ class Node:
             n = n.parent
         return out
 
+    def state_key(self, tick_id: int) -> tuple:
+        """This node's execution state as a hashable value (children not included).
+
+        Kind, description, child count, last status and whether tick ``tick_id`` set it,
+        then the node's own state slots (cursor, running child, priorities, failures,
+        whether a skill runs); identity and payload (uid, links, predicate, action) are
+        left out. `PaBtExecutor.state_key` combines these over the tree.
+        """
+        values = []
+        for slot in _state_slots(self.__class__):
+            v = getattr(self, slot)
+            if slot == "handle":
+                v = v is not None
+            elif v.__class__ is list:
+                v = tuple(v)
+            values.append(v)
+        status = self.status
+        return (
+            self.__class__.__name__,
+            self.describe(),
+            len(self.children),
+            None if status is None else status.value,
+            self.tick_id == tick_id,
+            tuple(values),
+        )
+
     def __repr__(self) -> str:
         return f"<{self.describe()} #{self.uid}>"
 
@@ -195,6 +221,17 @@ def _slots_of(cls: type) -> tuple[str, ...]:
         # parent before children, so children find their parent's copy in the memo
         names.sort(key=lambda n: (n == "children",))
         slots = _SLOTS[cls] = tuple(names)
+    return slots
+
+
+_NOT_STATE = frozenset({"uid", "parent", "children", "status", "tick_id", "key", "pred", "action"})
+_STATE_SLOTS: dict[type, tuple[str, ...]] = {}
+
+
+def _state_slots(cls: type) -> tuple[str, ...]:
+    slots = _STATE_SLOTS.get(cls)
+    if slots is None:
+        slots = _STATE_SLOTS[cls] = tuple(s for s in _slots_of(cls) if s not in _NOT_STATE)
     return slots
 
 

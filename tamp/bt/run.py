@@ -2,9 +2,9 @@
 
 This is what ``tamp plan DEMO.yaml --execute`` does after the RG layer chose the goal
 order: build `PaBtExecutor` from C_goal, a `SymbolicWorld` from the demonstration's
-initial state (plus the scripted obstacles and failures), tick until the root succeeds or
-the executor stops, and report the executed actions, the growth statistics and the final
-world.
+initial state (plus the scripted events, `Appear`, and failures, `Fail`), tick until the
+root succeeds or the executor stops, and report the executed actions, the growth statistics
+and the final world.
 """
 
 from __future__ import annotations
@@ -15,10 +15,12 @@ from typing import Any
 
 from tamp.bt.executor import PaBtExecutor
 from tamp.world.actions import Action, Domain
+from tamp.world.events import Appear, Fail
 from tamp.world.interface import Status
+from tamp.world.outcomes import ScriptedOutcomes
 from tamp.world.predicates import Predicate
 from tamp.world.state import WorldState
-from tamp.world.symbolic import Appear, Move, ScriptedFailure, SymbolicWorld
+from tamp.world.symbolic import SymbolicWorld
 
 
 @dataclass
@@ -92,8 +94,8 @@ def execute(
     c_goal: Sequence[Predicate],
     *,
     free_areas: Iterable[str] = (),
-    obstacles: Iterable[Appear | Move] = (),
-    failures: Iterable[ScriptedFailure] = (),
+    events: Iterable[Appear] = (),
+    failures: Iterable[Fail] = (),
     skill_ticks: int | Mapping[str, int] = 1,
     domain: Domain | None = None,
     max_ticks: int = 5000,
@@ -103,8 +105,8 @@ def execute(
     world = SymbolicWorld(
         state,
         skill_ticks=skill_ticks,
-        failures=failures,
-        events=obstacles,
+        outcomes=ScriptedOutcomes(failures),
+        events=events,
         **({"reach": domain.reach} if domain is not None else {}),
     )
     ex = PaBtExecutor(c_goal, domain, free_areas=free_areas, **executor_options)
@@ -129,7 +131,7 @@ def execute(
             "free_areas_found": list(stats.free_areas_found),
         },
         growth=[e.to_json() for e in ex.log],
-        world_events=[{"clock": e.clock, "kind": e.kind, "what": e.what} for e in world.history],
+        world_events=[e.to_json() for e in world.history],
         attempts=[r.to_json() for r in ex.attempts],
         executor=ex,
         world=world,
@@ -140,8 +142,8 @@ def execute_plan(
     demo: Any,
     c_goal: Sequence[Predicate],
     *,
-    obstacles: Iterable[Appear | Move] = (),
-    failures: Iterable[ScriptedFailure] = (),
+    events: Iterable[Appear] = (),
+    failures: Iterable[Fail] = (),
     skill_ticks: int | Mapping[str, int] = 1,
     domain: Domain | None = None,
     max_ticks: int = 5000,
@@ -152,7 +154,7 @@ def execute_plan(
         demo.initial_world(),
         c_goal,
         free_areas=[a.name for a in demo.free_areas],
-        obstacles=obstacles,
+        events=events,
         failures=failures,
         skill_ticks=skill_ticks,
         domain=domain,

@@ -1,34 +1,26 @@
 """The ``--execute`` part of ``tamp plan``: argument definitions and the run function.
 
-``tamp plan DEMO.yaml --execute [--obstacle OBJ@x,y,z[@tick]] [--fail NAME[:ARGS][:TIMES]]
+``tamp plan DEMO.yaml --execute [--appear OBJ@PLACE[@WHEN]] [--fail ACTION[(ARGS)][xTIMES]]
 [--skill-ticks N] [--max-ticks N] [--json] [--bt-xml out.xml] [--bt-dot out.dot]``
 
-- ``--obstacle O_a@2.2,0.8,0.1`` an object that is not in the demonstration appears at that
-  point (robot frame, metres) when the robot first comes within reach of it;
-  ``--obstacle O_a@2.2,0.8,0.1@5`` makes it appear at tick 5 (``@0``: there from the start).
-- ``--fail Pick:O1`` the first attempt of Pick(O1) fails; ``--fail Place:O1,L1:2`` the first
-  two attempts of Place(O1, L1); ``--fail MoveTo`` the first MoveTo, whatever its target.
+- The demonstration's own ``appear:`` entries happen (Case 3's O_a at l_1); ``--appear``
+  adds objects or overrides an object's entry (`tamp.commands.events_args`).
+- ``--fail Pick(O1)`` the first attempt of Pick(O1) fails; ``--fail 'Place(O1, L1)x2'`` the
+  first two attempts of Place(O1, L1); ``--fail MoveTo`` the first MoveTo, whatever its target.
+- Before it runs, the grown tree passes the verification gate as in ``tamp simulate``:
+  every execution over the symbolic domain (the appearances, one skill failure) against
+  the safety properties and ``F goal`` (`verification.gate.gate_tree`).
 - exit status 0 when every goal was reached, 1 otherwise (the reason is printed).
-
-The lead's ``tamp/commands/plan.py`` calls `add_execute_arguments` on its parser and, when
-``args.execute`` is set, `run_execute(args, demo, plan_result)`.
 """
 
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 from typing import Any
 
+from tamp.commands.events_args import add_event_arguments, demo_events
 from tamp.errors import EXIT_INFEASIBLE, EXIT_OK, InputError
-from tamp.world.geometry import Point
-from tamp.world.symbolic import Appear, ScriptedFailure
-
-_NAME = r"[A-Za-z_][\w\-]*"
-_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_OBSTACLE = re.compile(rf"^({_NAME})@({_NUM}),({_NUM})(?:,({_NUM}))?(?:@(\d+))?$")
-_FAIL = re.compile(rf"^({_NAME})(?::([\w\-]+(?:,[\w\-]+)*))?(?::(\d+))?$")
 
 
 def add_execute_arguments(parser: argparse.ArgumentParser) -> None:
@@ -39,20 +31,7 @@ def add_execute_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="run the grown behavior tree for the chosen order in the symbolic world",
     )
-    g.add_argument(
-        "--obstacle",
-        action="append",
-        default=[],
-        metavar="OBJ@x,y,z[@tick]",
-        help="an object that appears during execution (default: when the robot reaches it)",
-    )
-    g.add_argument(
-        "--fail",
-        action="append",
-        default=[],
-        metavar="NAME[:ARGS][:TIMES]",
-        help="scripted skill failure, e.g. Pick:O1 (first attempt fails) or Place:O1,L1:2",
-    )
+    add_event_arguments(g)
     g.add_argument("--skill-ticks", type=int, default=1, metavar="N", help="ticks per skill")
     g.add_argument("--max-ticks", type=int, default=5000, metavar="N", help="tick budget")
     g.add_argument(
@@ -61,44 +40,23 @@ def add_execute_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--bt-dot", metavar="PATH", help="write the grown tree as Graphviz DOT")
 
 
-def parse_obstacle(text: str, known: set[str] | None = None) -> Appear:
-    """``OBJ@x,y[,z][@tick]`` -> `Appear`; InputError (exit 2) names ``--obstacle``."""
-    m = _OBSTACLE.match(text.strip())
-    if not m:
-        raise InputError(f"expected OBJ@x,y,z[@tick], got {text!r}", field="--obstacle")
-    name, x, y, z, tick = m.groups()
-    if known is not None and name in known:
-        raise InputError(f"{name!r} is already an object of the demonstration", field="--obstacle")
-    return Appear(
-        name,
-        Point(float(x), float(y), float(z) if z is not None else 0.0),
-        int(tick) if tick is not None else None,
-    )
+def check_execute_arguments(args: argparse.Namespace) -> None:
+    """Options that only make sense with ``--execute`` are refused without it (exit 2)."""
+    if getattr(args, "execute", False):
+        return
+    for option in ("bt_xml", "bt_dot"):
+        if getattr(args, option, None):
+            raise InputError(
+                "needs --execute (the tree is grown while executing)",
+                field="--" + option.replace("_", "-"),
+            )
+    for option in ("appear", "fail"):
+        if getattr(args, option, None):
+            raise InputError("needs --execute", field="--" + option)
 
 
-def parse_failure(text: str, domain: Any = None) -> ScriptedFailure:
-    """``NAME[:ARG,ARG][:TIMES]`` -> `ScriptedFailure`; InputError names ``--fail``."""
-    m = _FAIL.match(text.strip())
-    if not m:
-        raise InputError(f"expected NAME[:ARGS][:TIMES], got {text!r}", field="--fail")
-    name, args, times = m.groups()
-    if domain is not None and name not in domain.templates:
-        raise InputError(
-            f"unknown action {name!r} (known: {', '.join(domain.templates)})", field="--fail"
-        )
-    parsed = tuple(args.split(",")) if args else None
-    if domain is not None and parsed is not None:
-        n = len(domain.templates[name].params)
-        if len(parsed) != n:
-            raise InputError(f"{name} takes {n} argument(s), got {len(parsed)}", field="--fail")
-    count = int(times) if times is not None else 1
-    if count < 1:
-        raise InputError("TIMES must be at least 1", field="--fail")
-    return ScriptedFailure(name, parsed, count)
-
-
-def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any):
-    """Run the execution; returns (report, JSON document, exit status)."""
+def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any, *, verify: bool):
+    """Gate and run the execution; returns (report, JSON document, exit status)."""
     from tamp.bt.run import execute_plan
     from tamp.commands.output import output_file
 
@@ -110,26 +68,20 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any):
         raise InputError("must be >= 0", field="--skill-ticks")
     if args.max_ticks < 1:
         raise InputError("must be >= 1", field="--max-ticks")
-    known = set(demo.objects)
-    obstacles = []
-    for text in args.obstacle:
-        ob = parse_obstacle(text, known)
-        known.add(ob.obj)
-        obstacles.append(ob)
-    failures = [parse_failure(t, domain) for t in args.fail]
-    for f in failures:  # a misspelt object would make the scripted failure never happen
-        params = domain.templates[f.action].params
-        for (_, kind), arg in zip(params, f.args or (), strict=False):
-            if kind == "object" and arg not in known:
-                raise InputError(
-                    f"{f.action}: unknown object {arg!r} (known: {', '.join(sorted(known))})",
-                    field="--fail",
-                )
+    appear, fail = demo_events(args, demo)
+    verified = None
+    if verify:
+        from verification.bt import executor_for
+        from verification.gate import gate_tree
+
+        verified = gate_tree(
+            executor_for(demo, list(plan_result.order)), demo.initial_world(), events=appear
+        )
     report = execute_plan(
         demo,
         plan_result.c_goal,
-        obstacles=obstacles,
-        failures=failures,
+        events=appear,
+        failures=fail,
         skill_ticks=args.skill_ticks,
         domain=domain,
         max_ticks=args.max_ticks,
@@ -146,16 +98,19 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any):
         "source": getattr(demo, "source", None),
         "order": list(getattr(plan_result, "order", [])),
         "cost": getattr(plan_result, "cost", None),
+        "appear": [str(a) for a in appear],
+        "fail": [str(f) for f in fail],
+        "verified": None if verified is None else verified.holds,
         **report.to_json(),
     }
     return report, doc, EXIT_OK if report.reached else EXIT_INFEASIBLE
 
 
-def run_execute(args: argparse.Namespace, demo: Any, plan_result: Any) -> int:
+def run_execute(args: argparse.Namespace, demo: Any, plan_result: Any, *, verify: bool) -> int:
     """Print the execution (text, or one JSON document with ``--json``); 0 reached, 1 not."""
     from tamp.commands.output import print_json
 
-    report, doc, code = execution_payload(args, demo, plan_result)
+    report, doc, code = execution_payload(args, demo, plan_result, verify=verify)
     if getattr(args, "json", False):
         print_json(doc)
     else:

@@ -8,6 +8,7 @@ Exit status: 0 task satisfied, 1 infeasible (with the reason), 2 bad input.
 from __future__ import annotations
 
 import argparse
+import sys
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -33,17 +34,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _resolve(name: str):
-    from tamp.scenarios import resolve
-
-    p = resolve(name)
-    if not p.exists() and not name.startswith("lots/"):
-        alt = resolve(f"lots/{name}")
-        if alt.exists():
-            return alt
-    return p
-
-
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -56,8 +46,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("must be >= 1", field="--max-waits")
     if args.dot:
         output_file(args.dot, "--dot")
-    task = load_task(_resolve(args.task))
-    events = load_events(_resolve(args.interference), task) if args.interference else []
+    task = load_task(args.task)
+    events = load_events(args.interference, task) if args.interference else []
     from verification import gate
 
     report = run_task(
@@ -96,5 +86,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"final: W^A {counts['A']}  W^B {counts['B']}  waste {counts['waste']}")
         print("task satisfied" if report.satisfied else f"task infeasible: {report.reason}")
     if not report.satisfied:
+        if args.json:  # the JSON document above already says why; no second document
+            print(f"tamp lots: error: {report.reason or 'task not satisfied'}", file=sys.stderr)
+            return InfeasibleError.exit_code
         raise InfeasibleError(report.reason or "task not satisfied")
     return 0

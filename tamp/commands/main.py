@@ -3,39 +3,62 @@
 Every subcommand module exposes ``register(subparsers)`` that adds its parser and sets
 ``func(args) -> int``. Heavy imports (Drake, torch, Spot) happen inside ``func`` so that
 ``tamp --help`` stays fast. Errors become one line on stderr and an exit status:
-0 success, 1 infeasible task or failed check, 2 bad input, 3 internal error.
+0 success, 1 infeasible task or failed check, 2 bad input, 3 internal error. Under
+``--json`` an error is also one JSON document on stdout:
+``{"error": ..., "exit": 2, "file": ..., "field": ...}``.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import json
 import os
 import sys
 import traceback
 from collections.abc import Callable, Sequence
+from importlib.metadata import PackageNotFoundError, version
 
 from tamp.errors import EXIT_BAD_INPUT, TampError
 
 EXIT_INTERNAL = 3
 
 #: Subcommand modules under tamp.commands, in the order `tamp --help` lists them.
-COMMANDS = ("plan", "lots", "refine", "simulate", "grasp")
+COMMANDS = ("plan", "lots", "simulate", "grasp")
+
+
+def package_version() -> str:
+    """The installed distribution's version (the source tree's when not installed)."""
+    try:
+        return version("tamp")
+    except PackageNotFoundError:  # pragma: no cover - running from an uninstalled tree
+        return "unknown"
+
+
+def add_version(parser: argparse.ArgumentParser) -> None:
+    """``--version``: print ``PROG VERSION`` and exit 0."""
+    parser.add_argument("--version", action="version", version=f"%(prog)s {package_version()}")
 
 
 def build_parser(prog: str, modules: Sequence[str], package: str) -> argparse.ArgumentParser:
-    """Parser with one subcommand per module that exists in ``package``."""
+    """Parser with one subcommand per module of ``package``."""
     parser = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
+    add_version(parser)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in modules:
-        try:
-            module = importlib.import_module(f"{package}.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"{package}.{name}":
-                continue  # layer not built yet
-            raise
-        module.register(sub)
+        importlib.import_module(f"{package}.{name}").register(sub)
     return parser
+
+
+def _error_json(message: str, code: int, exc: BaseException | None = None) -> None:
+    """The ``--json`` form of an error: one document on stdout, beside the stderr line."""
+    doc = {
+        "error": message,
+        "exit": code,
+        "file": getattr(exc, "file", None),
+        "field": getattr(exc, "field", None),
+    }
+    sys.stdout.write(json.dumps(doc, indent=2) + "\n")
 
 
 def run(
@@ -44,15 +67,23 @@ def run(
 ) -> int:
     """Parse, dispatch, and turn every error into one line plus the right exit status."""
     parser = make_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    as_json = "--json" in argv
     try:
         args = parser.parse_args(argv)
-    except SystemExit as exc:  # argparse: usage errors are bad input
-        code = exc.code if isinstance(exc.code, int) else EXIT_BAD_INPUT
-        return EXIT_BAD_INPUT if code not in (0,) else 0
+    except SystemExit as exc:  # argparse: usage errors are bad input (it printed the usage)
+        if exc.code in (0, None):
+            return 0
+        if as_json:
+            _error_json("bad command-line arguments (see the usage on stderr)", EXIT_BAD_INPUT)
+        return EXIT_BAD_INPUT
+    as_json = bool(getattr(args, "json", False))
     try:
         return int(args.func(args) or 0)
     except TampError as exc:
         print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+        if as_json:
+            _error_json(str(exc), exc.exit_code, exc)
         return exc.exit_code
     except KeyboardInterrupt:
         print(f"{parser.prog}: interrupted", file=sys.stderr)
@@ -62,11 +93,10 @@ def run(
     except Exception as exc:  # never a bare traceback
         if os.environ.get("TAMP_DEBUG"):
             traceback.print_exc()
-        print(
-            f"{parser.prog}: internal error: {type(exc).__name__}: {exc} "
-            "(set TAMP_DEBUG=1 for the traceback)",
-            file=sys.stderr,
-        )
+        message = f"internal error: {type(exc).__name__}: {exc}"
+        print(f"{parser.prog}: {message} (set TAMP_DEBUG=1 for the traceback)", file=sys.stderr)
+        if as_json:
+            _error_json(message, EXIT_INTERNAL, exc)
         return EXIT_INTERNAL
 
 

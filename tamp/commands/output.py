@@ -1,4 +1,5 @@
-"""Helpers shared by subcommands: JSON printing, progress on stderr, output-file checks."""
+"""Helpers shared by subcommands: JSON printing, progress on stderr, output-file checks, and
+the ``--no-verify`` flag with its warning line."""
 
 from __future__ import annotations
 
@@ -29,6 +30,24 @@ def progress(message: str, *, quiet: bool = False) -> None:
     """A progress line on stderr, so stdout stays clean for --json."""
     if not quiet:
         print(message, file=sys.stderr, flush=True)
+
+
+def add_no_verify(parser) -> None:
+    """``--no-verify``: skip the verification gate (a warning line says so on stderr)."""
+    parser.add_argument(
+        "--no-verify",
+        action="store_true",
+        help="skip the verification gate (not recommended: an unverified plan runs)",
+    )
+
+
+def warn_unverified(prog: str, what: str) -> None:
+    """The warning line every command prints when ``--no-verify`` skips the gate."""
+    print(
+        f"{prog}: warning: --no-verify: {what} runs without passing the verification gate",
+        file=sys.stderr,
+        flush=True,
+    )
 
 
 def output_file(path: str | Path, option: str, *, make_parents: bool = False) -> Path:

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import argparse
 
-from tamp.commands.output import output_file, print_json
+from tamp.commands.execute_args import add_execute_arguments, check_execute_arguments
+from tamp.commands.output import add_no_verify, output_file, print_json, warn_unverified
 from tamp.errors import InputError
 
 MAX_DOT_STATES = 5000
@@ -28,38 +29,33 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.add_argument("--dot", metavar="FILE", help="write the RG (chosen path highlighted) as DOT")
-    try:
-        from tamp.commands.execute_args import add_execute_arguments
-    except ImportError:
-        pass
-    else:
-        add_execute_arguments(p)
+    add_no_verify(p)
+    add_execute_arguments(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from tamp.demo import load_demonstration
     from tamp.rg import plan
-    from tamp.scenarios import resolve
 
     if args.dot:
         output_file(args.dot, "--dot")
-    execute = getattr(args, "execute", False)
-    for option in ("bt_xml", "bt_dot"):
-        if getattr(args, option, None) and not execute:
-            raise InputError(
-                "needs --execute (the tree is grown while executing)",
-                field="--" + option.replace("_", "-"),
-            )
-    demo = load_demonstration(resolve(args.demo))
+    check_execute_arguments(args)
+    demo = load_demonstration(args.demo)
     result = plan(demo, args.cost)
-    _gate(result)
+    verify = not args.no_verify
+    if verify:
+        from verification.gate import gate_order
+
+        gate_order(result)
+    else:
+        warn_unverified("tamp plan", "the goal order" + (" and its tree" if args.execute else ""))
     if args.dot:
-        _write_dot(demo, result, args.dot)
-    if execute:
+        _write_dot(result, args.dot)
+    if args.execute:
         from tamp.commands.execute_args import run_execute
 
-        return run_execute(args, demo, result)
+        return run_execute(args, demo, result, verify=verify)
     if args.json:
         print_json(result.to_json())
     else:
@@ -67,17 +63,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _gate(result) -> None:
-    """Verification gate: the chosen order is model-checked before anything executes."""
-    try:
-        from verification import gate
-    except ImportError:  # verification package not installed in this checkout
-        return
-    gate(result)
-
-
-def _write_dot(demo, result, path: str) -> None:
-    from tamp.rg import build_rg
+def _write_dot(result, path: str) -> None:
     from tamp.rg.dot import rg_to_dot
 
     if result.rg.states is None or result.rg.states > MAX_DOT_STATES:
@@ -85,7 +71,7 @@ def _write_dot(demo, result, path: str) -> None:
             f"the RG has more than {MAX_DOT_STATES} states: too large to draw", field="--dot"
         )
     out = output_file(path, "--dot")
-    rg_to_dot(demo, build_rg(demo), result.order).write_raw(str(out))
+    rg_to_dot(result.demo, result.graph(), result.order).write_raw(str(out))
 
 
 def _print_human(result) -> None:

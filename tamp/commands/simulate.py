@@ -1,6 +1,7 @@
 """``tamp simulate smp-mro``: run an SMP-MRO case in the Drake simulation (seed §V).
 
     tamp simulate smp-mro --case 1|2|3 [--scenario FILE] [--record out.html] [--json]
+                          [--appear OBJ@PLACE[@WHEN]] [--fail ACTION[(ARGS)][xTIMES]]
                           [--meshcat] [--rate R] [--no-verify] [--max-sim-time S]
 
 Plans the order (RG + A*), passes the verification gate, then simulates the youBot-like
@@ -14,7 +15,14 @@ from __future__ import annotations
 
 import argparse
 
-from tamp.commands.output import output_file, print_json, progress
+from tamp.commands.events_args import add_event_arguments, events_for
+from tamp.commands.output import (
+    add_no_verify,
+    output_file,
+    print_json,
+    progress,
+    warn_unverified,
+)
 
 
 def register(subparsers) -> None:
@@ -30,7 +38,8 @@ def register(subparsers) -> None:
         type=float,
         help="target real-time rate (default: as fast as possible; 1.0 with --meshcat)",
     )
-    s.add_argument("--no-verify", action="store_true", help="skip the verification gate")
+    add_event_arguments(s)
+    add_no_verify(s)
     s.add_argument("--max-sim-time", type=float, help="override the scenario's time limit (s)")
     s.add_argument("--json", action="store_true", help="machine-readable output")
     s.set_defaults(func=run)
@@ -58,6 +67,17 @@ def run(args: argparse.Namespace) -> int:
         output_file(args.record, "--record", make_parents=True)
     name = args.scenario or f"case{args.case or 1}.yaml"
     scenario = load_scenario(args.scenario or scenario_path(name))
+    if args.appear or args.fail:
+        demo = scenario.demo
+        appear, fail = events_for(
+            args,
+            objects=[o.id for o in scenario.objects],
+            areas=demo.initial_world().areas,
+            domain=demo.domain(),
+        )
+        scenario = scenario.with_events(appear, fail)
+    if args.no_verify:
+        warn_unverified("tamp simulate", "the plan and its tree")
     progress(f"simulating {scenario.name} ({scenario.source})", quiet=args.json)
     meshcat = None
     if args.meshcat:

@@ -2,9 +2,9 @@
 
     tamp-verify trace --formula F (--trace FILE | --word 'p1&!p2; …; cycle{…}') [--finite]
     tamp-verify plan DEMO.yaml [--order G1,G0,…] [--cost distance|time|success] [--no-graph]
-    tamp-verify bt DEMO.yaml [--property F …] [--order G1,G0,…] [--appear OBJ@AREA[:TICK] …]
-                   [--move OBJ@AREA:TICK …] [--max-failures N] [--may-fail A,B] [--max-states N]
-    tamp-verify lots TASK.yaml
+    tamp-verify bt DEMO.yaml [--property F …] [--order G1,G0,…] [--appear OBJ@PLACE[@WHEN] …]
+                   [--fail ACTION[(ARGS)] …] [--max-failures N] [--max-states N]
+    tamp-verify lots TASK.yaml [--interference EVENTS.yaml]
 
 Exit status: 0 the property holds, 1 violated (the counterexample is printed; with
 ``--json`` it is in the JSON document), 2 bad input (a formula or letter that does not
@@ -20,20 +20,9 @@ import argparse
 import sys
 from collections.abc import Sequence
 
+from tamp.commands.main import add_version
 from tamp.commands.main import run as run_cli
 from tamp.errors import EXIT_INFEASIBLE, EXIT_OK, InputError
-
-
-def _scenario(name: str, *subdirs: str) -> str:
-    """A user path, else a packaged scenario of that name (also under ``subdirs``)."""
-    from tamp.scenarios import resolve
-
-    p = resolve(name)
-    for sub in subdirs:
-        if p.exists():
-            break
-        p = resolve(f"{sub}/{name}")
-    return str(p) if p.exists() else name
 
 
 def _emit(report, args) -> int:
@@ -95,7 +84,7 @@ def _cmd_plan(args) -> int:
     from verification.rg import check_graph, check_order
     from verification.verdict import Report
 
-    demo = load_demonstration(_scenario(args.demo))
+    demo = load_demonstration(args.demo)
     if args.order is not None:
         order = _order(args.order)
     else:
@@ -121,51 +110,13 @@ def _add_plan(sub) -> None:
 # -- bt -------------------------------------------------------------------------------------
 
 
-def _event_args(text: str, flag: str, state, *, need_tick: bool):
-    """``OBJ@AREA`` or ``OBJ@x,y``, optionally ``:TICK`` -> (obj, Point, tick)."""
-    from tamp.world.geometry import Point
-
-    obj, sep, rest = text.partition("@")
-    where, _, tick = rest.partition(":")
-    if not sep or not obj or not where:
-        raise InputError(f"expected OBJ@AREA or OBJ@x,y[:TICK], got {text!r}", field=flag)
-    if where in state.areas:
-        p = state.areas[where].pos
-        pos = Point(p.x, p.y, 0.0)
-    else:
-        try:
-            xy = [float(v) for v in where.split(",")]
-        except ValueError:
-            xy = []
-        if len(xy) != 2:
-            raise InputError(
-                f"{where!r} is neither an area ({', '.join(sorted(state.areas))}) nor x,y",
-                field=flag,
-            )
-        pos = Point(xy[0], xy[1], 0.0)
-    at = None
-    if tick:
-        try:
-            at = int(tick)
-        except ValueError:
-            raise InputError(f"tick {tick!r} is not an integer", field=flag) from None
-    if need_tick and at is None:
-        raise InputError(f"{flag} needs a tick: OBJ@AREA:TICK", field=flag)
-    return obj, pos, at
-
-
 def _cmd_bt(args) -> int:
+    from tamp.commands.events_args import demo_events
     from tamp.demo import load_demonstration
-    from verification.bt import (
-        DEFAULT_PROPERTIES,
-        appear_event,
-        check_executor,
-        executor_for,
-        move_event,
-    )
+    from verification.bt import DEFAULT_PROPERTIES, check_tree, executor_for
     from verification.rg import check_order_ids
 
-    demo = load_demonstration(_scenario(args.demo))
+    demo = load_demonstration(args.demo)
     if args.max_failures < 0:
         raise InputError(f"must be >= 0, got {args.max_failures}", field="--max-failures")
     if args.max_states < 1:
@@ -174,26 +125,13 @@ def _cmd_bt(args) -> int:
     if args.order is not None:
         order = _order(args.order)
         check_order_ids(demo.goal_ids, order)
-    state = demo.initial_world()
-    events = [
-        appear_event(*_event_args(t, "--appear", state, need_tick=False)) for t in args.appear
-    ]
-    events += [move_event(*_event_args(t, "--move", state, need_tick=True)) for t in args.move]
-    may_fail = None
-    if args.may_fail is not None:
-        may_fail = [a.strip() for a in args.may_fail.split(",") if a.strip()]
-        known = set(demo.domain().templates)
-        for a in may_fail:
-            if a not in known:
-                raise InputError(
-                    f"unknown action {a!r} (known: {', '.join(sorted(known))})", field="--may-fail"
-                )
-    report = check_executor(
+    appear, fail = demo_events(args, demo)
+    report = check_tree(
         executor_for(demo, order),
-        state,
+        demo.initial_world(),
         args.property or list(DEFAULT_PROPERTIES),
-        events=events,
-        may_fail=may_fail,
+        events=appear,
+        failures=fail or None,
         max_failures=args.max_failures,
         max_states=args.max_states,
     )
@@ -201,6 +139,8 @@ def _cmd_bt(args) -> int:
 
 
 def _add_bt(sub) -> None:
+    from tamp.commands.events_args import add_event_arguments
+
     p = sub.add_parser("bt", help="explore every execution of the grown BT and check properties")
     p.add_argument("demo", metavar="DEMO.yaml", help="demonstration file")
     p.add_argument(
@@ -212,24 +152,10 @@ def _add_bt(sub) -> None:
         "G (holding_count <= 1), F goal",
     )
     p.add_argument("--order", help="goal order for C_goal (default: tamp plan's)")
-    p.add_argument(
-        "--appear",
-        action="append",
-        default=[],
-        metavar="OBJ@AREA[:TICK]",
-        help="an object appears there (when the robot reaches it, or at TICK)",
-    )
-    p.add_argument(
-        "--move",
-        action="append",
-        default=[],
-        metavar="OBJ@AREA:TICK",
-        help="a person moves an object there at TICK",
-    )
+    add_event_arguments(p, verify=True)
     p.add_argument(
         "--max-failures", type=int, default=1, help="skill failures per execution (default 1)"
     )
-    p.add_argument("--may-fail", metavar="A,B", help="actions that may fail (default: all)")
     p.add_argument("--max-states", type=int, default=50_000, help="exploration bound")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_bt)
@@ -241,7 +167,7 @@ def _add_bt(sub) -> None:
 def _cmd_lots(args) -> int:
     from verification.lots import check_task_file
 
-    return _emit(check_task_file(_scenario(args.task, "lots")), args)
+    return _emit(check_task_file(args.task), args)
 
 
 def _add_lots(sub) -> None:
@@ -256,6 +182,7 @@ def make_parser() -> argparse.ArgumentParser:
         prog="tamp-verify",
         description="Model-check traces, RG plans, behavior trees and LOTS tables (Spot).",
     )
+    add_version(parser)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     _add_trace(sub)
     _add_plan(sub)

@@ -6,6 +6,7 @@ import math
 
 from tamp.demo.constraints import derive_constraints
 from tamp.demo.model import Demonstration, Goal
+from tamp.world.events import Appear
 from tamp.world.geometry import Area, Point, Pose, Quaternion
 
 
@@ -21,6 +22,7 @@ def make_demonstration(
     domain_file: str | None = None,
     source: str = "<memory>",
     object_labels: dict[str, str] | None = None,
+    appear: tuple[Appear, ...] = (),
 ) -> Demonstration:
     """Goals ``G<k>`` for step k, constraints C derived (and checked) from the steps."""
     labels = object_labels or {o: f"objects[{i}]" for i, o in enumerate(objects)}
@@ -41,6 +43,7 @@ def make_demonstration(
         domain_file=domain_file,
         source=source,
         constraint_reasons=reasons,
+        appear=tuple(appear),
     )
 
 

@@ -19,6 +19,12 @@ Format (positions of objects, steps and free areas are in the user's MR frame)::
     free_areas:                      # optional places that do not affect the task
       - {id: free1, position: [x, y, z]}
     constraints: [[G0, G1]]          # optional explicit order specifications G_i <= G_j
+    appear: ["Oa@L1"]                # optional: what happens during execution (SMP-MRO
+                                     # Case 3), in the run vocabulary OBJ@PLACE[@WHEN] of
+                                     # `tamp.world.events`; a point PLACE x,y,z is in the
+                                     # user's frame like every position of this file
+
+``path`` may name a packaged demonstration (``case3.yaml``) from any directory.
 """
 
 from __future__ import annotations
@@ -32,6 +38,8 @@ from tamp.demo.frames import IDENTITY, UNITY_TO_ROS, MRFrame, check_rotation
 from tamp.demo.model import Demonstration
 from tamp.errors import InputError
 from tamp.fileio import Fields, check_vector, load_yaml
+from tamp.scenarios import resolve
+from tamp.world.events import Appear, check_events, parse_appear
 from tamp.world.geometry import Area, Point, Pose, Quaternion
 
 _KEYS = {
@@ -46,6 +54,7 @@ _KEYS = {
     "steps",
     "free_areas",
     "constraints",
+    "appear",
 }
 
 
@@ -62,7 +71,7 @@ def _matrix(f: Fields, key: str, default, *, proper: bool) -> tuple[tuple[float,
 
 def load_demonstration(path: str | Path) -> Demonstration:
     """Read, validate and transform a demonstration; bad input raises `InputError`."""
-    data, file = load_yaml(path, kind="demonstration")
+    data, file = load_yaml(resolve(path), kind="demonstration")
     f = Fields(data, file)
     f.check_keys(_KEYS)
 
@@ -141,7 +150,17 @@ def load_demonstration(path: str | Path) -> Demonstration:
             raise InputError("expected [Gi, Gj]", file=file, field=f"constraints[{i}]")
         explicit.append((pair[0], pair[1]))
 
-    return make_demonstration(
+    appear: list[Appear] = []
+    for i, item in enumerate(f.items("appear", [])):
+        field = f"appear[{i}]"
+        if not isinstance(item, str):
+            raise InputError("expected a string OBJ@PLACE[@WHEN]", file=file, field=field)
+        a = parse_appear(item, field=field, file=file)
+        if isinstance(a.place, Point):
+            a = Appear(a.obj, frame.to_robot(a.place.as_tuple()), a.when)
+        appear.append(a)
+
+    demo = make_demonstration(
         objects,
         steps,
         radius,
@@ -152,4 +171,15 @@ def load_demonstration(path: str | Path) -> Demonstration:
         domain_file=domain_file,
         source=file,
         object_labels=labels,
+        appear=tuple(appear),
     )
+    check_events(
+        demo.appear,
+        (),
+        objects=demo.objects,
+        areas=demo.initial_world().areas,
+        domain=demo.domain(),
+        fields={"appear": "appear"},
+        file=file,
+    )
+    return demo

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from tamp.world.events import Appear
 from tamp.world.geometry import Area, Point, Pose
 from tamp.world.state import ObjectState, WorldState
 
@@ -37,6 +38,9 @@ class Demonstration:
     domain_file: str | None = None
     source: str = "<memory>"
     constraint_reasons: dict[tuple[str, str], str] = field(default_factory=dict)
+    #: What happens during execution that the person did not show (SMP-MRO §V-D Case 3: an
+    #: obstacle O_a appears at l_1); flags of the CLI override entries of the same object.
+    appear: tuple[Appear, ...] = ()
 
     def goal(self, gid: str) -> Goal:
         for g in self.goals:

@@ -35,6 +35,7 @@ from pathlib import Path
 
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
+from tamp.scenarios import resolve
 
 SIDES = ("A", "B")
 _NAME = re.compile(r"^[a-z_][a-z0-9_]*$")
@@ -113,7 +114,7 @@ class Event:
 
 def load_task(path: str | Path) -> Task:
     """Read and validate a task file; any error is an `InputError` naming file and field."""
-    data, name = load_yaml(path, kind="LTL task")
+    data, name = load_yaml(resolve(path, "lots"), kind="LTL task")
     f = Fields(data, name)
     f.check_keys(
         ["version", "name", "description", "formula", "propositions", "initial", "remove_cost"]
@@ -161,7 +162,7 @@ def _counts(init: Fields, side: str) -> dict[str, int]:
 
 def load_events(path: str | Path, task: Task) -> list[Event]:
     """Read and validate an interference script against ``task`` (classes, sides, counts)."""
-    data, name = load_yaml(path, kind="interference")
+    data, name = load_yaml(resolve(path, "lots"), kind="interference")
     f = Fields(data, name)
     f.check_keys(["version", "description", "events"])
     events: list[Event] = []

@@ -101,14 +101,67 @@ def alg1_node_count(index: GoalIndex) -> int:
         sys.setrecursionlimit(old)
 
 
+class ReachabilityGraph:
+    """The merged RG of one demonstration, enumerated once (up to ``limit`` states).
+
+    A plan's statistics, its verification gate and its DOT drawing all read this one
+    enumeration; the networkx view is built on first use and kept.
+    """
+
+    def __init__(self, demo: Demonstration, limit: int = 200_000) -> None:
+        self.demo = demo
+        self.limit = limit
+        self.index = GoalIndex.of(demo)
+        try:
+            self._masks, self._edges = _masks(self.index, limit)
+        except RGTooLarge:
+            self._masks, self._edges = None, None
+        self._stats: RGStats | None = None
+        self._nx: nx.DiGraph | None = None
+
+    @property
+    def complete(self) -> bool:
+        """False when the RG has more than ``limit`` states (then only stats say so)."""
+        return self._masks is not None
+
+    @property
+    def stats(self) -> RGStats:
+        """State/edge counts when complete, and Alg. 1's node count."""
+        if self._stats is None:
+            if self._masks is None:
+                self._stats = RGStats(None, None, -1, False)
+            else:
+                self._stats = RGStats(
+                    len(self._masks), len(self._edges), alg1_node_count(self.index), True
+                )
+        return self._stats
+
+    def networkx(self) -> nx.DiGraph:
+        """The RG as a networkx DiGraph (see `build_rg`); `RGTooLarge` beyond ``limit``."""
+        if self._masks is None:
+            raise RGTooLarge(f"the RG has more than {self.limit} states")
+        if self._nx is None:
+            self._nx = self._to_networkx()
+        return self._nx
+
+    def _to_networkx(self) -> nx.DiGraph:
+        demo, index = self.demo, self.index
+        g = nx.DiGraph(source=demo.source)
+        for m in self._masks:
+            achieved = index.names(m)
+            places = {obj: "P" for obj in demo.objects}
+            for goal in demo.goals:  # demonstrated order: the last achieved goal wins
+                if goal.id in achieved:
+                    places[goal.object] = goal.id
+            g.add_node(achieved, places=places, mask=m)
+        for m, child, gi in self._edges:
+            g.add_edge(index.names(m), index.names(child), goal=index.ids[gi])
+        return g
+
+
 def rg_stats(demo: Demonstration, limit: int = 200_000) -> RGStats:
     """State/edge counts when the RG has at most ``limit`` states, and Alg. 1's count."""
-    index = GoalIndex.of(demo)
-    try:
-        masks, edges = _masks(index, limit)
-    except RGTooLarge:
-        return RGStats(None, None, -1, False)
-    return RGStats(len(masks), len(edges), alg1_node_count(index), True)
+    return ReachabilityGraph(demo, limit).stats
 
 
 def build_rg(demo: Demonstration, limit: int = 200_000) -> nx.DiGraph:
@@ -118,16 +171,4 @@ def build_rg(demo: Demonstration, limit: int = 200_000) -> nx.DiGraph:
     or the id of the goal it last reached); edges carry ``goal`` (the goal achieved).
     Raises `RGTooLarge` beyond ``limit`` states (the planner itself never builds the RG).
     """
-    index = GoalIndex.of(demo)
-    masks, edges = _masks(index, limit)
-    g = nx.DiGraph(source=demo.source)
-    for m in masks:
-        achieved = index.names(m)
-        places = {obj: "P" for obj in demo.objects}
-        for goal in demo.goals:  # demonstrated order: the last achieved goal wins
-            if goal.id in achieved:
-                places[goal.object] = goal.id
-        g.add_node(achieved, places=places, mask=m)
-    for m, child, gi in edges:
-        g.add_edge(index.names(m), index.names(child), goal=index.ids[gi])
-    return g
+    return ReachabilityGraph(demo, limit).networkx()

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
+import networkx as nx
 
 from tamp.demo.model import Demonstration
 from tamp.errors import InfeasibleError
 from tamp.rg.costs import COST_MODELS, CostModel, Metric, planar
-from tamp.rg.graph import RGStats, rg_stats
+from tamp.rg.graph import ReachabilityGraph, RGStats
 from tamp.rg.search import OrderProblem, astar
 from tamp.world.predicates import IsObjectAt
 
@@ -22,7 +24,16 @@ class PlanResult:
     cost_model: str
     expanded: int
     generated: int
-    rg: RGStats
+    reachability: ReachabilityGraph = field(repr=False, compare=False)
+
+    @property
+    def rg(self) -> RGStats:
+        """The RG's sizes (from the one enumeration of this plan)."""
+        return self.reachability.stats
+
+    def graph(self) -> nx.DiGraph:
+        """The RG as networkx (built once per plan; `RGTooLarge` past the stats limit)."""
+        return self.reachability.networkx()
 
     @property
     def c_goal(self) -> list[IsObjectAt]:
@@ -82,5 +93,5 @@ def plan(
         cost_model=cost,
         expanded=result.expanded,
         generated=result.generated,
-        rg=rg_stats(demo, stats_limit),
+        reachability=ReachabilityGraph(demo, stats_limit),
     )

@@ -1,4 +1,5 @@
-"""The symbolic world shared by every layer: geometry, state, predicates, action templates."""
+"""The symbolic world shared by every layer: geometry, state, predicates, action templates,
+and the one `SymbolicWorld` (with its outcome sources) that executors tick against."""
 
 from tamp.world.actions import (
     Action,
@@ -9,6 +10,7 @@ from tamp.world.actions import (
     load_domain,
 )
 from tamp.world.geometry import Area, Point, Pose, Quaternion
+from tamp.world.outcomes import BranchingOutcomes, OutcomeSource, ScriptedOutcomes
 from tamp.world.predicates import (
     DEFAULT_REACH,
     IsAreaFree,
@@ -19,12 +21,14 @@ from tamp.world.predicates import (
     Predicate,
 )
 from tamp.world.state import ObjectState, WorldState
+from tamp.world.symbolic import SymbolicWorld
 
 __all__ = [
     "DEFAULT_REACH",
     "Action",
     "ActionTemplate",
     "Area",
+    "BranchingOutcomes",
     "CondPattern",
     "Domain",
     "IsAreaFree",
@@ -33,10 +37,13 @@ __all__ = [
     "IsObjectAt",
     "IsRobotCloseTo",
     "ObjectState",
+    "OutcomeSource",
     "Point",
     "Pose",
     "Predicate",
     "Quaternion",
+    "ScriptedOutcomes",
+    "SymbolicWorld",
     "WorldState",
     "default_domain",
     "load_domain",

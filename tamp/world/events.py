@@ -19,9 +19,11 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
-from tamp.errors import InputError
+from tamp.errors import InputError, short_repr
 from tamp.world.geometry import Point
 
 _NAME = r"[A-Za-z_][\w\-]*"
@@ -181,6 +183,70 @@ def parse_fail(text: str, *, field: str = "--fail", file: str | None = None) -> 
     return Fail(name, args if "(" in s else None, times)
 
 
+def override(base: Sequence[Appear], flags: Sequence[Appear]) -> list[Appear]:
+    """``base`` (a file's events) with every object named in ``flags`` replaced by the flags'."""
+    named = {a.obj for a in flags}
+    return [a for a in base if a.obj not in named] + list(flags)
+
+
+def check_events(
+    appear: Sequence[Appear],
+    fail: Sequence[Fail],
+    *,
+    objects: Iterable[str],
+    areas: Iterable[str],
+    domain: Any,
+    fields: Mapping[str, str] | None = None,
+    file: str | None = None,
+) -> None:
+    """Refuse events that could never happen as written (exit 2 naming the field).
+
+    An area PLACE must exist; ``after:`` and ``--fail`` must name an action of ``domain``
+    (a `tamp.world.actions.Domain`) with the right number of arguments, and object
+    arguments must be objects of the task or objects that appear. ``fields`` names the
+    flag or file field of each kind (default ``--appear`` / ``--fail``).
+    """
+    fields = {"appear": "--appear", "fail": "--fail", **(fields or {})}
+    area_names = set(areas)
+    known = set(objects) | {a.obj for a in appear}
+    for a in appear:
+        field = fields["appear"]
+        if isinstance(a.place, str) and a.place not in area_names:
+            raise InputError(
+                f"{a}: unknown area {a.place!r} (known: {', '.join(sorted(area_names))})",
+                field=field,
+                file=file,
+            )
+        if isinstance(a.when, AfterAction):
+            _check_action(a.when.name, a.when.args, domain, known, field=field, file=file)
+    for f in fail:
+        _check_action(f.action, f.args, domain, known, field=fields["fail"], file=file)
+
+
+def _check_action(
+    name: str, args: tuple[str, ...] | None, domain: Any, known: set[str], *, field: str, file
+) -> None:
+    templates = domain.templates
+    if name not in templates:
+        raise InputError(
+            f"unknown action {name!r} (known: {', '.join(templates)})", field=field, file=file
+        )
+    if args is None:
+        return
+    params = templates[name].params
+    if len(args) != len(params):
+        raise InputError(
+            f"{name} takes {len(params)} argument(s), got {len(args)}", field=field, file=file
+        )
+    for (_, kind), arg in zip(params, args, strict=True):
+        if kind == "object" and arg not in known:
+            raise InputError(
+                f"{name}: unknown object {arg!r} (known: {', '.join(sorted(known))})",
+                field=field,
+                file=file,
+            )
+
+
 def _number(text: str, *, field: str, file: str | None) -> float:
     try:
         v = float(text)
@@ -195,7 +261,5 @@ def _point_text(p: Point) -> str:
     return f"{p.x:g},{p.y:g},{p.z:g}"
 
 
-def _short(value: object, limit: int = 60) -> str:
-    """A short quoted prefix of a value for error messages (never the whole of a huge line)."""
-    text = repr(str(value))
-    return text if len(text) <= limit else text[: limit - 4] + "...'"
+def _short(value: object) -> str:
+    return short_repr(str(value))

@@ -1,77 +1,93 @@
-"""`SymbolicWorld`: the `World` protocol over a `WorldState`, for tests and benchmarks.
+"""`SymbolicWorld`: the one `World` over a `WorldState`, for runs, tests and verification.
 
-- A skill started at clock ``t`` finishes at the first poll with ``clock >= t + ticks``
-  (``skill_ticks``: one number, or one per action name; 0 finishes on the first poll).
-  When it finishes, its preconditions are checked again; if they hold (and no scripted
-  failure applies) its effects are applied in order (``a.eef(s)``, §IV-C1) and the poll
-  returns SUCCESS, otherwise FAILURE and the state is unchanged. A skill whose
-  preconditions do not hold when it starts fails at its first poll.
-- ``failures``: `ScriptedFailure` entries; the first ``times`` attempts of a matching action
-  fail (e.g. a pick of O1 that fails once).
-- ``events``: `Appear` (an object that was not in the demonstration shows up — Case 3's O_a
-  at l_1) and `Move` (a person moves an object). An event with ``at_tick`` fires when the
-  clock reaches it; an `Appear` without ``at_tick`` fires as soon as the robot is within
-  reach of its position (checked at each `step` and right after each finished skill: the
-  robot discovers it when it gets there, §V-D2).
-- ``step()`` advances the clock by one tick and fires due events; the run loop calls it
-  before each executor tick.
+- Skills: a skill started at clock ``t`` finishes at the first poll with
+  ``clock >= t + ticks`` (``skill_ticks``: one number, or one per action name; 0 finishes on
+  the first poll). A skill whose preconditions do not hold when it starts fails at its
+  first poll; when it finishes its preconditions are checked again (FAILURE, state
+  unchanged, when they no longer hold), then the ``outcomes`` source decides: SUCCESS
+  applies the effects in order (``a.eef(s)``, SMP-MRO §IV-C1), FAILURE leaves the state
+  unchanged. Sources (`tamp.world.outcomes`): `ScriptedOutcomes` (``Fail`` entries, the
+  default: none) and `BranchingOutcomes` (verification explores every outcome).
+- Events: `tamp.world.events.Appear` entries. An object that is not in the state appears;
+  a known object is put there by a person (dropped from the hand if held). PLACE is a point
+  or an area name (its centre in the current state; an unknown area is bad input). WHEN:
+  `AtTick` fires when the clock reaches the tick, `AtTime` when ``clock * tick_period``
+  reaches the time (``tick_period`` seconds per tick, default 0.1 s: the simulated BT
+  period), `AfterAction` right after that skill succeeds (the first time), and None when
+  the robot first comes within ``reach`` of the place (SMP-MRO §V-D2, Case 3's O_a at l_1).
+  Discovery is checked at each `step` and, with ``discover_on_arrival`` (the default),
+  also right after each skill that succeeds, so the robot sees the object in the tick it
+  arrives; the verification explorer turns this off (the object is then seen at the next
+  tick, which is what its state counts were established with).
+- ``step()`` advances the clock by one tick, resets the per-tick record and fires the
+  timed and reach events that are due; run loops call it before each executor tick.
+- Per-tick record (reset by `step`, read by verification labels): ``action_failed`` (a
+  skill finished with FAILURE in this tick), ``placed_in_occupied`` (a skill put an object
+  into an area that already held another one), `tick_events` (the history of this tick).
 - Starting a skill while another runs raises RuntimeError (the protocol's rule) and is
-  counted in ``violations``.
+  counted in ``violations``. ``copy.deepcopy`` is cheap: states, events, actions and the
+  history entries are immutable and shared.
 """
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
+from tamp.errors import InputError
 from tamp.world.actions import Action
+from tamp.world.events import AfterAction, Appear, AtTick, AtTime
 from tamp.world.geometry import Area, Point, Pose
 from tamp.world.interface import Status
-from tamp.world.predicates import DEFAULT_REACH
+from tamp.world.outcomes import OutcomeSource, ScriptedOutcomes
+from tamp.world.predicates import DEFAULT_REACH, IsObjectAt
 from tamp.world.state import WorldState
 
+#: Seconds per tick used to convert `AtTime` events (the Drake scenarios' BT period).
+DEFAULT_TICK_PERIOD = 0.1
 
-@dataclass(frozen=True)
-class ScriptedFailure:
-    """The first ``times`` attempts of ``action`` (with ``args``, if given) fail."""
-
-    action: str
-    args: tuple[str, ...] | None = None
-    times: int = 1
-
-    def matches(self, action: Action) -> bool:
-        return action.name == self.action and (self.args is None or action.args == self.args)
-
-
-@dataclass(frozen=True)
-class Appear:
-    """Object ``obj`` appears at ``pos`` at clock ``at_tick``, or when the robot reaches it."""
-
-    obj: str
-    pos: Point
-    at_tick: int | None = None
+_TEXT = {
+    "start": "start {s}",
+    "success": "{s} -> SUCCESS",
+    "failure": "{s} -> FAILURE",
+    "cancel": "cancel {s}",
+    "appear": "{s} appears at {d}",
+    "move": "{s} is moved to {d}",
+}
 
 
 @dataclass(frozen=True)
-class Move:
-    """At clock ``at_tick`` a person puts object ``obj`` at ``pos`` (it is dropped if held)."""
-
-    obj: str
-    pos: Point
-    at_tick: int
-
-
-@dataclass
 class WorldEvent:
-    """What happened in the world, for reports: start/success/failure/cancel/appear/move."""
+    """What happened in the world: start/success/failure/cancel of a skill, appear/move.
+
+    ``subject`` is the action or the object; ``detail`` why a skill failed, or where the
+    object was put.
+    """
 
     clock: int
     kind: str
-    what: str
+    subject: str
+    detail: str = ""
+
+    @property
+    def what(self) -> str:
+        """One line for reports (``tamp plan --execute --json``'s ``world_events``)."""
+        if self.kind in ("appear", "move"):
+            return f"{self.subject} at {self.detail}"
+        return self.subject + (f": {self.detail}" if self.detail else "")
+
+    def to_json(self) -> dict:
+        return {"clock": self.clock, "kind": self.kind, "what": self.what}
+
+    def __str__(self) -> str:
+        return _TEXT[self.kind].format(s=self.subject, d=self.detail)
 
 
-@dataclass
+@dataclass(frozen=True)
 class _Skill:
+    """One skill attempt; replaced (never changed) when it ends, so copies share it."""
+
     action: Action
     started: int
     ticks: int
@@ -87,22 +103,34 @@ class SymbolicWorld:
         state: WorldState,
         *,
         skill_ticks: int | Mapping[str, int] = 1,
-        failures: Iterable[ScriptedFailure] = (),
-        events: Iterable[Appear | Move] = (),
+        outcomes: OutcomeSource | None = None,
+        events: Iterable[Appear] = (),
         reach: float = DEFAULT_REACH,
+        tick_period: float = DEFAULT_TICK_PERIOD,
+        discover_on_arrival: bool = True,
     ) -> None:
         self.state = state
         self.clock = 0
         self.skill_ticks = skill_ticks
+        self.outcomes: OutcomeSource = outcomes if outcomes is not None else ScriptedOutcomes()
         self.reach = reach
-        self._failures = {i: [f, f.times] for i, f in enumerate(failures)}
+        self.tick_period = tick_period
+        self.discover_on_arrival = discover_on_arrival
         self._events = list(events)
+        for ev in self._events:
+            if isinstance(ev.place, str) and ev.place not in state.areas:
+                raise InputError(
+                    f"{ev}: unknown area {ev.place!r} (known: {', '.join(sorted(state.areas))})",
+                    field="--appear",
+                )
         self._skills: dict[int, _Skill] = {}
         self._next_handle = 1
         self._running: int | None = None
+        self._tick_start = 0
         self.violations = 0
         self.history: list[WorldEvent] = []
-        self.fired: list[Appear | Move] = []
+        self.action_failed = False
+        self.placed_in_occupied = False
 
     # -- World protocol --------------------------------------------------------------------
     def observe(self) -> WorldState:
@@ -114,14 +142,16 @@ class SymbolicWorld:
             raise RuntimeError(
                 f"cannot start {action}: {self._skills[self._running].action} is still running"
             )
-        ticks = self._ticks_for(action.name)
         handle = self._next_handle
         self._next_handle += 1
         self._skills[handle] = _Skill(
-            action, self.clock, ticks, applicable=action.applicable(self.state)
+            action,
+            self.clock,
+            self._ticks_for(action.name),
+            applicable=action.applicable(self.state),
         )
         self._running = handle
-        self.history.append(WorldEvent(self.clock, "start", str(action)))
+        self._record("start", str(action))
         return handle
 
     def poll(self, handle: int) -> Status:
@@ -132,26 +162,27 @@ class SymbolicWorld:
             return self._finish(handle, Status.FAILURE, "preconditions did not hold at start")
         if self.clock - skill.started < skill.ticks:
             return Status.RUNNING
-        if not skill.action.applicable(self.state):
+        action = skill.action
+        if not action.applicable(self.state):
             return self._finish(handle, Status.FAILURE, "preconditions no longer hold")
-        for entry in self._failures.values():
-            f, left = entry
-            if left > 0 and f.matches(skill.action):
-                entry[1] -= 1
-                return self._finish(handle, Status.FAILURE, "scripted failure")
-        self.state = skill.action.apply(self.state)
+        if self.outcomes.outcome(action) is Status.FAILURE:
+            return self._finish(handle, Status.FAILURE, self.outcomes.reason)
+        before = self.state
+        self.state = action.apply(before)
+        if self._into_occupied(action, before):
+            self.placed_in_occupied = True
         status = self._finish(handle, Status.SUCCESS, "")
-        self._fire_due(on_reach_only=True)  # discovered on arrival
+        self._fire_after(action)
         return status
 
     def cancel(self, handle: int) -> None:
         skill = self._skills.get(handle)
         if skill is None or skill.status is not Status.RUNNING:
             return
-        skill.status = Status.FAILURE
+        self._skills[handle] = replace(skill, status=Status.FAILURE)
         if self._running == handle:
             self._running = None
-        self.history.append(WorldEvent(self.clock, "cancel", str(skill.action)))
+        self._record("cancel", str(skill.action))
 
     # -- extensions ------------------------------------------------------------------------
     def add_area(self, area: Area) -> None:
@@ -160,26 +191,64 @@ class SymbolicWorld:
             self.state = self.state.with_area(area)
 
     def step(self) -> None:
-        """Advance the clock one tick and fire the events that are due."""
+        """Advance the clock one tick, reset the per-tick record, fire the due events."""
         self.clock += 1
-        self._fire_due(on_reach_only=False)
-
-    def _fire_due(self, *, on_reach_only: bool) -> None:
-        remaining = []
-        for ev in self._events:
-            if (not on_reach_only or ev.at_tick is None) and self._due(ev):
-                self._fire(ev)
-            else:
-                remaining.append(ev)
-        self._events = remaining
+        self.action_failed = False
+        self.placed_in_occupied = False
+        self._tick_start = len(self.history)
+        self._fire_where(self._due)
 
     @property
     def busy(self) -> bool:
         return self._running is not None
 
+    @property
+    def running(self) -> Action | None:
+        """The action whose skill runs now, if any."""
+        return None if self._running is None else self._skills[self._running].action
+
+    @property
+    def pending_events(self) -> tuple[Appear, ...]:
+        """The events that have not fired yet, in their given order."""
+        return tuple(self._events)
+
     def executed(self) -> list[Action]:
         """Actions whose skill finished with SUCCESS, in order."""
         return [s.action for s in self._skills.values() if s.status is Status.SUCCESS]
+
+    def tick_events(self) -> list[WorldEvent]:
+        """What happened since the last `step` (the history of this tick)."""
+        return self.history[self._tick_start :]
+
+    def clear_history(self) -> None:
+        """Forget the history (long explorations keep their copies small)."""
+        self.history = []
+        self._tick_start = 0
+
+    def fingerprint(self) -> tuple:
+        """A hashable value of everything that decides what this world does next: the
+        state (rounded), the running skill, the outcome source, the pending events, the
+        clock when a timed event is pending, and the per-tick record."""
+        timed = any(isinstance(ev.when, AtTick | AtTime) for ev in self._events)
+        running = self.running
+        return (
+            state_key(self.state),
+            None if running is None else str(running),
+            self.outcomes.key(),
+            tuple(self._events),
+            self.clock if timed else None,
+            self.action_failed,
+            self.placed_in_occupied,
+        )
+
+    def __deepcopy__(self, memo: dict) -> SymbolicWorld:
+        new = copy.copy(self)
+        memo[id(self)] = new
+        new._skills = dict(self._skills)  # skill records are immutable: shared
+        new._events = list(self._events)
+        new.history = list(self.history)
+        new.outcomes = self.outcomes.copy()
+        return new
 
     # -- helpers ---------------------------------------------------------------------------
     def _ticks_for(self, name: str) -> int:
@@ -187,34 +256,82 @@ class SymbolicWorld:
             return int(self.skill_ticks.get(name, 1))
         return int(self.skill_ticks)
 
+    def _record(self, kind: str, subject: str, detail: str = "") -> None:
+        self.history.append(WorldEvent(self.clock, kind, subject, detail))
+
     def _finish(self, handle: int, status: Status, why: str) -> Status:
         skill = self._skills[handle]
-        skill.status = status
+        self._skills[handle] = replace(skill, status=status)
         if self._running == handle:
             self._running = None
-        kind = "success" if status is Status.SUCCESS else "failure"
-        self.history.append(
-            WorldEvent(self.clock, kind, str(skill.action) + (f": {why}" if why else ""))
-        )
+        if status is Status.FAILURE:
+            self.action_failed = True
+        self._record("success" if status is Status.SUCCESS else "failure", str(skill.action), why)
         return status
 
-    def _due(self, ev: Appear | Move) -> bool:
-        if ev.at_tick is not None:
-            return self.clock >= ev.at_tick
-        return self.state.robot.pos.planar_distance(ev.pos) <= self.reach + 1e-9
+    def _into_occupied(self, action: Action, before: WorldState) -> bool:
+        """Did ``action`` put an object into an area that already held another one?"""
+        for e in action.eff:
+            if isinstance(e, IsObjectAt) and e.area in before.areas:
+                area = before.area(e.area)
+                if any(o != e.obj for o in self.state.objects_in(area)):
+                    return True
+        return False
 
-    def _fire(self, ev: Appear | Move) -> None:
+    def _point(self, ev: Appear) -> Point:
+        return self.state.area(ev.place).pos if isinstance(ev.place, str) else ev.place
+
+    def _within_reach(self, ev: Appear) -> bool:
+        return self.state.robot.pos.planar_distance(self._point(ev)) <= self.reach + 1e-9
+
+    def _due(self, ev: Appear) -> bool:
+        when = ev.when
+        if when is None:
+            return self._within_reach(ev)
+        if isinstance(when, AtTick):
+            return self.clock >= when.tick
+        if isinstance(when, AtTime):
+            return self.clock * self.tick_period >= when.seconds - 1e-9
+        return False  # AfterAction: fired by the skill that succeeds
+
+    def _fire_after(self, action: Action) -> None:
+        def due(ev: Appear) -> bool:
+            when = ev.when
+            if isinstance(when, AfterAction):
+                return when.matches(action.name, action.args)
+            return when is None and self.discover_on_arrival and self._within_reach(ev)
+
+        self._fire_where(due)
+
+    def _fire_where(self, due) -> None:
+        if not self._events:
+            return
+        remaining = []
+        for ev in self._events:
+            if due(ev):
+                self._fire(ev)
+            else:
+                remaining.append(ev)
+        self._events = remaining
+
+    def _fire(self, ev: Appear) -> None:
+        p = self._point(ev)
         old = self.state.objects.get(ev.obj)
-        z = ev.pos.z
-        pose = Pose(
-            Point(ev.pos.x, ev.pos.y, z), old.pose.orientation if old else Pose.at(0, 0).orientation
-        )
+        orientation = old.pose.orientation if old else Pose.at(0, 0).orientation
         state = self.state
         if state.held == ev.obj:
             state = state.with_held(None)
-        self.state = state.with_object_at(ev.obj, pose)
-        kind = "appear" if isinstance(ev, Appear) else "move"
-        self.fired.append(ev)
-        self.history.append(
-            WorldEvent(self.clock, kind, f"{ev.obj} at ({ev.pos.x:g}, {ev.pos.y:g})")
-        )
+        self.state = state.with_object_at(ev.obj, Pose(Point(p.x, p.y, p.z), orientation))
+        self._record("move" if old else "appear", ev.obj, f"({p.x:g}, {p.y:g})")
+
+
+def state_key(s: WorldState) -> tuple:
+    """A hashable value of a state, positions rounded to a micrometre (merges equal states)."""
+    return (
+        (round(s.robot.pos.x, 6), round(s.robot.pos.y, 6), round(s.robot.orientation.yaw(), 6)),
+        s.held,
+        tuple(
+            sorted((k, tuple(round(v, 6) for v in o.pos.as_tuple())) for k, o in s.objects.items())
+        ),
+        tuple(sorted(s.areas)),
+    )

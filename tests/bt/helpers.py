@@ -1,4 +1,5 @@
-"""Helpers for the behavior-tree tests: a scripted world for node semantics, hand-built worlds."""
+"""Helpers for the behavior-tree tests: the SymbolicWorld set up for node semantics, hand-built
+worlds."""
 
 from __future__ import annotations
 
@@ -6,66 +7,65 @@ from dataclasses import dataclass
 
 from tamp.world import Area, ObjectState, Point, Pose, WorldState
 from tamp.world.actions import Action, ActionTemplate
+from tamp.world.events import Fail, parse_call
 from tamp.world.interface import Status
+from tamp.world.outcomes import ScriptedOutcomes
 from tamp.world.predicates import Predicate
+from tamp.world.symbolic import SymbolicWorld
 
 
 @dataclass(frozen=True)
 class Flag(Predicate):
-    """A predicate read from a dict state (node-semantics tests only)."""
+    """A flag for node-semantics tests: set while an object of that name exists."""
 
     flag: str
     name = "Flag"
 
-    def holds(self, state) -> bool:
-        return bool(state[self.flag])
+    def holds(self, state: WorldState) -> bool:
+        return self.flag in state.objects
 
 
 def act(name: str) -> Action:
     return Action(ActionTemplate(name, (), (), ()), (), (), ())
 
 
-class ScriptWorld:
-    """Records start/poll/cancel in order; skills return scripted statuses, else RUNNING."""
+def flag_state(**flags: bool) -> WorldState:
+    """A state whose set flags are objects (see `Flag`)."""
+    objects = {f: ObjectState(f, Pose.at(0.0, 0.0)) for f, on in flags.items() if on}
+    return WorldState(robot=Pose.at(0.0, 0.0), objects=objects)
 
-    def __init__(self, **flags: bool) -> None:
-        self.flags = dict(flags)
-        self.calls: list[tuple[str, str]] = []
-        self.outcome: dict[str, Status] = {}
-        self._handles: dict[int, str] = {}
-        self._running: int | None = None
-        self._next = 1
 
-    def observe(self):
-        return dict(self.flags)
+def flag_world(outcomes: dict[str, Status] | None = None, **flags: bool) -> SymbolicWorld:
+    """The SymbolicWorld for node semantics: skills stay RUNNING (`Ctx` never steps the
+    clock and a skill takes one tick), except those given a scripted FAILURE in
+    ``outcomes``, which fail at their first poll, every time."""
+    outcomes = outcomes or {}
+    assert set(outcomes.values()) <= {Status.FAILURE}, "only scripted failures are needed"
+    return SymbolicWorld(
+        flag_state(**flags),
+        skill_ticks={name: 0 for name in outcomes},
+        outcomes=ScriptedOutcomes(Fail(name, None, 10**9) for name in outcomes),
+    )
 
-    def start(self, action: Action) -> int:
-        if self._running is not None:
-            raise RuntimeError(f"start {action.name} while {self._handles[self._running]} runs")
-        h = self._next
-        self._next += 1
-        self._handles[h] = action.name
-        self._running = h
-        self.calls.append(("start", action.name))
-        return h
 
-    def poll(self, handle: int) -> Status:
-        name = self._handles[handle]
-        st = self.outcome.get(name, Status.RUNNING)
-        if st is not Status.RUNNING and self._running == handle:
-            self._running = None
-        return st
+def set_flags(world: SymbolicWorld, **flags: bool) -> None:
+    """Change flags between ticks (what a person or a skill would do to the state)."""
+    on = {f: True for f in world.state.objects}
+    on.update(flags)
+    world.state = flag_state(**on)
 
-    def cancel(self, handle: int) -> None:
-        self.calls.append(("cancel", self._handles[handle]))
-        if self._running == handle:
-            self._running = None
+
+def calls(world: SymbolicWorld) -> list[tuple[str, str]]:
+    """Skill starts and cancels, in order, as (kind, action name)."""
+    return [
+        (e.kind, parse_call(e.subject)[0]) for e in world.history if e.kind in ("start", "cancel")
+    ]
 
 
 class Ctx:
     """A minimal tick context (what PaBtExecutor provides) for hand-built trees."""
 
-    def __init__(self, world: ScriptWorld) -> None:
+    def __init__(self, world: SymbolicWorld) -> None:
         from tamp.bt.executor import PaBtExecutor
 
         self.ex = PaBtExecutor.__new__(PaBtExecutor)

@@ -8,16 +8,12 @@ import json
 import pytest
 
 from tamp import scenarios
-from tamp.commands.execute_args import (
-    add_execute_arguments,
-    parse_failure,
-    parse_obstacle,
-    run_execute,
-)
+from tamp.commands.execute_args import add_execute_arguments, run_execute
 from tamp.demo import load_demonstration
 from tamp.errors import InputError
 from tamp.rg import plan
-from tamp.world import default_domain
+from tamp.world import Point
+from tamp.world.events import AtTick, parse_appear, parse_fail
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -31,7 +27,7 @@ def _parser() -> argparse.ArgumentParser:
 def _run(argv: list[str], capsys) -> tuple[int, str, str]:
     args = _parser().parse_args(argv)
     demo = load_demonstration(scenarios.resolve(args.demo))
-    code = run_execute(args, demo, plan(demo))
+    code = run_execute(args, demo, plan(demo), verify=False)
     out = capsys.readouterr()
     return code, out.out, out.err
 
@@ -39,7 +35,7 @@ def _run(argv: list[str], capsys) -> tuple[int, str, str]:
 def test_execute_case3_json(tmp_path, capsys) -> None:
     xml, dot = tmp_path / "bt.xml", tmp_path / "bt.dot"
     code, out, _ = _run(
-        ["case3.yaml", "--execute", "--obstacle", "Oa@2.2,0.8,0.1", "--json",
+        ["case3.yaml", "--execute", "--appear", "Oa@2.2,0.8,0.1", "--json",
          "--bt-xml", str(xml), "--bt-dot", str(dot)],
         capsys,
     )  # fmt: skip
@@ -57,38 +53,37 @@ def test_execute_case3_json(tmp_path, capsys) -> None:
 
 
 def test_execute_text_and_failure_exit_status(capsys) -> None:
-    code, out, err = _run(["case1.yaml", "--execute", "--fail", "Pick:O1:9"], capsys)
+    code, out, err = _run(["case1.yaml", "--execute", "--fail", "Pick(O1)x9"], capsys)
     assert code == 1
     assert "Pick(O1) failed" in out and "goal not reached" in err
     code, out, _ = _run(["case1.yaml", "--execute"], capsys)
     assert code == 0 and "SUCCESS" in out and "Place(O0, L0)" in out
 
 
-@pytest.mark.parametrize("text", ["Oa", "Oa@1,2,x", "Oa@1", "@1,2,3", "Oa@1,2,3@-1", "O0@1,2,3"])
-def test_bad_obstacle_is_input_error(text: str) -> None:
-    with pytest.raises(InputError, match="--obstacle"):
-        parse_obstacle(text, known={"O0"})
+@pytest.mark.parametrize("text", ["Oa", "Oa@1,2,x", "Oa@1", "@1,2,3", "Oa@1,2,3@-1"])
+def test_bad_appear_is_input_error(text: str) -> None:
+    with pytest.raises(InputError, match="--appear"):
+        parse_appear(text)
 
 
-def test_obstacle_forms() -> None:
-    a = parse_obstacle("Oa@2.2,0.8,0.1")
-    assert (a.obj, a.pos.x, a.pos.y, a.pos.z, a.at_tick) == ("Oa", 2.2, 0.8, 0.1, None)
-    b = parse_obstacle("Ob@-1,2@7")
-    assert (b.pos.x, b.pos.y, b.pos.z, b.at_tick) == (-1.0, 2.0, 0.0, 7)
+def test_appear_forms() -> None:
+    a = parse_appear("Oa@2.2,0.8,0.1")
+    assert (a.obj, a.place, a.when) == ("Oa", Point(2.2, 0.8, 0.1), None)
+    b = parse_appear("Ob@-1,2@7")
+    assert (b.place, b.when) == (Point(-1.0, 2.0, 0.0), AtTick(7))
 
 
-@pytest.mark.parametrize("text", ["Fly:O1", "Place:O1", "Pick:O1:0", "Pick::"])
-def test_bad_failure_is_input_error(text: str) -> None:
+@pytest.mark.parametrize("text", ["Fly(O1)", "Place(O1)", "Pick(O1)x0", "Pick(("])
+def test_bad_failure_is_input_error(text: str, capsys) -> None:
     with pytest.raises(InputError, match="--fail"):
-        parse_failure(text, default_domain())
+        _run(["case1.yaml", "--execute", "--fail", text], capsys)
 
 
 def test_failure_forms() -> None:
-    d = default_domain()
-    assert parse_failure("Pick:O1", d).args == ("O1",)
-    f = parse_failure("Place:O1,L1:2", d)
+    assert parse_fail("Pick(O1)").args == ("O1",)
+    f = parse_fail("Place(O1, L1)x2")
     assert f.args == ("O1", "L1") and f.times == 2
-    assert parse_failure("MoveTo", d).args is None
+    assert parse_fail("MoveTo").args is None
 
 
 def test_execute_uses_the_demonstrations_domain(tmp_path, capsys) -> None:
@@ -108,7 +103,7 @@ def test_execute_uses_the_demonstrations_domain(tmp_path, capsys) -> None:
             "robot:\n  start: [0, 0, 0]\n", f"robot:\n  start: [0, 0, 0]\n  domain: {domain}\n"
         )
     )
-    code, out, _ = _run([str(demo), "--execute", "--fail", "Grasp:O2", "--json"], capsys)
+    code, out, _ = _run([str(demo), "--execute", "--fail", "Grasp(O2)", "--json"], capsys)
     assert code == 0, out
     doc = json.loads(out)
     names = [a["action"] for a in doc["executed"]]
@@ -117,11 +112,11 @@ def test_execute_uses_the_demonstrations_domain(tmp_path, capsys) -> None:
 
 
 def test_fail_on_an_unknown_object_is_bad_input(capsys) -> None:
-    """`--fail Pick:O9` used to be accepted and never to fire (no such object)."""
+    """`--fail Pick(O9)` used to be accepted and never to fire (no such object)."""
     with pytest.raises(InputError, match="unknown object 'O9'"):
-        _run(["case1.yaml", "--execute", "--fail", "Pick:O9"], capsys)
+        _run(["case1.yaml", "--execute", "--fail", "Pick(O9)"], capsys)
     # an object that appears during execution may fail too
     code, out, _ = _run(
-        ["case3.yaml", "--execute", "--obstacle", "Oa@2.2,0.8,0.1", "--fail", "Pick:Oa"], capsys
+        ["case3.yaml", "--execute", "--appear", "Oa@2.2,0.8,0.1", "--fail", "Pick(Oa)"], capsys
     )
     assert code == 0 and "retry Pick(Oa): skill failed" in out

@@ -23,7 +23,7 @@ pytestmark = pytest.mark.filterwarnings("ignore:'setParseAction' deprecated")
 @pytest.fixture(scope="module")
 def grown():
     demo = load_demonstration(scenarios.path("case3.yaml"))
-    report = execute_plan(demo, plan(demo).c_goal, obstacles=[Appear("Oa", Point(2.2, 0.8, 0.1))])
+    report = execute_plan(demo, plan(demo).c_goal, events=[Appear("Oa", Point(2.2, 0.8, 0.1))])
     assert report.reached
     return report.executor.root
 

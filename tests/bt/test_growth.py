@@ -10,9 +10,9 @@ from tamp import scenarios
 from tamp.bt import (
     Appear,
     Condition,
+    Fail,
     PaBtExecutor,
     ReactiveFallback,
-    ScriptedFailure,
     SymbolicWorld,
 )
 from tamp.bt.free_area import choose_free_area
@@ -32,7 +32,9 @@ from tamp.world import (
     default_domain,
 )
 from tamp.world.actions import ActionTemplate, CondPattern, Domain
+from tamp.world.events import AtTick
 from tamp.world.interface import Status
+from tamp.world.outcomes import ScriptedOutcomes
 
 from .helpers import case3_by_hand
 
@@ -92,7 +94,7 @@ CASE3_MOVES = [
 
 def test_case3_discovers_oa_and_recovers_as_in_the_paper() -> None:
     demo, result = _case("case3.yaml")
-    report = execute_plan(demo, result.c_goal, obstacles=[Appear("Oa", OA)])
+    report = execute_plan(demo, result.c_goal, events=[Appear("Oa", OA)])
     assert report.reached, report.reason
     assert _moves(report.executed) == CASE3_MOVES
     names = _names(report.executed)
@@ -112,7 +114,7 @@ def test_case3_discovers_oa_and_recovers_as_in_the_paper() -> None:
 def test_case3_by_hand_full_sequence_with_every_move() -> None:
     state, free = case3_by_hand()
     c_goal = [IsObjectAt("O0", "L0"), IsObjectAt("O1", "L1")]
-    report = execute(state, c_goal, free_areas=free, obstacles=[Appear("Oa", OA)])
+    report = execute(state, c_goal, free_areas=free, events=[Appear("Oa", OA)])
     assert report.reached, report.reason
     assert _names(report.executed) == [
         "MoveTo(O0)", "Pick(O0)", "Place(O0, L0)",
@@ -125,7 +127,7 @@ def test_case3_by_hand_full_sequence_with_every_move() -> None:
 
 def test_case3_obstacle_present_from_the_start_is_cleared_first() -> None:
     demo, result = _case("case3.yaml")
-    report = execute_plan(demo, result.c_goal, obstacles=[Appear("Oa", OA, at_tick=0)])
+    report = execute_plan(demo, result.c_goal, events=[Appear("Oa", OA, AtTick(0))])
     assert report.reached
     ex = _names(report.executed)
     # the hand is free when the blocked place is first planned: no detour for O1
@@ -138,7 +140,7 @@ def test_case3_obstacle_present_from_the_start_is_cleared_first() -> None:
 # -- failures, retries and limits ----------------------------------------------------------
 def test_pick_that_fails_once_is_retried() -> None:
     demo, result = _case("case1.yaml")
-    report = execute_plan(demo, result.c_goal, failures=[ScriptedFailure("Pick", ("O1",), 1)])
+    report = execute_plan(demo, result.c_goal, failures=[Fail("Pick", ("O1",), 1)])
     assert report.reached
     picks = [a for a in report.attempts if a["action"] == "Pick" and a["args"] == ["O1"]]
     assert [p["status"] for p in picks] == ["FAILURE", "SUCCESS"]
@@ -147,9 +149,7 @@ def test_pick_that_fails_once_is_retried() -> None:
 
 def test_persistent_failure_stops_with_a_reason_after_max_retries() -> None:
     demo, result = _case("case1.yaml")
-    report = execute_plan(
-        demo, result.c_goal, failures=[ScriptedFailure("Pick", ("O1",), 99)], max_retries=2
-    )
+    report = execute_plan(demo, result.c_goal, failures=[Fail("Pick", ("O1",), 99)], max_retries=2)
     assert report.status is Status.FAILURE
     assert "Pick(O1) failed 3 times" in report.reason
     picks = [a for a in report.attempts if a["action"] == "Pick" and a["args"] == ["O1"]]
@@ -158,14 +158,12 @@ def test_persistent_failure_stops_with_a_reason_after_max_retries() -> None:
 
 def test_cancelled_skills_are_reported_and_never_overlap() -> None:
     state, free = case3_by_hand()
-    from tamp.world.symbolic import Move
-
     c_goal = [IsObjectAt("O1", "L1")]
     report = execute(
         state,
         c_goal,
         free_areas=free,
-        obstacles=[Move("O1", Point(2.15, 0.85, 0.1), at_tick=3)],
+        events=[Appear("O1", Point(2.15, 0.85, 0.1), AtTick(3))],
         skill_ticks=3,
     )
     assert report.reached
@@ -197,7 +195,7 @@ def test_expansion_keeps_every_achieving_template_under_a_priority_fallback() ->
     domain = Domain("test", {**base.templates, "Push": push})
     state, free = case3_by_hand()
     ex = PaBtExecutor([IsObjectAt("O1", "L1")], domain, free_areas=free)
-    world = SymbolicWorld(state, failures=[ScriptedFailure("Place", ("O1", "L1"), 99)])
+    world = SymbolicWorld(state, outcomes=ScriptedOutcomes([Fail("Place", ("O1", "L1"), 99)]))
     ex.tick(world)
     rf = ex.root.children[0]
     assert isinstance(rf, ReactiveFallback)
@@ -215,7 +213,7 @@ def test_expansion_keeps_every_achieving_template_under_a_priority_fallback() ->
 
 def test_growth_is_logged_with_what_and_why() -> None:
     demo, result = _case("case3.yaml")
-    report = execute_plan(demo, result.c_goal, obstacles=[Appear("Oa", OA)])
+    report = execute_plan(demo, result.c_goal, events=[Appear("Oa", OA)])
     kinds = [e["kind"] for e in report.growth]
     assert kinds[0] == "expand" and "recovery" in kinds and "conflict" in kinds
     rec = next(e for e in report.growth if e["kind"] == "recovery")
@@ -226,7 +224,7 @@ def test_growth_is_logged_with_what_and_why() -> None:
 
 def test_parent_links_stay_consistent_after_growth_and_conflict_moves() -> None:
     demo, result = _case("case3.yaml")
-    report = execute_plan(demo, result.c_goal, obstacles=[Appear("Oa", OA)])
+    report = execute_plan(demo, result.c_goal, events=[Appear("Oa", OA)])
     root = report.executor.root
     seen = set()
     for n in root.walk():
@@ -276,7 +274,7 @@ def test_two_blockers_are_both_moved_to_distinct_free_areas() -> None:
     state = state.with_object_at("Ob", Pose.at(2.25, 0.8, 0.1))
     c_goal = [IsObjectAt("O1", "L1")]
     report = execute(
-        state, c_goal, free_areas=free, obstacles=[Appear("Oa", Point(2.15, 0.8, 0.1), 0)]
+        state, c_goal, free_areas=free, events=[Appear("Oa", Point(2.15, 0.8, 0.1), AtTick(0))]
     )
     assert report.reached, report.reason
     final = report.final
@@ -293,7 +291,7 @@ def test_two_blockers_are_both_moved_to_distinct_free_areas() -> None:
 
 def test_ring_search_when_no_demonstration_free_area_is_left() -> None:
     state, _ = case3_by_hand()
-    report = execute(state, [IsObjectAt("O1", "L1")], free_areas=[], obstacles=[Appear("Oa", OA)])
+    report = execute(state, [IsObjectAt("O1", "L1")], free_areas=[], events=[Appear("Oa", OA)])
     assert report.reached, report.reason
     found = report.stats["free_areas_found"]
     assert found and all(name.startswith("free_auto") for name in found)
@@ -359,7 +357,7 @@ def test_free_area_overlapping_a_goal_area_is_never_chosen() -> None:
 @pytest.mark.parametrize("ticks", [0, 1, 3])
 def test_case3_result_does_not_depend_on_skill_duration(ticks: int) -> None:
     demo, result = _case("case3.yaml")
-    report = execute_plan(demo, result.c_goal, obstacles=[Appear("Oa", OA)], skill_ticks=ticks)
+    report = execute_plan(demo, result.c_goal, events=[Appear("Oa", OA)], skill_ticks=ticks)
     assert report.reached
     assert _moves(report.executed) == CASE3_MOVES
 
@@ -392,3 +390,25 @@ def test_livelock_between_two_places_is_detected_and_stops() -> None:
     moves = _names(report.executed)
     assert moves[:3] == ["MoveTo(L0)", "MoveTo(L1)", "MoveTo(L0)"]
     assert len(moves) <= 6
+
+
+def test_snapshot_restore_replays_the_same_run_and_state_key_tracks_it() -> None:
+    demo, result = _case("case3.yaml")
+    world = SymbolicWorld(demo.initial_world(), events=[Appear("Oa", OA)])
+    ex = PaBtExecutor(result.c_goal, free_areas=[a.name for a in demo.free_areas])
+    while ex.tick_id < 12:
+        world.step()
+        ex.tick(world)
+    snap, key, at = ex.snapshot(history=False), ex.state_key(), copy.deepcopy(world)
+    assert ex.log and not snap.executor.log  # report-only history left out
+    first = ex.run(world, step=world.step)
+    done = [str(a) for a in ex.executed]
+    assert ex.state_key() != key
+    ex.restore(snap)
+    assert ex.state_key() == key and ex.result is None
+    again = ex.run(at, step=at.step)
+    assert first is again is Status.SUCCESS
+    assert done[-len(ex.executed) :] == [str(a) for a in ex.executed]
+    assert at.observe() == world.observe()
+    ex.restore(snap)  # a snapshot restores any number of times
+    assert ex.state_key() == key

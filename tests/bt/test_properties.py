@@ -7,9 +7,10 @@ from __future__ import annotations
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tamp.bt import Appear, ScriptedFailure
+from tamp.bt import Appear, Fail
 from tamp.bt.run import execute
 from tamp.world import Area, IsObjectAt, ObjectState, Point, Pose, WorldState
+from tamp.world.events import AtTick
 
 RADIUS = 0.15
 CELLS = [(0.6 + 0.8 * i, -2.0 + 0.8 * j) for i in range(6) for j in range(6)]
@@ -40,11 +41,13 @@ def scenarios(draw):
         dx, dy = draw(st.tuples(st.floats(-0.1, 0.1), st.floats(-0.1, 0.1)))
         tick = draw(st.one_of(st.none(), st.integers(0, 40)))
         x, y = goals[k]
-        obstacles.append(Appear(f"X{j}", Point(x + dx, y + dy, 0.1), tick))
+        obstacles.append(
+            Appear(f"X{j}", Point(x + dx, y + dy, 0.1), None if tick is None else AtTick(tick))
+        )
     failures = []
     if draw(st.booleans()):
         name = draw(st.sampled_from(["MoveTo", "Pick", "Place"]))
-        failures.append(ScriptedFailure(name, None, 1))
+        failures.append(Fail(name, None, 1))
     skill_ticks = draw(st.integers(0, 3))
     return state, c_goal, [f"free{k + 1}" for k in range(n_free)], obstacles, failures, skill_ticks
 
@@ -54,7 +57,7 @@ def scenarios(draw):
 def test_random_demonstrations_reach_every_goal(case) -> None:
     state, c_goal, free, obstacles, failures, skill_ticks = case
     report = execute(
-        state, c_goal, free_areas=free, obstacles=obstacles, failures=failures,
+        state, c_goal, free_areas=free, events=obstacles, failures=failures,
         skill_ticks=skill_ticks,
     )  # fmt: skip
     assert report.reached, report.reason
@@ -108,8 +111,8 @@ def test_random_demonstrations_through_the_rg_layer(case) -> None:
         Appear(f"X{j}", Point(g.pos.x + 0.05, g.pos.y, 0.1), None)
         for j, g in enumerate(demo.goals[:n_obstacles])
     ]
-    failures = [ScriptedFailure("Pick", None, 1)] if fail else []
-    report = execute_plan(demo, result.c_goal, obstacles=obstacles, failures=failures)
+    failures = [Fail("Pick", None, 1)] if fail else []
+    report = execute_plan(demo, result.c_goal, events=obstacles, failures=failures)
     assert report.reached, report.reason
     assert report.goals_reached == len(result.c_goal)
     for c in last.values():

@@ -13,9 +13,10 @@ from tamp.demo import load_demonstration
 from tamp.errors import InfeasibleError, InputError
 from tamp.rg import build_rg, plan
 from tamp.scenarios import path
+from tamp.world.events import Appear, Fail
 from tests.verification.ltlf_oracle import lasso_violates
 from verification import VerificationError, gate
-from verification.bt import appear_event, check_executor, executor_for
+from verification.bt import check_tree, executor_for
 from verification.rg import check_graph, check_order, constraint_formula, order_word
 
 
@@ -211,13 +212,13 @@ def place_with(place, con):
 def test_bt_case3_with_obstacle_holds_and_counts_states() -> None:
     demo = load_demonstration(path("case3.yaml"))
     exe = executor_for(demo)
-    events = [appear_event("Oa", demo.goal("G1").area.pos)]
-    r0 = check_executor(exe, demo.initial_world(), events=events, max_failures=0)
-    r1 = check_executor(exe, demo.initial_world(), events=events, max_failures=1)
+    events = [Appear("Oa", demo.goal("G1").area.pos)]
+    r0 = check_tree(exe, demo.initial_world(), events=events, max_failures=0)
+    r1 = check_tree(exe, demo.initial_world(), events=events, max_failures=1)
     assert r0.holds and r1.holds
     assert r1.states_explored > r0.states_explored
     # the robot grasps the obstacle on its way (Case 3 recovery) -- shown by a counterexample
-    r = check_executor(
+    r = check_tree(
         exe, demo.initial_world(), ['G !"IsGraspedObject(Oa)"'], events=events, max_failures=0
     )
     assert not r.holds
@@ -228,11 +229,11 @@ def test_bt_case3_with_obstacle_holds_and_counts_states() -> None:
 def test_bt_single_execution_matches_the_symbolic_world_run(case) -> None:
     """Peer oracle: with no failures the explored path performs exactly the actions that
     the BT layer's own SymbolicWorld run performs."""
-    from tamp.bt import Appear, SymbolicWorld
+    from tamp.bt import SymbolicWorld
 
     demo = load_demonstration(path(case))
     events = [Appear("Oa", demo.goal("G1").area.pos)] if case == "case3.yaml" else []
-    r = check_executor(
+    r = check_tree(
         executor_for(demo), demo.initial_world(), ["G !goal"], events=events, max_failures=0
     )
     assert not r.holds
@@ -250,7 +251,7 @@ def test_bt_single_execution_matches_the_symbolic_world_run(case) -> None:
 
 def test_bt_executions_without_failures_form_one_path() -> None:
     demo = load_demonstration(path("case1.yaml"))
-    ex = check_executor(executor_for(demo), demo.initial_world(), max_failures=0)
+    ex = check_tree(executor_for(demo), demo.initial_world(), max_failures=0)
     v = ex.verdicts[0]
     assert "transitions" in v.subject
     n = ex.explored
@@ -271,12 +272,12 @@ def test_bt_corrupted_domain_is_stopped(case2) -> None:
 
 
 def test_bt_unbounded_failures_break_liveness(case2) -> None:
-    r = check_executor(
+    r = check_tree(
         executor_for(case2),
         case2.initial_world(),
         ["F goal", "F failed | F goal"],
         max_failures=4,
-        may_fail=["Pick"],
+        failures=[Fail("Pick")],
     )
     assert not r.verdicts[0].holds  # Pick can fail more often than the executor retries
     assert r.verdicts[1].holds  # but every execution ends, one way or the other
@@ -284,9 +285,41 @@ def test_bt_unbounded_failures_break_liveness(case2) -> None:
 
 def test_bt_unknown_proposition_is_bad_input(case2) -> None:
     with pytest.raises(InputError):
-        check_executor(executor_for(case2), case2.initial_world(), ["G !nonsense"])
+        check_tree(executor_for(case2), case2.initial_world(), ["G !nonsense"])
 
 
 def test_gate_rejects_unknown_plan_types() -> None:
     with pytest.raises(TypeError):
         gate(object())
+
+
+def test_bt_failures_name_the_skills_that_may_fail() -> None:
+    """`Fail` entries restrict branching to matching skills (arguments included)."""
+    demo = load_demonstration(path("case1.yaml"))
+    state = demo.initial_world()
+    none = check_tree(executor_for(demo), state, ["F goal"], max_failures=0)
+    one = check_tree(executor_for(demo), state, ["F goal"], failures=[Fail("Pick", ("O1",))])
+    picks = check_tree(executor_for(demo), state, ["F goal"], failures=[Fail("Pick")])
+    assert none.explored < one.explored < picks.explored
+    r = check_tree(
+        executor_for(demo), state, ["G !action_failed"], failures=[Fail("Pick", ("O1",))]
+    )
+    assert not r.holds
+    assert any("Pick(O1) -> FAILURE" in s for s in r.counterexample.steps)
+    assert not any("Pick(O0) -> FAILURE" in s for s in r.counterexample.steps)
+
+
+def test_bt_appearance_after_an_action_is_explored() -> None:
+    """`after:` events fire in the tick the skill succeeds; the tree still recovers."""
+    from tamp.world.events import AfterAction
+
+    demo = load_demonstration(path("case3.yaml"))
+    events = [Appear("Oa", "L1", AfterAction("Pick", ("O1",)))]
+    r = check_tree(
+        executor_for(demo), demo.initial_world(), ['G !"IsGraspedObject(Oa)"', "F goal"],
+        events=events, max_failures=0,
+    )  # fmt: skip
+    assert not r.verdicts[0].holds and r.verdicts[1].holds
+    steps = r.counterexample.steps
+    k = next(i for i, s in enumerate(steps) if "Pick(O1) -> SUCCESS" in s)
+    assert "Oa appears at (2.2, 0.8)" in steps[k]

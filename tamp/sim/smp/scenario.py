@@ -147,13 +147,7 @@ class SimScenario:
 
 def scenario_path(name: str | Path) -> Path:
     """A user path if it exists, else ``tamp/scenarios/sim/<name>`` (``.yaml`` optional)."""
-    p = Path(name)
-    if p.exists():
-        return p
-    for cand in (SIM_DIR / str(name), SIM_DIR / f"{name}.yaml"):
-        if cand.exists():
-            return cand
-    return p
+    return scenarios.resolve(name, "sim")
 
 
 def load_scenario(path: str | Path) -> SimScenario:

@@ -1,0 +1,229 @@
+"""The refinement steps (Fig. 3–6, Fig. 13) as pure functions over programs.
+
+Refining the trajectory (§3.2, Fig. 4):
+- Step 1 `locate`: per robot, the behaviors before the manipulation of the object.
+- Step 2 `parallelize`: behavior n joins n + 1 (both before manipulation) when n took less
+  time than n + 1 and nothing obstructs (different sections, n + 1 waits for nothing, n + 1
+  is not already in a group with n's section). n is absorbed: its event becomes a
+  completion marker (Fig. 13). The runner executes the result once and `revert`s a
+  parallelization that collides.
+- `adjust_base_speed` (Fig. 6(c)): in a group whose base motion outlasts the other
+  behaviors, the base speed grows so that it ends with them.
+
+Refining the communication rate (§3.3, Fig. 5):
+- `RateSearch`: raise P by a step while the triggering sensor's samples arrive without
+  delay (wait below the threshold); on the first delayed probe keep the previous P. The
+  same object drives the offline search (`refine_rate`, any measured wait function) and
+  the RateTuningSupervisor in the simulation.
+- `apply_rate` (Step 3): set the robot's P and scale the base speed by the same ratio. A
+  section advances one step per command, so the arm's and gripper's speeds follow P by
+  construction; the file states every speed at its behavior's rate, so they scale too.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+
+from tamp.refine.program import Program, RobotProgram, event_id
+
+# ----------------------------------------------------------------------------- Step 1
+
+
+def locate(program: Program) -> dict[str, tuple[int, ...]]:
+    """Step 1: indices of each robot's behaviors before its first manipulating behavior
+    (all of them when none is marked ``manipulates``)."""
+    out = {}
+    for r in program.robots:
+        first = next((i for i, b in enumerate(r.behaviors) if b.manipulates), len(r.behaviors))
+        out[r.name] = tuple(range(first))
+    return out
+
+
+# ----------------------------------------------------------------------------- Step 2
+
+
+@dataclass(frozen=True)
+class Parallelization:
+    """Behavior ``absorbed`` (n) of ``robot`` now starts with ``host`` (n + 1)."""
+
+    robot: str
+    absorbed: str
+    host: str
+
+    def describe(self) -> str:
+        return f"{self.robot}: {self.absorbed} runs in parallel with {self.host}"
+
+
+def _group_sections(r: RobotProgram, i: int) -> set[str]:
+    """Sections of the group that behavior ``i`` belongs to (up to and including ``i``)."""
+    sections = {r.behaviors[i].section}
+    while i > 0 and r.behaviors[i].parallel_with is not None:
+        i -= 1
+        sections.add(r.behaviors[i].section)
+    return sections
+
+
+def obstruction(r: RobotProgram, n: int) -> str | None:
+    """Why behavior n + 1 cannot start with n (None: nothing obstructs)."""
+    a, b = r.behaviors[n], r.behaviors[n + 1]
+    if b.parallel_with is not None:
+        return f"{b.name} already runs in parallel"
+    if b.section in _group_sections(r, n):
+        return f"{a.name} and {b.name} share the {b.section}"
+    if b.waits_for:
+        return f"{b.name} waits for {', '.join(b.waits_for)}"
+    if b.event.after == event_id(r.name, a.name):
+        return f"{b.name} ends after {a.name}"
+    return None
+
+
+def parallelize(
+    program: Program, durations: Mapping[str, float]
+) -> tuple[Program, list[Parallelization]]:
+    """Step 2 over the behaviors located by Step 1, using measured ``durations`` (event id ->
+    seconds). Returns the new program and what was parallelized, in order."""
+    done: list[Parallelization] = []
+    pre = locate(program)
+    for r in program.robots:
+        idx = pre[r.name]
+        for n in idx:
+            if n + 1 not in idx:
+                continue
+            cur = program.robot(r.name)
+            a, b = cur.behaviors[n], cur.behaviors[n + 1]
+            ta, tb = (
+                durations.get(event_id(r.name, a.name)),
+                durations.get(event_id(r.name, b.name)),
+            )
+            if ta is None or tb is None or not ta < tb or obstruction(cur, n) is not None:
+                continue
+            program = program.with_behavior(
+                r.name, n + 1, replace(b, parallel_with=a.name, rate_hz=a.rate_hz)
+            )
+            done.append(Parallelization(r.name, a.name, b.name))
+    return program, done
+
+
+def revert(program: Program, p: Parallelization) -> Program:
+    """Undo one parallelization (the host waits for the absorbed behavior's event again)."""
+    r = program.robot(p.robot)
+    i = r.index(p.host)
+    return program.with_behavior(p.robot, i, replace(r.behaviors[i], parallel_with=None))
+
+
+@dataclass(frozen=True)
+class SpeedChange:
+    """Base behavior ``event``'s speed went from ``old`` to ``new`` to end with ``partner``."""
+
+    event: str
+    old: float
+    new: float
+    partner: str
+
+    def describe(self) -> str:
+        return (
+            f"{self.event}: base speed {self.old:.4g} -> {self.new:.4g} (ends with {self.partner})"
+        )
+
+
+def adjust_base_speed(
+    program: Program, durations: Mapping[str, float]
+) -> tuple[Program, list[SpeedChange]]:
+    """Fig. 6(c): in each parallel group, a base motion that took longer than the group's
+    other behaviors is sped up by the ratio of the durations so that it ends with them."""
+    changes: list[SpeedChange] = []
+    for r in program.robots:
+        for group in r.groups():
+            if len(group) < 2:
+                continue
+            members = [r.behaviors[i] for i in group]
+            others = [
+                (durations.get(event_id(r.name, b.name)), b.name)
+                for b in members
+                if b.section != "base"
+            ]
+            others = [(t, n) for t, n in others if t is not None]
+            if not others:
+                continue
+            target, partner = max(others)
+            for i in group:
+                b = r.behaviors[i]
+                t = durations.get(event_id(r.name, b.name))
+                if b.section != "base" or t is None or t <= target or target <= 0:
+                    continue
+                speed = b.motion.speed * t / target
+                new = replace(b, motion=replace(b.motion, speed=speed))
+                program = program.with_behavior(r.name, i, new)
+                changes.append(
+                    SpeedChange(event_id(r.name, b.name), b.motion.speed, speed, partner)
+                )
+    return program, changes
+
+
+# ----------------------------------------------------------------------------- Fig. 5
+
+
+@dataclass(frozen=True)
+class RateSearch:
+    """Fig. 5, Step 2 as a state machine: probe ``rate``; `observe` its measured wait.
+
+    Starts at ``current + step``. A probe whose wait is at most ``threshold`` raises the
+    rate by ``step``; the first delayed probe ends the search with the rate before the last
+    increment (``found``). ``limit`` caps the rate (commands faster than the sensors are
+    not useful); reaching it also ends the search.
+    """
+
+    current: float
+    step: float
+    threshold: float
+    limit: float
+    rate: float = 0.0
+    found: float | None = None
+    probes: tuple[tuple[float, float], ...] = ()  # (rate, measured wait)
+
+    def __post_init__(self) -> None:
+        if self.rate == 0.0:
+            object.__setattr__(self, "rate", min(self.current + self.step, self.limit))
+        if self.current >= self.limit and self.found is None:
+            object.__setattr__(self, "found", self.current)
+
+    @property
+    def done(self) -> bool:
+        return self.found is not None
+
+    @property
+    def validated(self) -> float:
+        """The highest rate known to deliver without delay so far."""
+        if self.found is not None:
+            return self.found
+        return self.rate - self.step if self.rate > self.current else self.current
+
+    def observe(self, wait: float) -> RateSearch:
+        """The probe at ``rate`` measured ``wait`` (s): the next state of the search."""
+        if self.done:
+            return self
+        probes = self.probes + ((self.rate, wait),)
+        if wait > self.threshold:
+            return replace(self, found=self.validated, probes=probes)
+        if self.rate >= self.limit:
+            return replace(self, found=self.rate, probes=probes)
+        return replace(self, rate=min(self.rate + self.step, self.limit), probes=probes)
+
+
+def refine_rate(search: RateSearch, measure: Callable[[float], float]) -> RateSearch:
+    """Run the search to its end with ``measure(rate) -> wait`` (s)."""
+    while not search.done:
+        search = search.observe(measure(search.rate))
+    return search
+
+
+def apply_rate(program: Program, robot: str, rate: float) -> Program:
+    """Step 3: robot ``robot`` commands at ``rate``; every motion's speed scales by the
+    ratio of the new rate to the behavior's old one, so the step per command is kept."""
+    r = program.robot(robot)
+    for i, b in enumerate(r.behaviors):
+        ratio = rate / program.rate(b)
+        motion = replace(b.motion, speed=b.motion.speed * ratio)
+        program = program.with_behavior(robot, i, replace(b, rate_hz=rate, motion=motion))
+    return program

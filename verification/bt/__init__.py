@@ -1,0 +1,21 @@
+"""Verification of grown behavior trees: every execution explored and model-checked.
+
+Modules, one job each: `explore` (the executions as a transition system, on the one
+`SymbolicWorld` with branching outcomes), `labels` (the propositions properties may use),
+`check` (`check_tree`, the entry point), `demo` (an executor for a demonstration).
+"""
+
+from verification.bt.check import check_tree
+from verification.bt.demo import executor_for
+from verification.bt.explore import Exploration, explore
+from verification.bt.labels import DEFAULT_PROPERTIES, FLAGS, Labeller
+
+__all__ = [
+    "DEFAULT_PROPERTIES",
+    "FLAGS",
+    "Exploration",
+    "Labeller",
+    "check_tree",
+    "executor_for",
+    "explore",
+]

@@ -1,0 +1,57 @@
+"""`check_tree`: model-check every explored execution of a grown tree against LTL properties."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+import spot
+
+from tamp.bt.executor import PaBtExecutor
+from tamp.world.events import Appear, Fail
+from tamp.world.state import WorldState
+from verification import ltl
+from verification.bt.explore import explore
+from verification.bt.labels import DEFAULT_PROPERTIES
+from verification.kripke import model_check
+from verification.verdict import Report
+
+
+def check_tree(
+    executor: PaBtExecutor,
+    state: WorldState,
+    properties: Sequence[str | spot.formula] = DEFAULT_PROPERTIES,
+    *,
+    events: Iterable[Appear] = (),
+    failures: Iterable[Fail] | None = None,
+    max_failures: int = 1,
+    max_states: int = 50_000,
+    subject: str = "BT",
+) -> Report:
+    """Every execution of ``executor`` from ``state`` against each property.
+
+    ``events``: interference (`Appear`). ``failures``: the skills that may fail (`Fail`
+    entries; None: every skill), at most ``max_failures`` failures per execution.
+    ``executor`` is not ticked (the exploration works on copies). Properties use the
+    propositions of `verification.bt.labels`; an unknown one is an `InputError`.
+    """
+    formulas = [
+        p if isinstance(p, spot.formula) else ltl.parse_formula(p, field="--property")
+        for p in properties
+    ]
+    aps = sorted({a for f in formulas for a in ltl.ap_names(f)})
+    ex = explore(
+        executor,
+        state,
+        aps,
+        events=events,
+        failures=failures,
+        max_failures=max_failures,
+        max_states=max_states,
+    )
+    bound = "" if ex.complete else f", BOUNDED at {max_states} states"
+    name = (
+        f"{subject} ({ex.system.num_states} states, {ex.system.num_edges} transitions, "
+        f"≤{max_failures} failure(s){bound})"
+    )
+    verdicts = [model_check(ex.system, f, subject=name) for f in formulas]
+    return Report(verdicts, explored=ex.system.num_states)

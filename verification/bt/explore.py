@@ -1,0 +1,148 @@
+"""Every execution of a grown behavior tree, as an explicit transition system.
+
+SMP-MRO grows its tree at run time (§IV-C, Alg. 2-3), so what must be verified is the
+*executor* (`tamp.bt.PaBtExecutor`: tree + growth rules), not one static tree. The
+exploration runs copies of the real executor, tick by tick, against the one
+`tamp.world.SymbolicWorld` configured for it: every skill takes one tick and then either
+succeeds (effects applied, §IV-C1 ``a.eef``) or fails (state unchanged), as chosen by a
+`BranchingOutcomes` source. Each tick is replayed from the executor's snapshot
+(`ExecutorSnapshot.resume`) and a copy of the world once per combination of skill
+outcomes, so the graph holds every execution the executor can produce. A state is keyed by
+(`PaBtExecutor.state_key`, `SymbolicWorld.fingerprint`, label); equal keys are merged,
+which makes the graph finite and the count meaningful.
+
+Choices written down here:
+- Failures are bounded: at most ``max_failures`` skill failures per execution (default 1),
+  of the skills matching ``failures`` (`tamp.world.events.Fail` entries; None: every
+  skill). With unbounded failures no controller reaches its goal on every path (a skill
+  can fail forever); the executor's own retry limit still applies inside that budget.
+- Interference is `tamp.world.events.Appear` events. An object discovered on reach is seen
+  at the tick after the robot arrives (``discover_on_arrival=False``; `tamp plan
+  --execute` sees it in the arrival tick).
+- The exploration is bounded by ``max_states``; when the bound is hit the states left
+  unexpanded are recorded (`TransitionSystem.unexpanded`): a path that stops there is a
+  counterexample only when it is already a bad prefix (see `verification.kripke`), never
+  merely because the exploration stopped.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections import deque
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from tamp.bt.executor import ExecutorSnapshot, PaBtExecutor
+from tamp.world.events import Appear, Fail
+from tamp.world.interface import Status
+from tamp.world.outcomes import BranchingOutcomes
+from tamp.world.state import WorldState
+from tamp.world.symbolic import SymbolicWorld
+from verification.bt.labels import Labeller
+from verification.kripke import TransitionSystem
+
+
+@dataclass
+class Exploration:
+    """The explored system, whether it is complete, terminal states and ticks replayed."""
+
+    system: TransitionSystem
+    complete: bool
+    terminal: int
+    ticks: int
+
+
+def branching_world(
+    state: WorldState,
+    *,
+    events: Iterable[Appear] = (),
+    failures: Iterable[Fail] | None = None,
+    max_failures: int = 1,
+) -> SymbolicWorld:
+    """The `SymbolicWorld` the exploration starts from (one tick per skill, branching)."""
+    return SymbolicWorld(
+        state,
+        skill_ticks=1,
+        outcomes=BranchingOutcomes(failures, max_failures),
+        events=events,
+        discover_on_arrival=False,
+    )
+
+
+def explore(
+    executor: PaBtExecutor,
+    state: WorldState,
+    aps: Sequence[str],
+    *,
+    events: Iterable[Appear] = (),
+    failures: Iterable[Fail] | None = None,
+    max_failures: int = 1,
+    max_states: int = 50_000,
+) -> Exploration:
+    """Breadth-first over every execution of ``executor`` from ``state`` (module doc).
+
+    ``executor`` itself is never ticked; states are labelled with the propositions ``aps``
+    (`verification.bt.labels`).
+    """
+    labeller = Labeller(aps, state)
+    world = branching_world(state, events=events, failures=failures, max_failures=max_failures)
+    start = executor.snapshot(history=False)
+    ts = TransitionSystem()
+    index: dict[tuple, int] = {}
+
+    def add(e: PaBtExecutor, w: SymbolicWorld, how: str) -> tuple[int, bool]:
+        label = labeller.label(e, w)
+        key = (e.state_key(), w.fingerprint(), label)
+        if key in index:
+            return index[key], False
+        i = ts.add_state(label, how)
+        index[key] = i
+        return i, True
+
+    root, _ = add(start.executor, world, "start")
+    ts.init = root
+    queue = deque([(root, start, world, start.executor.result is not None)])
+    complete = True
+    terminal = 0
+    ticks = 0
+    while queue:
+        i, snap, w, done = queue.popleft()
+        if done:
+            terminal += 1
+            continue
+        pending: list[list[Status]] = [[]]
+        while pending:
+            choices = pending.pop()
+            work = snap.resume()
+            w2 = copy.deepcopy(w)
+            outcomes = w2.outcomes
+            assert isinstance(outcomes, BranchingOutcomes)
+            outcomes.choose(choices)
+            w2.step()
+            work.tick(w2)
+            ticks += 1
+            decisions = outcomes.decisions
+            for k in range(len(choices), len(decisions)):
+                pending.append(decisions[:k] + [Status.FAILURE])
+            j, new = add(work, w2, _describe_tick(w2, work, choices))
+            ts.add_edge(i, j)
+            if new:
+                if ts.num_states >= max_states:
+                    complete = False
+                    ts.unexpanded = {j, *(q[0] for q in queue)}
+                    queue.clear()
+                    break
+                work.forget_history()
+                w2.clear_history()
+                # ``work`` is not ticked again: it becomes the new state's snapshot as is
+                queue.append((j, ExecutorSnapshot(work), w2, work.result is not None))
+    return Exploration(ts, complete, terminal, ticks)
+
+
+def _describe_tick(w: SymbolicWorld, e: PaBtExecutor, choices: Sequence[Status]) -> str:
+    parts = [str(ev) for ev in w.tick_events()]
+    if Status.FAILURE in choices:
+        parts.append("(outcome chosen: failure)")
+    if e.result is not None:
+        parts.append(f"tree {e.result.value}" + (f" ({e.reason})" if e.reason else ""))
+    return "; ".join(parts) if parts else "tick"
