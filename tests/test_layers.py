@@ -1,0 +1,109 @@
+"""The layering of ARCHITECTURE.md, checked on every import statement of the source tree.
+
+"The arrows go one way: world ← ltl, demo, rg, bt, lots, refine, grasp ← verification ←
+sim ← campaign ← commands." Function-level imports count too (a lazy import is still a
+dependency). Drake is imported only under `tamp/sim/` and by the grasp data renderer,
+Spot only under `tamp/ltl/`, Meshcat only in `tamp/sim/core/recording.py`.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Rank of each layer: a module may import only layers of lower or equal rank.
+RANK = {
+    "tamp.errors": 0,
+    "tamp.fileio": 0.5,
+    "tamp.scenarios": 0.5,
+    "tamp.world": 1,
+    "tamp.ltl": 2,
+    "tamp.demo": 2,
+    "tamp.rg": 3,
+    "tamp.bt": 3,
+    "tamp.lots": 3,
+    "tamp.refine": 3,
+    "tamp.grasp": 3,
+    "verification": 4,
+    "tamp.sim": 5,
+    "tamp.campaign": 6,
+    "tamp.commands": 7,
+    "tamp": 0,  # the package's own __init__
+}
+
+#: Imports that a layer may make of a peer of the same rank (documented dependencies).
+PEERS = {("tamp.rg", "tamp.demo"), ("tamp.lots", "tamp.ltl"), ("tamp.demo", "tamp.world")}
+
+
+def _layer(module: str) -> str | None:
+    best = None
+    for name in RANK:
+        if (module == name or module.startswith(name + ".")) and (
+            best is None or len(name) > len(best)
+        ):
+            best = name
+    return best
+
+
+def _modules():
+    for base in ("tamp", "verification"):
+        for path in sorted((ROOT / base).rglob("*.py")):
+            rel = path.relative_to(ROOT).with_suffix("")
+            parts = list(rel.parts)
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            yield ".".join(parts), path
+
+
+def _imports(path: Path):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name, node.lineno
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            yield node.module, node.lineno
+            for alias in node.names:  # "from tamp import cli" names a module
+                yield f"{node.module}.{alias.name}", node.lineno
+
+
+def test_layers_import_only_downwards():
+    bad = []
+    for module, path in _modules():
+        src = _layer(module)
+        for target, line in _imports(path):
+            dst = _layer(target)
+            if src is None or dst is None or dst == src or src == "tamp":
+                continue
+            if RANK[dst] > RANK[src] or (RANK[dst] == RANK[src] and (src, dst) not in PEERS):
+                bad.append(f"{path.relative_to(ROOT)}:{line}: {src} imports {target}")
+    assert not bad, "\n".join(bad)
+
+
+def test_heavy_libraries_stay_in_their_layer():
+    where = {
+        "pydrake": ("tamp/sim/", "tamp/grasp/synthetic.py"),
+        "spot": ("tamp/ltl/",),
+        "buddy": ("tamp/ltl/",),
+    }
+    bad = []
+    for _, path in _modules():
+        rel = str(path.relative_to(ROOT))
+        for target, line in _imports(path):
+            top = target.split(".")[0]
+            if top in where and not rel.startswith(where[top]):
+                bad.append(f"{rel}:{line}: imports {target}")
+            if target.endswith("Meshcat") and rel != "tamp/sim/core/recording.py":
+                bad.append(f"{rel}:{line}: imports Meshcat")
+    assert not bad, "\n".join(bad)
+
+
+def test_spot_translate_is_called_in_one_file():
+    users = [
+        str(p.relative_to(ROOT))
+        for _, p in _modules()
+        if "spot.translate(" in p.read_text(encoding="utf-8")
+    ]
+    assert users == ["tamp/ltl/translate.py"]
