@@ -79,9 +79,16 @@ class ExecutionReport:
             f"{s['conflicts']} ({s['conflict_moves']} moves), retries {s['retries']}, "
             f"ticks {self.ticks}, tree size {self.tree_size}"
         )
-        for e in self.growth:
-            if e["kind"] in ("recovery", "conflict", "retry", "stop"):
-                lines.append(f"  [tick {e['tick']}] {e['kind']} {e['condition']}: {e['why']}")
+        notes = [
+            (e["clock"], f"  [tick {e['clock']}] {e['kind']}: {e['what']}")
+            for e in self.world_events
+            if e["kind"] in ("appear", "move")
+        ] + [
+            (e["tick"], f"  [tick {e['tick']}] {e['kind']} {e['condition']}: {e['why']}")
+            for e in self.growth
+            if e["kind"] in ("recovery", "conflict", "retry", "stop")
+        ]
+        lines += [text for _, text in sorted(notes, key=lambda n: n[0])]
         summary = self.final.summary()
         lines.append(f"final world: held {summary['held']}, robot {summary['robot'][:2]}")
         for uid, pos in summary["objects"].items():
