@@ -12,6 +12,8 @@ import reprlib
 EXIT_OK = 0
 EXIT_INFEASIBLE = 1
 EXIT_BAD_INPUT = 2
+#: tamp-verify only: a bounded check found no violation but could not establish the property
+EXIT_UNKNOWN = 4
 
 
 def short_repr(value: object, limit: int = 60) -> str:

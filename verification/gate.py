@@ -32,7 +32,8 @@ if TYPE_CHECKING:
 
 
 def _passed(report: Report) -> Report:
-    if not report.holds:
+    """Raise on a violation; an "unknown" (bounded) report passes, its notes saying so."""
+    if report.violated:
         raise VerificationError(report)
     return report
 

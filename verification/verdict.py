@@ -80,20 +80,32 @@ class Verdict:
     holds: bool
     states_explored: int
     counterexample: Counterexample | None = None
+    #: False when the system was explored only up to a bound: then no violation among the
+    #: explored states does not establish the property (status "unknown")
+    complete: bool = True
+
+    @property
+    def status(self) -> str:
+        """``holds``, ``violated`` (a real counterexample), or ``unknown`` (bounded, none found)."""
+        if not self.holds:
+            return "violated"
+        return "holds" if self.complete else "unknown"
 
     def to_json(self) -> dict:
         return {
             "subject": self.subject,
             "formula": self.formula,
             "semantics": self.semantics,
-            "holds": self.holds,
+            "status": self.status,
+            "holds": self.status == "holds",
             "states_explored": self.states_explored,
             "counterexample": self.counterexample.to_json() if self.counterexample else None,
         }
 
     def text(self) -> str:
+        word = {"holds": "holds", "violated": "VIOLATED", "unknown": "UNKNOWN (bounded)"}
         head = (
-            f"{self.subject}: {'holds' if self.holds else 'VIOLATED'} "
+            f"{self.subject}: {word[self.status]} "
             f"({self.semantics}; {self.states_explored} states explored)\n  formula: {self.formula}"
         )
         if self.counterexample is None:
@@ -112,8 +124,19 @@ class Report:
     notes: list[str] = field(default_factory=list)
 
     @property
+    def status(self) -> str:
+        """``violated`` if any verdict is, else ``unknown`` if any is, else ``holds``."""
+        kinds = {v.status for v in self.verdicts}
+        return "violated" if "violated" in kinds else "unknown" if "unknown" in kinds else "holds"
+
+    @property
     def holds(self) -> bool:
-        return all(v.holds for v in self.verdicts)
+        """Every property established (a bounded "no violation found" does not count)."""
+        return self.status == "holds"
+
+    @property
+    def violated(self) -> bool:
+        return self.status == "violated"
 
     @property
     def states_explored(self) -> int:
@@ -133,6 +156,7 @@ class Report:
     def to_json(self) -> dict:
         ce = self.counterexample
         return {
+            "status": self.status,
             "holds": self.holds,
             "counterexample": ce.to_json() if ce else None,
             "states_explored": self.states_explored,

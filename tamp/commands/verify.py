@@ -7,7 +7,8 @@
     tamp-verify lots TASK.yaml [--interference EVENTS.yaml]
 
 Exit status: 0 the property holds, 1 violated (the counterexample is printed; with
-``--json`` it is in the JSON document), 2 bad input (a formula or letter that does not
+``--json`` it is in the JSON document), 4 unknown (``bt`` with ``--max-states``: the bounded
+exploration found no violation but could not establish the property), 2 bad input (a formula or letter that does not
 parse, a malformed file), 3 internal error. ``--json`` prints at least
 ``{"holds": bool, "counterexample": …, "states_explored": int}``.
 
@@ -22,7 +23,7 @@ from collections.abc import Sequence
 
 from tamp.commands.main import add_version
 from tamp.commands.main import run as run_cli
-from tamp.errors import EXIT_INFEASIBLE, EXIT_OK, InputError
+from tamp.errors import EXIT_INFEASIBLE, EXIT_OK, EXIT_UNKNOWN, InputError
 
 
 def _emit(report, args) -> int:
@@ -32,7 +33,7 @@ def _emit(report, args) -> int:
         print_json(report.to_json())
     else:
         print(report.text())
-    return EXIT_OK if report.holds else EXIT_INFEASIBLE
+    return {"holds": EXIT_OK, "violated": EXIT_INFEASIBLE, "unknown": EXIT_UNKNOWN}[report.status]
 
 
 # -- trace ----------------------------------------------------------------------------------

@@ -135,16 +135,43 @@ def test_plan_empty_order_exits_2(capsys) -> None:
 
 def test_bounded_bt_exploration_reports_no_spurious_violation(capsys) -> None:
     """At the bound the unexpanded states used to stutter forever, so `F goal` was reported
-    VIOLATED by a path that merely stops where the exploration stopped."""
+    VIOLATED by a path that merely stops where the exploration stopped. Since issue 17 such
+    a property is "unknown" (exit 4), never "holds"."""
     rc, out, _ = run(capsys, "bt", str(path("case1.yaml")), "--max-states", "5", "--json")
     doc = json.loads(out)
-    assert rc == 0, out
+    assert rc == 4, out
     assert len(doc["checks"]) == 3
     for v in doc["checks"]:
         assert "BOUNDED" in v["subject"]
-        assert v["holds"] and v["counterexample"] is None
+        assert v["status"] == "unknown" and v["counterexample"] is None
     # a bad prefix inside the explored states is still a violation at the bound
     rc, out, _ = run(
         capsys, "bt", str(path("case1.yaml")), "--max-states", "5", "--property", "G goal"
     )
     assert rc == 1 and "no continuation can satisfy" in out
+
+
+def test_property_naming_an_unknown_object_or_area_is_bad_input(capsys):
+    from tamp.commands.verify import main
+
+    assert main(["bt", "case3.yaml", "--property", 'G !"IsObjectAt(O7, L1)"']) == 2
+    assert "unknown object or area 'O7'" in capsys.readouterr().err
+    assert main(["bt", "case3.yaml", "--property", "G (objects_in_L9 <= 1)"]) == 2
+    assert "unknown area 'L9'" in capsys.readouterr().err
+    # an object that only appears during the run is known
+    assert main(["bt", "case3.yaml", "--property", 'F "IsObjectAt(Oa, free1)"']) == 0
+
+
+def test_bounded_exploration_is_unknown_not_holds(capsys):
+    import json
+
+    from tamp.commands.verify import main
+    from tamp.errors import EXIT_UNKNOWN
+
+    assert main(["bt", "case3.yaml", "--max-states", "20", "--json"]) == EXIT_UNKNOWN
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["status"] == "unknown" and doc["holds"] is False
+    assert {c["status"] for c in doc["checks"]} == {"unknown"}
+    assert "bounded at 20 states" in doc["notes"][0]
+    # a real violation found within the bound is still a violation (exit 1)
+    assert main(["bt", "case3.yaml", "--max-states", "60", "--property", "G !holding"]) == 1

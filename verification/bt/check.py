@@ -49,4 +49,12 @@ def check_tree(
         f"≤{max_failures} failure(s){bound})"
     )
     verdicts = [model_check(ex.system, f, subject=name) for f in formulas]
-    return Report(verdicts, explored=ex.system.num_states)
+    notes = []
+    if not ex.complete:
+        for v in verdicts:
+            v.complete = False
+        notes.append(
+            f"exploration bounded at {max_states} states: a property with no counterexample "
+            "among them is unknown, not established (raise --max-states)"
+        )
+    return Report(verdicts, explored=ex.system.num_states, notes=notes)

@@ -84,7 +84,8 @@ def explore(
     ``executor`` itself is never ticked; states are labelled with the propositions ``aps``
     (`verification.bt.labels`).
     """
-    labeller = Labeller(aps, state)
+    events = list(events)
+    labeller = Labeller(aps, state, appearing=[a.obj for a in events])
     world = branching_world(state, events=events, failures=failures, max_failures=max_failures)
     start = executor.snapshot(history=False)
     ts = TransitionSystem()

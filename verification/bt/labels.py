@@ -15,7 +15,7 @@ names are bad input (``--property``).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 
 from tamp.errors import InputError
 from tamp.ltl.formula import COMPARISON_AP
@@ -61,7 +61,11 @@ def parse_ground_predicate(text: str) -> Predicate | None:
 class Labeller:
     """Truth of each proposition a property uses, on (executor, world) after a tick."""
 
-    def __init__(self, aps: Sequence[str], state: WorldState):
+    def __init__(self, aps: Sequence[str], state: WorldState, appearing: Iterable[str] = ()):
+        #: names a property may mention: the objects and areas of the initial state and the
+        #: objects that appear during the run; any other name is bad input (exit 2)
+        self.known = set(state.objects) | set(state.areas) | set(appearing)
+        self.areas = set(state.areas)
         self.evals: dict[str, Evaluator] = {ap: self._compile(ap, state) for ap in aps}
 
     def label(self, executor, world: SymbolicWorld) -> frozenset[str]:
@@ -76,9 +80,16 @@ class Labeller:
             get = _counter(counter)
             if get is None:
                 raise _unknown(ap)
+            area = counter[len("objects_in_") :] if counter.startswith("objects_in_") else None
+            if area is not None and area not in self.areas:
+                raise _unknown_name(ap, area, "area", self.areas)
             return lambda e, w: _compare(get(w.state), op, value)
         pred = parse_ground_predicate(ap)
         if pred is not None:
+            _, args = parse_call(ap, field="--property")
+            for arg in args:
+                if arg not in self.known and not _is_number(arg):
+                    raise _unknown_name(ap, arg, "object or area", self.known)
             return lambda e, w: _safe_holds(pred, w.state)
         raise _unknown(ap)
 
@@ -90,6 +101,21 @@ def _counter(name: str) -> Callable[[WorldState], int] | None:
         area = name[len("objects_in_") :]
         return lambda s: len(s.objects_in(s.area(area))) if area in s.areas else 0
     return None
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _unknown_name(ap: str, name: str, kind: str, known: Iterable[str]) -> InputError:
+    return InputError(
+        f"{ap!r} names an unknown {kind} {name!r} (known: {', '.join(sorted(known))})",
+        field="--property",
+    )
 
 
 def _unknown(ap: str) -> InputError:
