@@ -7,10 +7,11 @@
     tamp-verify lots TASK.yaml [--interference EVENTS.yaml]
 
 Exit status: 0 the property holds, 1 violated (the counterexample is printed; with
-``--json`` it is in the JSON document), 4 unknown (``bt`` with ``--max-states``: the bounded
-exploration found no violation but could not establish the property), 2 bad input (a formula or letter that does not
-parse, a malformed file), 3 internal error. ``--json`` prints at least
-``{"holds": bool, "counterexample": …, "states_explored": int}``.
+``--json`` it is in the JSON document), 2 bad input (a formula or letter that does not
+parse, a malformed file), 3 internal error, 4 unknown (``bt`` whose exploration hit
+``--max-states`` without a counterexample: nothing established). ``--json`` prints at least
+``{"status": "holds"|"violated"|"unknown", "holds": bool, "counterexample": …,
+"states_explored": int}``.
 
 Spot and the planning layers are imported inside each command, so ``--help`` stays fast.
 """
