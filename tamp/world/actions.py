@@ -185,6 +185,17 @@ def load_domain(path: str | Path) -> Domain:
         )
         if not eff:
             raise item.error("eff", "an action needs at least one effect")
+        for i, e in enumerate(eff):
+            cls, _ = PREDICATES[e.predicate]
+            if cls.achieve is Predicate.achieve:  # e.g. IsAreaFree: a consequence, not an effect
+                achievable = [
+                    n for n, (c, _) in PREDICATES.items() if c.achieve is not Predicate.achieve
+                ]
+                raise item.error(
+                    f"eff[{i}]",
+                    f"no skill can make {e.predicate} true directly "
+                    f"(effects may be: {', '.join(achievable)})",
+                )
         templates[name] = ActionTemplate(
             name=name,
             params=tuple(params.items()),

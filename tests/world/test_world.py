@@ -98,3 +98,19 @@ def test_unreadable_files_are_bad_input(tmp_path, content: bytes) -> None:
         load_domain(p)
     assert str(p) in str(err.value)
     assert main(["plan", str(p)]) == 2
+
+
+def test_domain_effect_no_skill_can_make_true_is_refused_at_load(tmp_path):
+    import pytest
+
+    from tamp.errors import InputError
+    from tamp.world.actions import load_domain
+
+    p = tmp_path / "dom.yaml"
+    p.write_text(
+        "version: 1\nrobot: r\nactions:\n"
+        "  - {name: Clear, params: {l: area}, con: [], eff: [IsAreaFree(l)]}\n"
+    )
+    with pytest.raises(InputError, match="no skill can make IsAreaFree true") as err:
+        load_domain(p)
+    assert err.value.field == "actions[0].eff[0]"
