@@ -1,0 +1,149 @@
+"""Every shell example of README.md and docs/*.md is run and its output compared (issue 17).
+
+An example is a fenced block line ``$ COMMAND`` followed by the output it shows. Rules, so
+that docs cannot drift silently:
+- ``# exit N`` after the command gives the expected exit status (default 0);
+- the shown lines must appear in the real output in order and consecutively, except where
+  a line ``...`` or ``…`` (alone) skips any number of lines or one inside a line matches any
+  text; a blank line ends the example's output;
+- an annotation ``   <- text`` at the end of a shown line is a comment, not output;
+- timings are normalised on both sides (``7.1 s``, ``8.5x``, ``58.3 ms``), nothing else.
+Simulation examples are marked slow (they run a Drake diagram).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+ENTRY = {"tamp": "tamp.commands.main", "tamp-verify": "tamp.commands.verify"}
+_TIMING = re.compile(r"\b\d+(?:\.\d+)?(?= ?(?:s\b|ms\b|x\b|µs\b))")
+
+
+@dataclass
+class Example:
+    file: str
+    line: int
+    command: str
+    exit: int
+    shown: list[str]
+
+    @property
+    def id(self) -> str:
+        return f"{self.file}:{self.line}"
+
+
+def _examples() -> list[Example]:
+    found = []
+    for doc in DOCS:
+        lines = doc.read_text(encoding="utf-8").splitlines()
+        in_block = False
+        current: Example | None = None
+        for n, line in enumerate(lines, 1):
+            if line.startswith("```"):
+                in_block = not in_block
+                current = None
+                continue
+            if not in_block:
+                continue
+            if line.startswith("$ "):
+                text = line[2:]
+                code = 0
+                m = re.search(r"\s+#\s*(.*)$", text)
+                if m:
+                    text = text[: m.start()]
+                    em = re.match(r"exit (\d+)", m.group(1))
+                    code = int(em.group(1)) if em else 0
+                current = Example(doc.name, n, text.strip(), code, [])
+                found.append(current)
+            elif current is not None and not line.strip():
+                current = None
+            elif current is not None:
+                shown = re.sub(r"\s+<-\s.*$", "", line).replace("…", "...").rstrip()
+                current.shown.append(shown)
+    return found
+
+
+def _norm(line: str) -> str:
+    return _TIMING.sub("<n>", line.rstrip())
+
+
+def _matches(shown: str, actual: str) -> bool:
+    shown, actual = _norm(shown), _norm(actual)
+    if "..." not in shown:
+        return shown == actual
+    pattern = ".*".join(re.escape(part) for part in shown.split("..."))
+    return re.fullmatch(pattern, actual) is not None
+
+
+def _compare(shown: list[str], actual: list[str]) -> str | None:
+    """None when ``shown`` matches ``actual`` (see the module docstring), else why not."""
+    chunks: list[list[str]] = [[]]
+    for line in shown:
+        if line.strip() == "...":
+            chunks.append([])
+        else:
+            chunks[-1].append(line)
+    pos = 0
+    for k, chunk in enumerate(chunks):
+        if not chunk:
+            continue
+        anchored = k == 0
+        start_range = [pos] if anchored else range(pos, len(actual) - len(chunk) + 1)
+        for start in start_range:
+            if start + len(chunk) <= len(actual) and all(
+                _matches(s, actual[start + i]) for i, s in enumerate(chunk)
+            ):
+                pos = start + len(chunk)
+                break
+        else:
+            return f"not found in order: {chunk[0]!r}"
+    return None
+
+
+def _params():
+    out = []
+    for ex in _examples():
+        marks = [pytest.mark.slow] if " simulate " in f" {ex.command} " else []
+        out.append(pytest.param(ex, id=ex.id, marks=marks))
+    return out
+
+
+@pytest.mark.parametrize("example", _params())
+def test_doc_example_output(example: Example, tmp_path):
+    argv = shlex.split(example.command)
+    assert argv[0] in ENTRY, f"{example.id}: only tamp and tamp-verify examples are run"
+    env = {**os.environ, "DRAKE_ALLOW_NETWORK": "meshcat", "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run(
+        [sys.executable, "-m", ENTRY[argv[0]], *argv[1:]],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env=env,
+        timeout=600,
+    )
+    assert proc.returncode == example.exit, (
+        f"{example.id}: exit {proc.returncode}, expected {example.exit}\n{proc.stderr}"
+    )
+    why = _compare(example.shown, proc.stdout.splitlines())
+    assert why is None, f"{example.id}: {why}\n--- actual output ---\n{proc.stdout}"
+
+
+def test_the_comparison_itself():
+    actual = ["a", "b 7.1 s", "c", "d", "e"]
+    assert _compare(["a", "b 9.9 s"], actual) is None
+    assert _compare(["a", "...", "d", "e"], actual) is None
+    assert _compare(["a", "c"], actual) is not None  # consecutive unless "..." between
+    assert _compare(["b..."], actual) is not None  # the first chunk is anchored at the top
+    assert _compare(["...", "c", "e"], actual) is not None
+    assert _compare(["...", "d", "e"], actual) is None
+    assert _compare(["a", "...", "x"], actual) is not None
