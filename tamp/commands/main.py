@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import logging
 import os
 import sys
 import traceback
@@ -50,6 +51,24 @@ def build_parser(prog: str, modules: Sequence[str], package: str) -> argparse.Ar
     return parser
 
 
+def configure_logging(prog: str) -> None:
+    """Diagnostics go through `logging` to stderr as ``PROG: message``; ``TAMP_LOG`` sets
+    the level (default INFO; DEBUG shows the progress lines that ``--json`` quiets)."""
+    logger = logging.getLogger("tamp")
+    if not any(getattr(h, "_tamp", False) for h in logger.handlers):
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter(f"{prog}: %(message)s"))
+        handler._tamp = True  # type: ignore[attr-defined]
+        logger.addHandler(handler)
+        logger.propagate = False
+    level = os.environ.get("TAMP_LOG", "INFO").upper()
+    if level not in logging.getLevelNamesMapping():
+        logger.setLevel(logging.INFO)
+        logger.warning("TAMP_LOG=%s is not a logging level; using INFO", level[:20])
+    else:
+        logger.setLevel(level)
+
+
 def _error_json(message: str, code: int, exc: BaseException | None = None) -> None:
     """The ``--json`` form of an error: one document on stdout, beside the stderr line."""
     doc = {
@@ -67,6 +86,7 @@ def run(
 ) -> int:
     """Parse, dispatch, and turn every error into one line plus the right exit status."""
     parser = make_parser()
+    configure_logging(parser.prog)
     argv = list(sys.argv[1:] if argv is None else argv)
     as_json = "--json" in argv
     try:

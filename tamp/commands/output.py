@@ -4,6 +4,7 @@ the ``--no-verify`` flag with its warning line."""
 from __future__ import annotations
 
 import json
+import logging
 import os
 import sys
 from pathlib import Path
@@ -27,9 +28,9 @@ def _default(obj: Any) -> Any:
 
 
 def progress(message: str, *, quiet: bool = False) -> None:
-    """A progress line on stderr, so stdout stays clean for --json."""
-    if not quiet:
-        print(message, file=sys.stderr, flush=True)
+    """A progress line on stderr (through `logging`, logger ``tamp``), so stdout stays clean
+    for --json; ``quiet`` lowers it to DEBUG."""
+    logging.getLogger("tamp").log(logging.DEBUG if quiet else logging.INFO, message)
 
 
 def add_no_verify(parser) -> None:

@@ -85,3 +85,17 @@ def test_no_verify_warns(capsys):
     assert tamp_main(["plan", "case1.yaml", "--no-verify"]) == 0
     err = capsys.readouterr().err
     assert "warning: --no-verify" in err
+
+
+def test_diagnostics_go_through_logging(capsys, caplog, monkeypatch):
+    import logging
+
+    from tamp.commands.output import progress
+
+    progress("working")
+    progress("quiet one", quiet=True)
+    names = [(r.name, r.levelno, r.getMessage()) for r in caplog.records]
+    assert ("tamp", logging.INFO, "working") in names
+    assert ("tamp", logging.DEBUG, "quiet one") in names
+    monkeypatch.setenv("TAMP_LOG", "no-such-level")
+    assert tamp_main(["plan", "case1.yaml", "--no-verify"]) == 0  # a warning, no traceback

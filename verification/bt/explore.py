@@ -32,6 +32,8 @@ from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+from tqdm import tqdm
+
 from tamp.bt.executor import ExecutorSnapshot, PaBtExecutor
 from tamp.world.events import Appear, Fail
 from tamp.world.interface import Status
@@ -106,7 +108,10 @@ def explore(
     complete = True
     terminal = 0
     ticks = 0
+    # progress on stderr for long explorations (tqdm turns itself off when stderr is no TTY)
+    bar = tqdm(desc="exploring", unit=" states", disable=None, leave=False, mininterval=0.5)
     while queue:
+        bar.update(ts.num_states - bar.n)
         i, snap, w, done = queue.popleft()
         if done:
             terminal += 1
@@ -137,6 +142,7 @@ def explore(
                 w2.clear_history()
                 # ``work`` is not ticked again: it becomes the new state's snapshot as is
                 queue.append((j, ExecutorSnapshot(work), w2, work.result is not None))
+    bar.close()
     return Exploration(ts, complete, terminal, ticks)
 
 

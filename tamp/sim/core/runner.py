@@ -15,6 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator, SimulatorConfig
+from tqdm import tqdm
 
 
 def make_simulator(diagram, *, realtime_rate: float = 0.0) -> Simulator:
@@ -57,11 +58,15 @@ def run_in_chunks(
     t = simulator.get_context().get_time()
     stopped = False
     n = 0
+    # progress in sim seconds on stderr (tqdm turns itself off when stderr is no TTY)
+    bar = tqdm(total=round(limit, 1), desc="simulating", unit=" sim s", disable=None, leave=False)
     while t < limit - 1e-9:
         n += 1
         t = min(chunk * n, limit)
         simulator.AdvanceTo(t)
+        bar.update(round(t - bar.n, 1))
         if between(t):
             stopped = True
             break
+    bar.close()
     return ChunkedRun(t, time.perf_counter() - wall0, time.process_time() - cpu0, stopped)
