@@ -60,7 +60,6 @@ def configure_logging(prog: str) -> None:
         handler.setFormatter(logging.Formatter(f"{prog}: %(message)s"))
         handler._tamp = True  # type: ignore[attr-defined]
         logger.addHandler(handler)
-        logger.propagate = False
     level = os.environ.get("TAMP_LOG", "INFO").upper()
     if level not in logging.getLevelNamesMapping():
         logger.setLevel(logging.INFO)

@@ -92,6 +92,7 @@ def test_diagnostics_go_through_logging(capsys, caplog, monkeypatch):
 
     from tamp.commands.output import progress
 
+    caplog.set_level(logging.DEBUG, logger="tamp")
     progress("working")
     progress("quiet one", quiet=True)
     names = [(r.name, r.levelno, r.getMessage()) for r in caplog.records]
