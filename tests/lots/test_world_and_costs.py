@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from tamp.errors import InputError
 from tamp.lots.cell import skill, visible_counts
 from tamp.lots.controller import LotsController
 from tamp.lots.person import ScriptedPerson, actions_done
@@ -57,6 +58,28 @@ def test_holding_event_without_a_pick_happens_during_that_action(tower):
     execute(w, "LookAt", "A")
     assert visible_counts(w.observe(), "A")["cube"] == 1
     assert [(n, phase) for n, phase, _ in person.log] == [(0, "holding")]
+
+
+def test_person_slots_follow_the_robot_actions():
+    """idle N once N actions ended; holding N once the hand holds during action N+1, or
+    during action N+1 itself when it has no pick (a wait); each slot begins once."""
+    p = ScriptedPerson()
+    assert p.slots(0, False) == [(0, "idle")]
+    assert p.slots(0, False) == []
+    assert p.slots(0, True) == [(0, "holding")]  # picked
+    assert p.slots(0, True) == []
+    assert p.slots(1, False) == [(1, "idle")]  # placed
+    assert p.slots(2, False) == [(1, "holding"), (2, "idle")]  # a wait: no pick
+
+
+def test_impossible_scripted_event_names_the_file_and_field(tower):
+    ev = Event(after=0, kind="remove", cls="peak", side="B", where="ev.yaml: events[0]")
+    with pytest.raises(InputError) as err:
+        ScriptedPerson([ev]).act(lots_world(tower))
+    assert err.value.file == "ev.yaml" and err.value.field == "events[0]"
+    lax = ScriptedPerson([ev], strict=False)
+    lax.act(lots_world(tower))
+    assert lax.log == [] and lax.pending_events() == 0
 
 
 def test_per_action_costs_choose_the_cheaper_proposition():
