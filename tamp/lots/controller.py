@@ -14,10 +14,11 @@ the ``lots_arm`` domain (`tamp.lots.cell`: ``LookAt(l)``, ``Pick(k, l)``, ``Plac
 ``Wait(l)``) with ``world.start``, polls it on later ticks, and when it ends takes the next
 decision — which only fixes the skill started on the next tick, so a world (and a person in
 it) can change between any two skills. The only thing the controller reads from the world is
-`tamp.lots.cell.visible_counts` of ``world.observe()`` after a ``LookAt``: the counts per class
-of the workspace under the eye-in-hand camera. Its state is small (belief, counters, the
-pending skill, tree and table) and `snapshot`/`restore` copy it, sharing the automaton and
-planner, so a Drake LeafSystem can keep it in abstract state.
+`tamp.lots.cell.visible_counts` of ``world.observe()`` when a ``LookAt`` ends (it observes at
+no other time): the counts per class of the workspace under the eye-in-hand camera. Its
+state is small (belief, counters, the pending skill, tree and table) and `snapshot`/`restore`
+copy it, sharing the automaton and planner, so a Drake LeafSystem can keep it in abstract
+state.
 
 When the task can no longer be completed (Assumption 1 broken: every hammer taken away, a
 W^B state no run can finish from), the robot waits a bounded number of times and then stops
@@ -45,7 +46,6 @@ from tamp.lots.planner import Entry, Plan, Planner, Table, Tree, initial_lasso
 from tamp.lots.task import Task
 from tamp.world.actions import Action
 from tamp.world.interface import Status, World
-from tamp.world.state import WorldState
 
 
 @dataclass(frozen=True)
@@ -325,7 +325,7 @@ class LotsController:
         done, self.pending, self.handle = self.pending, None, None
         if status is Status.SUCCESS:
             self.failures = 0
-            getattr(self, f"_on_{done.then}")(done, world.observe())
+            getattr(self, f"_on_{done.then}")(done, world)
         else:
             self._on_failure(done)
         return self.result or Status.RUNNING
@@ -397,12 +397,13 @@ class LotsController:
             return
         self._next("look_a", "LookAt", "A")
 
-    def _seen(self, state: WorldState, side: str) -> Counts | None:
-        counts = visible_counts(state, side)
+    def _seen(self, world: World, side: str) -> Counts | None:
+        """What the camera sees of ``side`` now (the only read of the world), as counts."""
+        counts = visible_counts(world.observe(), side)
         return None if counts is None else self.lots.vector(counts)
 
-    def _look_b(self, done: Pending, state: WorldState) -> Counts | None:
-        b_obs = self._seen(state, "B")
+    def _look_b(self, done: Pending, world: World) -> Counts | None:
+        b_obs = self._seen(world, "B")
         if b_obs is None:
             self._on_failure(done)
             return None
@@ -419,9 +420,9 @@ class LotsController:
         elif done.action.name != "Pick":
             self.pending = done
 
-    def _on_look_a(self, done: Pending, state: WorldState) -> None:
+    def _on_look_a(self, done: Pending, world: World) -> None:
         """Alg. 1 lines 5-24 from the view of W^A: remove a surplus, decide, act or wait."""
-        a_obs = self._seen(state, "A")
+        a_obs = self._seen(world, "A")
         if a_obs is None:
             self._on_failure(done)
             return
@@ -461,7 +462,7 @@ class LotsController:
         self.looks = 0
         self._wait(reason, blocked=True)
 
-    def _on_waited(self, done: Pending, state: WorldState) -> None:
+    def _on_waited(self, done: Pending, world: World) -> None:
         self._record("wait", note=done.note)
         self.looks = 0
         if done.blocked:
@@ -469,8 +470,8 @@ class LotsController:
             if self.waits >= self.max_waits:
                 self._stop(f"{done.note} (waited {self.waits} times)")
 
-    def _on_look_b_surplus(self, done: Pending, state: WorldState) -> None:
-        b_obs = self._look_b(done, state)
+    def _on_look_b_surplus(self, done: Pending, world: World) -> None:
+        b_obs = self._look_b(done, world)
         if b_obs is None:
             return
         j = self.lots.surplus(b_obs)
@@ -478,13 +479,13 @@ class LotsController:
             name = self.lots.classes[j]
             self._next("removing", "Pick", name, "B", cls=j, dest=WASTE, note="surplus")
 
-    def _on_look_b_stale(self, done: Pending, state: WorldState) -> None:
-        b_obs = self._look_b(done, state)
+    def _on_look_b_stale(self, done: Pending, world: World) -> None:
+        b_obs = self._look_b(done, world)
         if b_obs is not None and b_obs == done.b:
             self._blocked(done.note)
 
-    def _on_look_b_done(self, done: Pending, state: WorldState) -> None:
-        b_obs = self._look_b(done, state)
+    def _on_look_b_done(self, done: Pending, world: World) -> None:
+        b_obs = self._look_b(done, world)
         if b_obs is None:
             return
         if b_obs == done.b:
@@ -494,8 +495,8 @@ class LotsController:
             self.looks = 0
             self._wait("W^B keeps changing")
 
-    def _on_look_b_remove(self, done: Pending, state: WorldState) -> None:
-        b_obs = self._look_b(done, state)
+    def _on_look_b_remove(self, done: Pending, world: World) -> None:
+        b_obs = self._look_b(done, world)
         if b_obs is None or b_obs != done.b:
             return
         entry = done.entry
@@ -503,23 +504,23 @@ class LotsController:
         name = self.lots.classes[entry.cls]
         self._next("removing", "Pick", name, "B", entry=entry, cls=entry.cls, dest=dest)
 
-    def _on_removing(self, done: Pending, state: WorldState) -> None:
+    def _on_removing(self, done: Pending, world: World) -> None:
         self.pending = Pending("removed", skill("Place", done.dest), **_carry(done))
 
-    def _on_removed(self, done: Pending, state: WorldState) -> None:
+    def _on_removed(self, done: Pending, world: World) -> None:
         self.belief.removed(done.cls, done.dest)
         if done.entry is not None:
             self._last = done.entry
         self._record("remove", done.cls, dest=done.dest, note=done.note)
         self.waits = self.looks = 0
 
-    def _on_picked(self, done: Pending, state: WorldState) -> None:
+    def _on_picked(self, done: Pending, world: World) -> None:
         self.belief.picked(done.cls)
         self.pending = Pending("carried", skill("LookAt", "B"), **_carry(done))
 
-    def _on_carried(self, done: Pending, state: WorldState) -> None:
+    def _on_carried(self, done: Pending, world: World) -> None:
         """At W^B with the object: place it, or re-decide if W^B changed meanwhile."""
-        b_obs = self._look_b(done, state)
+        b_obs = self._look_b(done, world)
         if b_obs is None:
             return
         self.waits = self.looks = 0
@@ -536,16 +537,16 @@ class LotsController:
         else:
             self._next("discarded", "Place", WASTE, cls=c)
 
-    def _on_placed(self, done: Pending, state: WorldState) -> None:
+    def _on_placed(self, done: Pending, world: World) -> None:
         self.belief.placed()
         self._last = done.entry
         self._record("move", done.cls, prop=done.entry.prop)
 
-    def _on_returned(self, done: Pending, state: WorldState) -> None:
+    def _on_returned(self, done: Pending, world: World) -> None:
         self.belief.returned()
         self._record("return_held", done.cls)
 
-    def _on_discarded(self, done: Pending, state: WorldState) -> None:
+    def _on_discarded(self, done: Pending, world: World) -> None:
         self.belief.dropped()
         self._record("discard_held", done.cls)
 

@@ -97,8 +97,10 @@ class CameraOnly:
     def __init__(self, world, *, noise: bool = False):
         self.world = world
         self.noise = noise
+        self.observed = 0
 
     def observe(self):
+        self.observed += 1
         state = self.world.observe()
         side = camera_side(state)
         if side is None:  # the camera over neither workspace: it sees an empty table
@@ -126,9 +128,12 @@ def test_the_controller_reads_only_what_the_camera_sees(task_name, ev_name, nois
     c_ref, world_ref, _, step_ref = setup(task_name, ev_name)
     assert c_ref.run(world_ref, step=step_ref) is Status.SUCCESS
     c, world, _, step = setup(task_name, ev_name)
-    assert c.run(CameraOnly(world, noise=noise), step=step) is Status.SUCCESS
+    camera = CameraOnly(world, noise=noise)
+    assert c.run(camera, step=step) is Status.SUCCESS
     assert [a.to_json() for a in c.actions] == [a.to_json() for a in c_ref.actions]
     assert [str(a) for a in world.executed()] == [str(a) for a in world_ref.executed()]
+    # it observes once per view, when a LookAt ends, and at no other time
+    assert camera.observed == sum(1 for a in world.executed() if a.name == "LookAt")
 
 
 def test_snapshot_and_restore_continue_the_same_run():
