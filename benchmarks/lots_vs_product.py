@@ -12,7 +12,11 @@ measures, in one run:
 * ``replan``: after an unforeseen state. Half-way through the round a person puts the
   next-but-one object into W^B (dis_2). LOTS: tree update (Alg. 3) + ``get_table`` (Alg. 2)
   from its tree and table as they were; product: the totals changed, so the product
-  ``TS × B`` is rebuilt for the new objects and searched (Dijkstra) from the observed state.
+  ``TS × B`` is rebuilt for the new objects and searched (Dijkstra) from the observed state;
+* ``tick``: the median cost of one `LotsController.tick` over whole rounds on the symbolic
+  world (skills of 0 ticks: every tick starts and ends one skill); ``tick_max_us`` and
+  ``snapshot_us`` in the JSON: the slowest tick, and copying the controller's state (what a
+  Drake LeafSystem's abstract state costs).
 
 Times are medians of ``time.perf_counter_ns`` over many repetitions (fewer for the slow
 baseline rebuilds); the baseline is skipped where its product exceeds ``--max-product``
@@ -32,8 +36,10 @@ import time
 from tamp.lots.automaton import Automaton
 from tamp.lots.controller import LotsController
 from tamp.lots.product import ProductPlanner
+from tamp.lots.run import lots_world
 from tamp.lots.task import Proposition, Task
 from tamp.ltl import clear_cache
+from tamp.world.interface import Status
 
 NS = 1e-9
 
@@ -75,6 +81,25 @@ def hit_ns(table, b, reps: int = 200_000) -> float:
     return min(best)
 
 
+def tick_cost(task: Task, aut: Automaton, rounds: int = 3) -> tuple[float, float, float]:
+    """Per `tick` over whole rounds on the symbolic world (the first round warms up): median
+    and max ns (the max is mostly the scheduler on a loaded machine); and the median ns of a
+    `snapshot` at the end of a round."""
+    times: list[int] = []
+    for r in range(rounds + 1):
+        c = LotsController(task, automaton=aut)
+        world = lots_world(task, skill_ticks=0)
+        status = Status.RUNNING
+        while status is Status.RUNNING:
+            world.step()
+            t0 = time.perf_counter_ns()
+            status = c.tick(world)
+            if r:
+                times.append(time.perf_counter_ns() - t0)
+        assert status is Status.SUCCESS
+    return statistics.median(times), max(times), median_ns(c.snapshot, 51)
+
+
 def disturbed(c: LotsController):
     """State half-way through the round, then the next-but-one object put into W^B."""
     moves = [s for s in c.initial_plan.steps if s.kind == "move"]
@@ -111,6 +136,8 @@ def measure(family: str, n: int, max_product: int, quick: bool) -> dict:
         "table_hit_us": hit_ns(c0.table, b_k) * 1e-3,
     }
     assert b_new not in c0.table  # unforeseen for LOTS
+    tick, tick_max, snap = tick_cost(task, aut)
+    row.update(tick_us=tick * 1e-3, tick_max_us=tick_max * 1e-3, snapshot_us=snap * 1e-3)
 
     # LOTS replanning: fresh controllers (tree + table as after Alg. 1 lines 2-3)
     reps = 5 if quick else 30
@@ -182,12 +209,12 @@ def main(argv: list[str] | None = None) -> int:
     head = (
         f"{'family':7} {'n':>2} {'|Q|':>4} {'|S^B|':>6} {'product':>8} {'translate':>10} "
         f"{'hit':>8} {'prod step':>10} {'replan LOTS':>12} {'replan prod':>12} {'speedup':>8} "
-        f"{'cost':>9}"
+        f"{'cost':>9} {'tick':>6}"
     )
     print(head)
     print(
         f"{'':7} {'':>2} {'':>4} {'':>6} {'states':>8} {'ms':>10} {'µs':>8} {'ms':>10} "
-        f"{'ms':>12} {'ms':>12} {'×':>8} {'ours/prod':>9}"
+        f"{'ms':>12} {'ms':>12} {'×':>8} {'ours/prod':>9} {'µs':>6}"
     )
     for r in rows:
         cost = f"{r['plan_cost_ours']:g}/{fmt(r.get('plan_cost_product'), 'g')}"
@@ -196,7 +223,7 @@ def main(argv: list[str] | None = None) -> int:
             f"{r['product_states']:>8} {r['translate_ms']:>10.2f} {r['table_hit_us']:>8.3f} "
             f"{fmt(r['product_step_ms'], '10.2f'):>10} {r['replan_ours_ms']:>12.3f} "
             f"{fmt(r['replan_product_ms'], '12.1f'):>12} {fmt(r['speedup'], '8.0f'):>8} "
-            f"{cost:>9}"
+            f"{cost:>9} {r['tick_us']:>6.1f}"
         )
     at8 = {r["family"]: r["speedup"] for r in rows if r["n"] == 8}
     hit_max = max(r["table_hit_us"] for r in rows)

@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
         run_letters = [next(iter(x)) for x in c.initial_plan.prefix if x]
         print(f"planned round: {' '.join(run_letters) or '(nothing to do)'}")
         human: dict[tuple[int, int], list[str]] = {}
-        for n, phase, e in report.world.log:
+        for n, phase, e in report.person.log:
             # idle events after action n come before action n + 1; 'holding' ones during it
             slot = (n, 0) if phase == "idle" else (n, 1)
             human.setdefault(slot, []).append(e.describe())
@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
             if i < len(report.actions):
                 a = report.actions[i]
                 print(f"  {a.index:2d}. {a.text()}")
-        counts = report.world.counts()
+        counts = report.counts()
         print(f"replans: {report.replans}")
         print(f"final: W^A {counts['A']}  W^B {counts['B']}  waste {counts['waste']}")
         print("task satisfied" if report.satisfied else f"task infeasible: {report.reason}")

@@ -8,8 +8,10 @@ Modules (importing this package loads no Spot; each module imports it where it i
 - ``lots``        LOTS counts, Lemma 1 (``|S^B| = ∏(n'_i + 1)``)
 - ``planner``     initial lasso, Dijkstra/A* on (automaton state, W^B counts) pairs (Alg. 2),
                   the table ``T`` and the tree ``TR`` with its update (Alg. 3)
-- ``controller``  Alg. 1 against any `world.LocalWorld`
-- ``world``       the `LocalWorld` protocol and the symbolic world with human interference
+- ``cell``        the workcell as a `tamp.world.WorldState` (areas A, B, waste; objects with a
+                  class), the ``lots_arm`` skills, and `visible_counts` (what the camera sees)
+- ``controller``  Alg. 1, tick-based against any `tamp.world.World` (start / poll a skill)
+- ``person``      the scripted person: interference events applied to the `SymbolicWorld`
 - ``product``     the product-automaton baseline (Lemma 2)
-- ``run``         run a task and report (what ``tamp lots`` prints)
+- ``run``         run a task on the `SymbolicWorld` and report (what ``tamp lots`` prints)
 """

@@ -1,4 +1,4 @@
-"""The reactive LOTS controller: Zhou et al. Alg. 1 on a world seen one workspace at a time.
+"""The reactive LOTS controller: Zhou et al. Alg. 1, ticked against a `tamp.world.World`.
 
 Each cycle the robot looks at W^A (where it picks), infers W^B from what it believes the
 whole workspace holds (Alg. 1 lines 6-11), looks the W^B state up in the table ``T``
@@ -9,28 +9,43 @@ re-decides on what it sees — it places the object if ``T`` still wants it, put
 W^A if the rest of the task needs it, and otherwise drops it into the waste basket (the
 surplus scissors of Fig. 8, the tower body of Fig. 10).
 
+Tick-based, like `tamp.bt.PaBtExecutor`: ``tick(world)`` never blocks. It starts one skill of
+the ``lots_arm`` domain (`tamp.lots.cell`: ``LookAt(l)``, ``Pick(k, l)``, ``Place(l)``,
+``Wait(l)``) with ``world.start``, polls it on later ticks, and when it ends takes the next
+decision — which only fixes the skill started on the next tick, so a world (and a person in
+it) can change between any two skills. The only thing the controller reads from the world is
+`tamp.lots.cell.visible_counts` of ``world.observe()`` when a ``LookAt`` ends (it observes at
+no other time): the counts per class of the workspace under the eye-in-hand camera. Its
+state is small (belief, counters, the pending skill, tree and table) and `snapshot`/`restore`
+copy it, sharing the automaton and planner, so a Drake LeafSystem can keep it in abstract
+state.
+
 When the task can no longer be completed (Assumption 1 broken: every hammer taken away, a
-W^B state no run can finish from), the robot waits a bounded number of times and then
-raises `InfeasibleError` with the reason; it never loops forever.
+W^B state no run can finish from), the robot waits a bounded number of times and then stops
+with FAILURE and the reason; it never loops forever. A skill that fails is started again
+(a failed pick: the cycle restarts with a fresh look), at most ``max_retries`` times in a row.
 
 Every table the controller builds (the initial one, Alg. 1 line 3, and each rebuilt after an
 unforeseen W^B state, line 20) is described by a :class:`Build` — the plan, the table and the
 pair ``(q, s^B)`` it starts from — and handed to the optional ``check`` (the verification
-gate) *before* it is used: a check that raises stops the controller before the robot acts.
+gate) *before* it is used: a check that raises stops the controller (the exception leaves
+``tick``) before the robot acts on the table.
 """
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
-from tamp.errors import InfeasibleError
 from tamp.lots.automaton import Automaton, Letter
+from tamp.lots.cell import WASTE, skill, visible_counts
 from tamp.lots.lots import Counts, Lots
 from tamp.lots.planner import Entry, Plan, Planner, Table, Tree, initial_lasso
 from tamp.lots.task import Task
-from tamp.lots.world import LocalWorld
+from tamp.world.actions import Action
+from tamp.world.interface import Status, World
 
 
 @dataclass(frozen=True)
@@ -147,25 +162,34 @@ class Belief:
             self.total[i] -= 1
 
 
-@dataclass
-class Outcome:
-    """Result of a controller run (what ``tamp lots --json`` prints, plus history)."""
+@dataclass(frozen=True)
+class Pending:
+    """The skill the controller starts (or runs) and what to do when it ends.
 
-    satisfied: bool
-    actions: list[ActionRecord]
-    replans: int
-    final_b: Counts
-    reason: str = ""
-    tables: list[tuple[str, list[dict]]] = field(default_factory=list)
+    ``then`` names the continuation (``_on_<then>``); the other fields carry what the
+    decision that chose the skill knew: the W^B state it expected, the table entry, the
+    class handled, the removal's destination, a note for the record.
+    """
+
+    then: str
+    action: Action
+    b: Counts | None = None
+    entry: Entry | None = None
+    cls: int | None = None
+    dest: str | None = None
+    note: str = ""
+    blocked: bool = False  # a wait because the task cannot go on (counts towards max_waits)
 
 
 class LotsController:
-    """Alg. 1 for one task; independent of how observations are produced (`LocalWorld`).
+    """Alg. 1 for one task, ticked against any `World` (symbolic or Drake).
 
     ``mode``: tree update variant (``bfs`` deterministic, ``random`` as in Alg. 3, seeded by
     ``seed``). ``max_waits``: consecutive waits after which the task is declared infeasible
-    (at least 1). ``check``: called with the controller after every table it builds, before
-    the table is used (``self.build`` is then the new one); it raises to stop the robot.
+    (at least 1). ``max_actions``: bound on robot actions (default `default_limit`).
+    ``max_retries``: failures of a skill in a row before the controller stops. ``check``:
+    called with the controller after every table it builds, before the table is used
+    (``self.build`` is then the new one); it raises to stop the robot.
     """
 
     def __init__(
@@ -175,6 +199,8 @@ class LotsController:
         mode: str = "bfs",
         seed: int = 0,
         max_waits: int = 3,
+        max_actions: int | None = None,
+        max_retries: int = 3,
         automaton: Automaton | None = None,
         check: Callable[[LotsController], Any] | None = None,
     ):
@@ -195,9 +221,23 @@ class LotsController:
         self.table = Table.from_plan(self.plan, self.lots)
         self.tables: list[tuple[str, list[dict]]] = [("initial", self.table.rows())]
         self.max_waits = max(1, max_waits)
+        self.max_actions = max_actions if max_actions is not None else self.default_limit(8)
+        self.max_retries = max_retries
         self.replans = 0
         self.belief = Belief(self.lots.vector(task.initial_a), b0)
         self._last: Entry | None = None  # the entry whose action was executed last
+        # tick state
+        self.actions: list[ActionRecord] = []
+        self.pending: Pending | None = None  # the skill to start, or running
+        self.handle: int | None = None  # its world handle while it runs
+        self.waits = 0  # consecutive waits because the task cannot go on
+        self.looks = 0  # consecutive cycles that only looked (guard against oscillation)
+        self.failures = 0  # consecutive skill failures
+        self.ticks = 0
+        self.skills = 0  # skills started
+        self.result: Status | None = None
+        self.reason = ""
+        self.final_b: Counts | None = None  # W^B seen when the round was found complete
         self.check = check
         if check is not None:
             check(self)
@@ -246,138 +286,271 @@ class LotsController:
         """Does the rest of the task (from W^B state ``b``) deliver class ``i`` again?"""
         return self.lots.final[i] > b[i]
 
-    def default_limit(self, events: int = 0) -> int:
-        """Bound on robot actions: one round, plus a few actions per human event."""
-        n = sum(1 for s in self.initial_plan.steps if s.kind != "idle")
-        return 2 * n + 6 + events * (2 * n + 4) + self.max_waits
-
-    # ------------------------------------------------------------------ the loop
-    def run(
-        self,
-        world: LocalWorld,
-        *,
-        max_actions: int | None = None,
-        record_into: list[ActionRecord] | None = None,
-    ) -> Outcome:
-        """Run Alg. 1 until the round is complete; `InfeasibleError` when it cannot be.
-
-        ``record_into``: a list that receives the actions as they happen (kept when the run
-        ends in `InfeasibleError`).
-        """
-        lots, names = self.lots, self.lots.classes
-        limit = max_actions if max_actions is not None else self.default_limit(8)
-        actions: list[ActionRecord] = record_into if record_into is not None else []
-        waits = 0
-        looks = 0  # consecutive cycles that only looked (guard against oscillation)
-
-        def record(kind: str, i: int | None = None, prop=None, dest=None, note="") -> None:
-            actions.append(
-                ActionRecord(
-                    len(actions) + 1,
-                    kind,
-                    names[i] if i is not None else None,
-                    prop,
-                    dest,
-                    tuple(self.belief.b),
-                    note,
-                )
-            )
-
-        def look_b() -> Counts:
-            return self.belief.on_b(lots.vector(world.observe("B")))
-
-        while True:
-            if len(actions) >= limit:
-                raise InfeasibleError(f"task not completed within {limit} robot actions")
-            a_obs = lots.vector(world.observe("A"))
-            b = self.belief.on_a(a_obs)  # Alg. 1 lines 5-11
-            looks += 1
-            if looks > 8:  # observations keep disagreeing: let an action slot pass
-                world.wait()
-                record("wait", note="observations of W^A and W^B disagree")
-                looks = 0
-                continue
-            i = lots.surplus(b)
-            if i is not None:  # more in W^B than one round needs (Lemma 1): remove it
-                b_obs = look_b()
-                j = lots.surplus(b_obs)
-                if j is not None:
-                    world.remove_from_b(names[j], "waste")
-                    self.belief.removed(j, "waste")
-                    record("remove", j, dest="waste", note="surplus")
-                    waits = looks = 0
-                continue
-            entry = self.decide(b)
-            missing = entry is not None and entry.kind == "move" and a_obs[entry.cls] == 0
-            if entry is None or missing:
-                if looks == 1:  # the W^A inference may be stale: look at W^B first
-                    if look_b() != b:
-                        continue
-                if entry is None:
-                    reason = (
-                        f"W^B state {lots.format(b)} cannot lead to completion of "
-                        f"{self.task.formula!r} (tree update exhausted {len(self.tree)} pairs)"
-                    )
-                else:
-                    reason = f"no {names[entry.cls]} left in W^A for {entry.prop}"
-                world.wait()
-                record("wait", note=reason)
-                looks = 0
-                waits += 1
-                if waits >= self.max_waits:
-                    raise InfeasibleError(f"{reason} (waited {waits} times)")
-                continue
-            if entry.kind == "done":
-                b_obs = look_b()
-                if b_obs == b:
-                    return self._outcome(True, actions, b_obs)
-                if looks > 4:
-                    world.wait()
-                    record("wait", note="W^B keeps changing")
-                    looks = 0
-                continue
-            if entry.kind == "remove":
-                if look_b() != b:
-                    continue
-                dest = "A" if self._needs_later(entry) else "waste"
-                world.remove_from_b(names[entry.cls], dest)
-                self.belief.removed(entry.cls, dest)
-                self._last = entry
-                record("remove", entry.cls, dest=dest)
-                waits = looks = 0
-                continue
-            # move: pick in W^A, carry to W^B, look before placing
-            c = entry.cls
-            world.pick(names[c])
-            self.belief.picked(c)
-            b_obs = look_b()
-            waits = looks = 0
-            if b_obs == b:
-                world.place()
-                self.belief.placed()
-                self._last = entry
-                record("move", c, prop=entry.prop)
-                continue
-            # W^B changed while the robot was carrying (unseen interference): re-decide
-            e2 = None if lots.surplus(b_obs) is not None else self.decide(b_obs)
-            if e2 is not None and e2.kind == "move" and e2.cls == c:
-                world.place()
-                self.belief.placed()
-                self._last = e2
-                record("move", c, prop=e2.prop)
-            elif self._still_needed(c, b_obs):
-                world.return_held()
-                self.belief.returned()
-                record("return_held", c)
-            else:
-                world.discard_held()
-                self.belief.dropped()
-                record("discard_held", c)
-
     def _needs_later(self, entry: Entry) -> bool:
         """Keep a removed object (back to W^A) when the rest of the plan delivers its class."""
         rest = self.table.run[entry.index + 1 :]
         return any(e.kind == "move" and e.cls == entry.cls for e in rest)
 
-    def _outcome(self, ok: bool, actions: list[ActionRecord], b: Counts) -> Outcome:
-        return Outcome(ok, actions, self.replans, b, tables=self.tables)
+    def default_limit(self, events: int = 0) -> int:
+        """Bound on robot actions: one round, plus a few actions per human event."""
+        n = sum(1 for s in self.initial_plan.steps if s.kind != "idle")
+        return 2 * n + 6 + events * (2 * n + 4) + self.max_waits
+
+    # ------------------------------------------------------------------ ticking
+    @property
+    def running(self) -> Action | None:
+        """The skill running now, if any."""
+        return self.pending.action if self.handle is not None and self.pending else None
+
+    def tick(self, world: World) -> Status:
+        """One step of Alg. 1: start the pending skill or poll the running one; never blocks.
+
+        When a skill ends, its result is read (a ``LookAt``: the counts the camera sees) and
+        the next skill is chosen; it starts on the next tick. Returns RUNNING until the round
+        is complete (SUCCESS) or the task is found infeasible (FAILURE, ``reason``).
+        """
+        if self.result is not None:
+            return self.result
+        self.ticks += 1
+        if self.handle is None:
+            if self.pending is None:
+                self._cycle()
+                if self.result is not None:
+                    return self.result
+            self.handle = world.start(self.pending.action)
+            self.skills += 1
+        status = world.poll(self.handle)
+        if status is Status.RUNNING:
+            return Status.RUNNING
+        done, self.pending, self.handle = self.pending, None, None
+        if status is Status.SUCCESS:
+            self.failures = 0
+            getattr(self, f"_on_{done.then}")(done, world)
+        else:
+            self._on_failure(done)
+        return self.result or Status.RUNNING
+
+    def run(self, world: World, *, max_ticks: int = 100_000, step=None) -> Status:
+        """Tick until SUCCESS or FAILURE (``step()`` is called before each tick if given)."""
+        for _ in range(max_ticks):
+            if step is not None:
+                step()
+            status = self.tick(world)
+            if status is not Status.RUNNING:
+                return status
+        self.halt(world)
+        return self._stop(f"no result after {max_ticks} ticks")
+
+    def halt(self, world: World) -> None:
+        """Cancel the running skill (the next tick starts the cycle again with a look)."""
+        if self.handle is not None:
+            world.cancel(self.handle)
+        self.handle = self.pending = None
+
+    def snapshot(self) -> LotsController:
+        """This point of the run, to `restore` later (any number of times)."""
+        return copy.deepcopy(self)
+
+    def restore(self, snapshot: LotsController) -> None:
+        """Continue from ``snapshot``: every counter, the belief, tree and table become a copy."""
+        twin = copy.deepcopy(snapshot)
+        self.__dict__.clear()
+        self.__dict__.update(twin.__dict__)
+
+    def __deepcopy__(self, memo: dict) -> LotsController:
+        """Copy what a tick changes; share what never changes (task, automaton, planner,
+        plans, tables: a replan replaces them, it does not edit them)."""
+        new = LotsController.__new__(LotsController)
+        memo[id(self)] = new
+        new.__dict__.update(self.__dict__)
+        new.tree = copy.deepcopy(self.tree, memo)
+        new.tables = list(self.tables)
+        new.belief = copy.deepcopy(self.belief, memo)
+        new.actions = list(self.actions)
+        return new
+
+    # ------------------------------------------------------------------ Alg. 1, one skill at a time
+    def _record(self, kind: str, i: int | None = None, prop=None, dest=None, note="") -> None:
+        self.actions.append(
+            ActionRecord(
+                len(self.actions) + 1,
+                kind,
+                self.lots.classes[i] if i is not None else None,
+                prop,
+                dest,
+                tuple(self.belief.b),
+                note,
+            )
+        )
+
+    def _next(self, then: str, name: str, *args: str, **kw: Any) -> None:
+        self.pending = Pending(then, skill(name, *args), **kw)
+
+    def _stop(self, reason: str) -> Status:
+        self.result, self.reason = Status.FAILURE, reason
+        return Status.FAILURE
+
+    def _cycle(self) -> None:
+        """Top of Alg. 1's loop: within the action bound, look at W^A."""
+        if len(self.actions) >= self.max_actions:
+            self._stop(f"task not completed within {self.max_actions} robot actions")
+            return
+        self._next("look_a", "LookAt", "A")
+
+    def _seen(self, world: World, side: str) -> Counts | None:
+        """What the camera sees of ``side`` now (the only read of the world), as counts."""
+        counts = visible_counts(world.observe(), side)
+        return None if counts is None else self.lots.vector(counts)
+
+    def _look_b(self, done: Pending, world: World) -> Counts | None:
+        b_obs = self._seen(world, "B")
+        if b_obs is None:
+            self._on_failure(done)
+            return None
+        return self.belief.on_b(b_obs)
+
+    def _wait(self, note: str, *, blocked: bool = False) -> None:
+        self._next("waited", "Wait", "A", note=note, blocked=blocked)
+
+    def _on_failure(self, done: Pending) -> None:
+        """A failed skill: try it again (a pick: look again first), up to ``max_retries``."""
+        self.failures += 1
+        if self.failures > self.max_retries:
+            self._stop(f"{done.action} failed {self.failures} times in a row")
+        elif done.action.name != "Pick":
+            self.pending = done
+
+    def _on_look_a(self, done: Pending, world: World) -> None:
+        """Alg. 1 lines 5-24 from the view of W^A: remove a surplus, decide, act or wait."""
+        a_obs = self._seen(world, "A")
+        if a_obs is None:
+            self._on_failure(done)
+            return
+        lots = self.lots
+        b = self.belief.on_a(a_obs)  # Alg. 1 lines 5-11
+        self.looks += 1
+        if self.looks > 8:  # observations keep disagreeing: let an action slot pass
+            self.looks = 0
+            self._wait("observations of W^A and W^B disagree")
+            return
+        if lots.surplus(b) is not None:  # more in W^B than one round needs (Lemma 1)
+            self._next("look_b_surplus", "LookAt", "B")
+            return
+        entry = self.decide(b)
+        missing = entry is not None and entry.kind == "move" and a_obs[entry.cls] == 0
+        if entry is None or missing:
+            if entry is None:
+                reason = (
+                    f"W^B state {lots.format(b)} cannot lead to completion of "
+                    f"{self.task.formula!r} (tree update exhausted {len(self.tree)} pairs)"
+                )
+            else:
+                reason = f"no {lots.classes[entry.cls]} left in W^A for {entry.prop}"
+            if self.looks == 1:  # the W^A inference may be stale: look at W^B first
+                self._next("look_b_stale", "LookAt", "B", b=b, note=reason)
+            else:
+                self._blocked(reason)
+        elif entry.kind == "done":
+            self._next("look_b_done", "LookAt", "B", b=b)
+        elif entry.kind == "remove":
+            self._next("look_b_remove", "LookAt", "B", b=b, entry=entry)
+        else:  # move: pick in W^A, carry to W^B, look before placing
+            c = entry.cls
+            self._next("picked", "Pick", lots.classes[c], "A", b=b, entry=entry, cls=c)
+
+    def _blocked(self, reason: str) -> None:
+        self.looks = 0
+        self._wait(reason, blocked=True)
+
+    def _on_waited(self, done: Pending, world: World) -> None:
+        self._record("wait", note=done.note)
+        self.looks = 0
+        if done.blocked:
+            self.waits += 1
+            if self.waits >= self.max_waits:
+                self._stop(f"{done.note} (waited {self.waits} times)")
+
+    def _on_look_b_surplus(self, done: Pending, world: World) -> None:
+        b_obs = self._look_b(done, world)
+        if b_obs is None:
+            return
+        j = self.lots.surplus(b_obs)
+        if j is not None:
+            name = self.lots.classes[j]
+            self._next("removing", "Pick", name, "B", cls=j, dest=WASTE, note="surplus")
+
+    def _on_look_b_stale(self, done: Pending, world: World) -> None:
+        b_obs = self._look_b(done, world)
+        if b_obs is not None and b_obs == done.b:
+            self._blocked(done.note)
+
+    def _on_look_b_done(self, done: Pending, world: World) -> None:
+        b_obs = self._look_b(done, world)
+        if b_obs is None:
+            return
+        if b_obs == done.b:
+            self.final_b = b_obs
+            self.result, self.reason = Status.SUCCESS, "round complete"
+        elif self.looks > 4:
+            self.looks = 0
+            self._wait("W^B keeps changing")
+
+    def _on_look_b_remove(self, done: Pending, world: World) -> None:
+        b_obs = self._look_b(done, world)
+        if b_obs is None or b_obs != done.b:
+            return
+        entry = done.entry
+        dest = "A" if self._needs_later(entry) else WASTE
+        name = self.lots.classes[entry.cls]
+        self._next("removing", "Pick", name, "B", entry=entry, cls=entry.cls, dest=dest)
+
+    def _on_removing(self, done: Pending, world: World) -> None:
+        self.pending = Pending("removed", skill("Place", done.dest), **_carry(done))
+
+    def _on_removed(self, done: Pending, world: World) -> None:
+        self.belief.removed(done.cls, done.dest)
+        if done.entry is not None:
+            self._last = done.entry
+        self._record("remove", done.cls, dest=done.dest, note=done.note)
+        self.waits = self.looks = 0
+
+    def _on_picked(self, done: Pending, world: World) -> None:
+        self.belief.picked(done.cls)
+        self.pending = Pending("carried", skill("LookAt", "B"), **_carry(done))
+
+    def _on_carried(self, done: Pending, world: World) -> None:
+        """At W^B with the object: place it, or re-decide if W^B changed meanwhile."""
+        b_obs = self._look_b(done, world)
+        if b_obs is None:
+            return
+        self.waits = self.looks = 0
+        c = done.cls
+        if b_obs == done.b:
+            self._next("placed", "Place", "B", entry=done.entry, cls=c)
+            return
+        # W^B changed while the robot was carrying (unseen interference): re-decide
+        e2 = None if self.lots.surplus(b_obs) is not None else self.decide(b_obs)
+        if e2 is not None and e2.kind == "move" and e2.cls == c:
+            self._next("placed", "Place", "B", entry=e2, cls=c)
+        elif self._still_needed(c, b_obs):
+            self._next("returned", "Place", "A", cls=c)
+        else:
+            self._next("discarded", "Place", WASTE, cls=c)
+
+    def _on_placed(self, done: Pending, world: World) -> None:
+        self.belief.placed()
+        self._last = done.entry
+        self._record("move", done.cls, prop=done.entry.prop)
+
+    def _on_returned(self, done: Pending, world: World) -> None:
+        self.belief.returned()
+        self._record("return_held", done.cls)
+
+    def _on_discarded(self, done: Pending, world: World) -> None:
+        self.belief.dropped()
+        self._record("discard_held", done.cls)
+
+
+def _carry(p: Pending) -> dict[str, Any]:
+    """What a follow-up skill of the same decision keeps knowing."""
+    return {"b": p.b, "entry": p.entry, "cls": p.cls, "dest": p.dest, "note": p.note}

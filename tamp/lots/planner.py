@@ -492,6 +492,18 @@ class Tree:
     def __contains__(self, pair: Pair) -> bool:
         return pair in self.parent
 
+    def __deepcopy__(self, memo: dict) -> Tree:
+        """Copy the pairs, frontier and random state; share the planner (and its automaton)."""
+        new = Tree.__new__(Tree)
+        memo[id(self)] = new
+        new.planner, new.mode, new.expansions = self.planner, self.mode, self.expansions
+        new.rng = random.Random()
+        new.rng.setstate(self.rng.getstate())
+        new.parent = dict(self.parent)
+        new.by_b = {b: list(qs) for b, qs in self.by_b.items()}
+        new._frontier = type(self._frontier)(self._frontier)
+        return new
+
     def add(self, pair: Pair, parent: Pair | None) -> bool:
         if pair in self.parent:
             return False

@@ -1,25 +1,33 @@
-"""Run a LOTS task against the symbolic world and summarise it (what ``tamp lots`` prints)."""
+"""Run a LOTS task on the symbolic world and summarise it (what ``tamp lots`` prints).
+
+The controller ticks against the one `tamp.world.SymbolicWorld` holding the workcell of
+`tamp.lots.cell` (skills take ``skill_ticks`` ticks); before each tick the world's clock
+advances and the scripted person (`tamp.lots.person`) does what is due.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from tamp.errors import InfeasibleError
 from tamp.lots.automaton import Letter
+from tamp.lots.cell import initial_state, side_counts
 from tamp.lots.controller import ActionRecord, LotsController
+from tamp.lots.person import Policy, ScriptedPerson
 from tamp.lots.task import Event, Task
-from tamp.lots.world import SymbolicLotsWorld
+from tamp.world.interface import Status
+from tamp.world.symbolic import SymbolicWorld
 
 
 @dataclass
 class Report:
-    """A finished run: controller (automaton, table, tree), world, actions, verdict."""
+    """A finished run: controller (automaton, table, tree), world, person, verdict."""
 
     task: Task
     controller: LotsController
-    world: SymbolicLotsWorld
+    world: SymbolicWorld
+    person: ScriptedPerson
     actions: list[ActionRecord]
     satisfied: bool
     reason: str = ""
@@ -29,9 +37,12 @@ class Report:
     def replans(self) -> int:
         return self.controller.replans
 
+    def counts(self) -> dict[str, dict[str, int]]:
+        """Ground truth at the end: counts per class in W^A, W^B and the waste basket."""
+        return side_counts(self.world.state)
+
     def to_json(self) -> dict[str, Any]:
         c, lots = self.controller, self.controller.lots
-        counts = self.world.counts()
         return {
             "task": self.task.name,
             "formula": self.task.formula,
@@ -46,10 +57,10 @@ class Report:
             "actions": [a.to_json() for a in self.actions],
             "interference": [
                 {"after": n, "phase": phase, "event": e.describe()}
-                for n, phase, e in self.world.log
+                for n, phase, e in self.person.log
             ],
             "replans": c.replans,
-            "final": counts,
+            "final": self.counts(),
             "satisfied": self.satisfied,
             "verdict": "satisfied" if self.satisfied else "infeasible",
             "reason": self.reason,
@@ -60,6 +71,12 @@ def _letter(letter: Letter) -> list[str]:
     return sorted(letter)
 
 
+def lots_world(task: Task, *, skill_ticks: int | Mapping[str, int] = 1) -> SymbolicWorld:
+    """The symbolic workcell of ``task`` with its initial counts in W^A and W^B."""
+    state = initial_state({"A": task.initial_a, "B": task.initial_b})
+    return SymbolicWorld(state, skill_ticks=skill_ticks)
+
+
 def run_task(
     task: Task,
     events: list[Event] | tuple[Event, ...] = (),
@@ -68,8 +85,9 @@ def run_task(
     seed: int = 0,
     max_waits: int = 3,
     max_actions: int | None = None,
-    policy: Any = None,
+    policy: Policy | None = None,
     check: Callable[[LotsController], Any] | None = None,
+    skill_ticks: int | Mapping[str, int] = 1,
 ) -> Report:
     """Run Alg. 1 to the end. Infeasibility is reported (``satisfied`` False, ``reason``).
 
@@ -77,33 +95,24 @@ def run_task(
     each replan), before the robot acts on it: the front ends pass `verification.gate`, which
     raises when the planned run or a table entry does not lead to acceptance (the
     verification gate of the architecture). What ``check`` raises propagates, even an
-    `InfeasibleError` such as `VerificationError`: a rejected table is not an infeasible task.
+    `InfeasibleError` such as `VerificationError`: a rejected table is not an infeasible task
+    (the controller itself reports infeasibility by stopping with FAILURE, never by raising).
     """
-    rejected: list[BaseException] = []
-
-    def guarded(c: LotsController) -> None:
-        try:
-            check(c)
-        except BaseException as exc:
-            rejected.append(exc)
-            raise
-
-    controller = LotsController(
-        task,
-        mode=mode,
-        seed=seed,
-        max_waits=max_waits,
-        check=guarded if check is not None else None,
+    controller = LotsController(task, mode=mode, seed=seed, max_waits=max_waits, check=check)
+    controller.max_actions = (
+        max_actions if max_actions is not None else controller.default_limit(len(events) + 4)
     )
-    world = SymbolicLotsWorld(task, events, policy=policy)
-    limit = max_actions if max_actions is not None else controller.default_limit(len(events) + 4)
-    actions: list[ActionRecord] = []
-    try:
-        outcome = controller.run(world, max_actions=limit, record_into=actions)
-    except InfeasibleError as exc:
-        if rejected:
-            raise
-        return Report(task, controller, world, actions, False, str(exc), controller.tables)
-    truth = controller.lots.vector(world.observe("B"))  # ground truth, not the belief
-    ok = outcome.satisfied and truth == controller.lots.final
-    return Report(task, controller, world, actions, ok, "", controller.tables)
+    world = lots_world(task, skill_ticks=skill_ticks)
+    person = ScriptedPerson(events, policy=policy)
+
+    def step() -> None:
+        world.step()
+        person.act(world)
+
+    status = controller.run(world, step=step)
+    truth = controller.lots.vector(side_counts(world.state)["B"])  # ground truth, not belief
+    ok = status is Status.SUCCESS and truth == controller.lots.final
+    reason = "" if status is Status.SUCCESS else controller.reason
+    return Report(
+        task, controller, world, person, controller.actions, ok, reason, controller.tables
+    )

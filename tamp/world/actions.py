@@ -1,7 +1,8 @@
 """Action templates with preconditions ``con`` and effects ``eff`` (SMP-MRO §IV-C1, §V-A3).
 
 Templates are loaded from a per-robot YAML domain file (``tamp/world/domains/youbot.yaml``
-is the paper's youBot: MoveTo, Pick, Place), so another robot needs only another file.
+is the paper's youBot: MoveTo, Pick, Place; ``lots_arm.yaml`` the LOTS arm of Zhou et al.:
+LookAt, Pick, Place, Wait over object kinds), so another robot needs only another file.
 A template grounded with argument values is an `Action`; applying it to a `WorldState`
 makes each effect true in the listed order (``a.eef(s)`` of §IV-C1).
 """
@@ -18,7 +19,8 @@ from tamp.world.events import parse_call
 from tamp.world.predicates import DEFAULT_REACH, PREDICATES, IsRobotCloseTo, Predicate
 from tamp.world.state import WorldState
 
-PARAM_KINDS = ("object", "area", "place")  # place = an object or an area
+#: place = an object or an area; kind = an object class (LOTS: "hammer")
+PARAM_KINDS = ("object", "area", "place", "kind")
 DOMAINS_DIR = Path(__file__).parent / "domains"
 
 
@@ -209,4 +211,13 @@ def load_domain(path: str | Path) -> Domain:
 
 def default_domain() -> Domain:
     """The youBot domain of §V-A3 shipped with the package."""
-    return load_domain(DOMAINS_DIR / "youbot.yaml")
+    return packaged_domain("youbot")
+
+
+def packaged_domain(name: str) -> Domain:
+    """A domain shipped in ``tamp/world/domains`` by file stem (``youbot``, ``lots_arm``)."""
+    path = DOMAINS_DIR / f"{name}.yaml"
+    if not path.is_file():
+        known = ", ".join(sorted(p.stem for p in DOMAINS_DIR.glob("*.yaml")))
+        raise InputError(f"unknown domain {name!r} (known: {known})", field="domain")
+    return load_domain(path)

@@ -98,16 +98,28 @@ class Appear:
     """Object ``obj`` is put at ``place`` (an area name or a point) at ``when``.
 
     Used for objects that are not in the demonstration (Case 3's O_a) and, with a known
-    object, for a person moving it (it is dropped from the hand if held).
+    object, for a person moving it (it is dropped from the hand if held). ``kind``: the class
+    of a new object (LOTS tasks name objects by class); a known object keeps its own.
     """
 
     obj: str
     place: str | Point
     when: When = None
+    kind: str = ""
 
     def __str__(self) -> str:
         where = self.place if isinstance(self.place, str) else _point_text(self.place)
         return f"{self.obj}@{where}" + (f"@{self.when}" if self.when is not None else "")
+
+
+@dataclass(frozen=True)
+class Remove:
+    """Object ``obj`` leaves the workcell now (a person takes it away: LOTS dis_2)."""
+
+    obj: str
+
+    def __str__(self) -> str:
+        return f"remove {self.obj}"
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,6 @@
-"""The five condition templates of SMP-MRO §V-A2, as hashable pure functions of a WorldState.
+"""Condition templates as hashable pure functions of a WorldState: the five of SMP-MRO §V-A2,
+and four over object *kinds* for the LOTS arm (Zhou et al. §III: the robot picks "a hammer",
+not a named object; its skills are `tamp/world/domains/lots_arm.yaml`).
 
 Each predicate also knows how to *make itself true* (``achieve``), which is how action
 effects are applied symbolically, and which other predicates it *contradicts* (two
@@ -11,7 +13,12 @@ Choices where the paper is silent (written down here on purpose):
 - ``IsRobotCloseTo(ref, d)`` takes an object or area name; ``d`` defaults to the domain's
   reach (0.9 m, the paper's default). The paper writes ``IsRobotCloseTo(l.pos, l.radius)``
   for MoveTo/Place, which would put a mobile base on top of the goal area; a reach radius
-  is what a mobile manipulator can satisfy.
+  is what a mobile manipulator can satisfy. For the LOTS arm the "robot" pose is where its
+  eye-in-hand camera looks (the workspace under it is the one it sees).
+- ``IsGraspedKind(k)`` made true grasps the unheld object of kind ``k`` nearest the robot
+  (ties: the smaller uid); the LOTS ``Pick(k, l)`` moves the arm over ``l`` first, so that
+  is an object in ``l``. ``IsHandFreeOver(l)`` made true releases the held object over ``l``:
+  it lands at ``l``'s centre. ``IsKindAt`` and ``IsHolding`` are only preconditions.
 """
 
 from __future__ import annotations
@@ -119,7 +126,7 @@ class IsHandFree(Predicate):
         return state.with_held(None)
 
     def contradicts(self, other: Predicate) -> bool:
-        return isinstance(other, IsGraspedObject)
+        return isinstance(other, IsGraspedObject | IsGraspedKind | IsHolding)
 
 
 @dataclass(frozen=True, slots=True)
@@ -142,7 +149,7 @@ class IsGraspedObject(Predicate):
     def contradicts(self, other: Predicate) -> bool:
         if isinstance(other, IsGraspedObject):
             return other.obj != self.obj
-        if isinstance(other, IsHandFree):
+        if isinstance(other, IsHandFree | IsHandFreeOver):
             return True
         if isinstance(other, IsObjectAt):
             return other.obj == self.obj
@@ -168,6 +175,97 @@ class IsAreaFree(Predicate):
         return sorted(state.objects_in(state.area(self.area)))
 
 
+@dataclass(frozen=True, slots=True)
+class IsKindAt(Predicate):
+    """True when some object of kind ``kind`` lies (not held) in area ``area``."""
+
+    kind: str
+    area: str
+    name = "IsKindAt"
+
+    @property
+    def args(self) -> tuple:
+        return (self.kind, self.area)
+
+    def holds(self, state: WorldState) -> bool:
+        area = state.area(self.area)
+        return any(state.objects[u].kind == self.kind for u in state.objects_in(area))
+
+
+@dataclass(frozen=True, slots=True)
+class IsGraspedKind(Predicate):
+    """True when the robot holds an object of kind ``kind``."""
+
+    kind: str
+    name = "IsGraspedKind"
+
+    @property
+    def args(self) -> tuple:
+        return (self.kind,)
+
+    def holds(self, state: WorldState) -> bool:
+        return state.held is not None and state.objects[state.held].kind == self.kind
+
+    def achieve(self, state: WorldState) -> WorldState:
+        if self.holds(state):
+            return state
+        here = state.robot.pos
+        candidates = [
+            (here.planar_distance(o.pos), uid)
+            for uid, o in state.objects.items()
+            if o.kind == self.kind and uid != state.held
+        ]
+        if not candidates:
+            raise ValueError(f"{self}: no object of kind {self.kind!r} to grasp")
+        return state.with_held(min(candidates)[1])
+
+    def contradicts(self, other: Predicate) -> bool:
+        if isinstance(other, IsGraspedKind):
+            return other.kind != self.kind
+        return isinstance(other, IsHandFree | IsHandFreeOver)
+
+
+@dataclass(frozen=True, slots=True)
+class IsHolding(Predicate):
+    """True when the robot holds some object (h ≠ None)."""
+
+    name = "IsHolding"
+
+    def holds(self, state: WorldState) -> bool:
+        return state.held is not None
+
+    def contradicts(self, other: Predicate) -> bool:
+        return isinstance(other, IsHandFree | IsHandFreeOver)
+
+
+@dataclass(frozen=True, slots=True)
+class IsHandFreeOver(Predicate):
+    """True when the hand is free and the robot is over area ``area`` (inside its disc)."""
+
+    area: str
+    name = "IsHandFreeOver"
+
+    @property
+    def args(self) -> tuple:
+        return (self.area,)
+
+    def holds(self, state: WorldState) -> bool:
+        return state.held is None and state.area(self.area).contains(state.robot.pos)
+
+    def achieve(self, state: WorldState) -> WorldState:
+        c = state.area(self.area).pos
+        robot = state.robot
+        out = state.with_robot_at(Pose(Point(c.x, c.y, robot.pos.z), robot.orientation))
+        if state.held is None:
+            return out
+        old = state.objects[state.held].pose
+        pose = Pose(Point(c.x, c.y, old.pos.z), old.orientation)
+        return out.with_object_at(state.held, pose).with_held(None)
+
+    def contradicts(self, other: Predicate) -> bool:
+        return isinstance(other, IsGraspedObject | IsGraspedKind | IsHolding)
+
+
 #: Predicate constructors by name, with the kind of each positional argument.
 PREDICATES: dict[str, tuple[type[Predicate], tuple[str, ...]]] = {
     "IsObjectAt": (IsObjectAt, ("object", "area")),
@@ -175,4 +273,8 @@ PREDICATES: dict[str, tuple[type[Predicate], tuple[str, ...]]] = {
     "IsHandFree": (IsHandFree, ()),
     "IsGraspedObject": (IsGraspedObject, ("object",)),
     "IsAreaFree": (IsAreaFree, ("area",)),
+    "IsKindAt": (IsKindAt, ("kind", "area")),
+    "IsGraspedKind": (IsGraspedKind, ("kind",)),
+    "IsHolding": (IsHolding, ()),
+    "IsHandFreeOver": (IsHandFreeOver, ("area",)),
 }

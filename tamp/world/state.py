@@ -10,10 +10,15 @@ from tamp.world.geometry import Area, Point, Pose
 
 @dataclass(frozen=True, slots=True)
 class ObjectState:
-    """A known object: its uid and pose (the paper's ``Object``)."""
+    """A known object: its uid, pose (the paper's ``Object``) and ``kind``.
+
+    ``kind`` is the object's class where a task names objects by class (LOTS: "a hammer",
+    Zhou et al. §III); empty where objects are named one by one (SMP-MRO).
+    """
 
     uid: str
     pose: Pose
+    kind: str = ""
 
     @property
     def pos(self) -> Point:
@@ -62,6 +67,14 @@ class WorldState:
             if area.contains(o.pos) and not (ignore_held and uid == self.held)
         ]
 
+    def kinds_in(self, area: Area) -> dict[str, int]:
+        """How many objects of each kind lie in ``area`` (not held), kinds in sorted order."""
+        counts: dict[str, int] = {}
+        for uid in self.objects_in(area):
+            kind = self.objects[uid].kind
+            counts[kind] = counts.get(kind, 0) + 1
+        return dict(sorted(counts.items()))
+
     # -- updates --------------------------------------------------------------------------
     def with_robot_at(self, pose: Pose) -> WorldState:
         return replace(self, robot=pose)
@@ -69,9 +82,13 @@ class WorldState:
     def with_held(self, uid: str | None) -> WorldState:
         return replace(self, held=uid)
 
-    def with_object_at(self, uid: str, pose: Pose) -> WorldState:
+    def with_object_at(self, uid: str, pose: Pose, kind: str | None = None) -> WorldState:
+        """``uid`` at ``pose``; a known object keeps its kind unless ``kind`` is given."""
         objects = dict(self.objects)
-        objects[uid] = ObjectState(uid, pose)
+        old = objects.get(uid)
+        if kind is None:
+            kind = old.kind if old is not None else ""
+        objects[uid] = ObjectState(uid, pose, kind)
         return replace(self, objects=objects)
 
     def without_object(self, uid: str) -> WorldState:

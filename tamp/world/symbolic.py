@@ -19,6 +19,8 @@
   also right after each skill that succeeds, so the robot sees the object in the tick it
   arrives; the verification explorer turns this off (the object is then seen at the next
   tick, which is what its state counts were established with).
+- `happen` applies an `Appear` (its WHEN ignored) or a `Remove` now: what a scripted person
+  (`tamp.lots.person`) does between ticks.
 - ``step()`` advances the clock by one tick, resets the per-tick record and fires the
   timed and reach events that are due; run loops call it before each executor tick.
 - Per-tick record (reset by `step`, read by verification labels): ``action_failed`` (a
@@ -37,7 +39,7 @@ from dataclasses import dataclass, replace
 
 from tamp.errors import InputError
 from tamp.world.actions import Action
-from tamp.world.events import AfterAction, Appear, AtTick, AtTime
+from tamp.world.events import AfterAction, Appear, AtTick, AtTime, Remove
 from tamp.world.geometry import Area, Point, Pose
 from tamp.world.interface import Status
 from tamp.world.outcomes import OutcomeSource, ScriptedOutcomes
@@ -54,12 +56,13 @@ _TEXT = {
     "cancel": "cancel {s}",
     "appear": "{s} appears at {d}",
     "move": "{s} is moved to {d}",
+    "remove": "{s} is taken away",
 }
 
 
 @dataclass(frozen=True)
 class WorldEvent:
-    """What happened in the world: start/success/failure/cancel of a skill, appear/move.
+    """What happened in the world: start/success/failure/cancel of a skill, appear/move/remove.
 
     ``subject`` is the action or the object; ``detail`` why a skill failed, or where the
     object was put.
@@ -189,6 +192,21 @@ class SymbolicWorld:
         """Make a new area (a free area found by the executor's ring search) known."""
         if area.name not in self.state.areas:
             self.state = self.state.with_area(area)
+
+    def happen(self, ev: Appear | Remove) -> None:
+        """Apply ``ev`` now (an `Appear`'s WHEN is ignored): a person acting between ticks.
+
+        An unknown area or object is a `ValueError` (the caller validated its script).
+        """
+        if isinstance(ev, Remove):
+            if ev.obj not in self.state.objects:
+                raise ValueError(f"{ev}: unknown object {ev.obj!r}")
+            self.state = self.state.without_object(ev.obj)
+            self._record("remove", ev.obj)
+            return
+        if isinstance(ev.place, str) and ev.place not in self.state.areas:
+            raise ValueError(f"{ev}: unknown area {ev.place!r}")
+        self._fire(ev)
 
     def step(self) -> None:
         """Advance the clock one tick, reset the per-tick record, fire the due events."""
@@ -321,7 +339,8 @@ class SymbolicWorld:
         state = self.state
         if state.held == ev.obj:
             state = state.with_held(None)
-        self.state = state.with_object_at(ev.obj, Pose(Point(p.x, p.y, p.z), orientation))
+        pose = Pose(Point(p.x, p.y, p.z), orientation)
+        self.state = state.with_object_at(ev.obj, pose, None if old else ev.kind)
         self._record("move" if old else "appear", ev.obj, f"({p.x:g}, {p.y:g})")
 
 

@@ -6,11 +6,12 @@ import dataclasses
 
 import pytest
 
+from tamp.lots.cell import held_kind, side_counts
 from tamp.lots.controller import LotsController
+from tamp.lots.person import ScriptedPerson
 from tamp.lots.planner import Table
-from tamp.lots.run import run_task
+from tamp.lots.run import lots_world, run_task
 from tamp.lots.task import Event, load_task
-from tamp.lots.world import SymbolicLotsWorld
 from verification import gate
 from verification.lots import check_controller, check_run
 from verification.verdict import VerificationError
@@ -75,16 +76,22 @@ def test_a_corrupted_rebuilt_table_is_stopped_before_the_robot_acts(monkeypatch)
     _corrupt_replans(monkeypatch)
     task = load_task("tower.yaml")
     c = LotsController(task, check=gate)
-    world = SymbolicLotsWorld(task, PEAK_EARLY)
-    actions = []
+    world, person = lots_world(task), ScriptedPerson(PEAK_EARLY)
+
+    def step():
+        world.step()
+        person.act(world)
+
     with pytest.raises(VerificationError) as err:
-        c.run(world, record_into=actions)
+        c.run(world, step=step)
     assert "replan 1" in err.value.report.failed[0].subject
     # only the action before the replan happened; nothing was done with the bad table: the
     # body was picked under the initial table (p2), the replan came when the camera saw W^B
-    assert [a.key() for a in actions] == [("move", "p1")]
-    assert world.counts()["B"] == {"bottom": 1, "peak": 1}
-    assert world.held == "body"
+    assert [a.key() for a in c.actions] == [("move", "p1")]
+    assert side_counts(world.state)["B"] == {"bottom": 1, "peak": 1}
+    assert held_kind(world.state) == "body"
+    assert c.running is None and not world.busy  # no skill was started on the bad table
+    assert str(world.executed()[-1]) == "LookAt(B)"
 
 
 def test_run_task_propagates_the_rejection_instead_of_calling_it_infeasible(monkeypatch):

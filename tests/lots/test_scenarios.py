@@ -19,7 +19,7 @@ def test_example1_without_interference(example1, mode):
     r = run_task(example1, mode=mode, seed=11)
     assert r.satisfied
     assert keys(r) == [("move", "p4"), ("move", "p3"), ("move", "p2"), ("move", "p1")]
-    assert r.world.counts() == {
+    assert r.counts() == {
         "A": {},
         "B": {"hammer": 1, "screw": 2, "screwdriver": 1},
         "waste": {},
@@ -41,7 +41,7 @@ def test_example1_unforeseen_state_runs_the_tree_update(example1):
         ("move", "p1"),
     ]
     assert r.actions[1].dest == "A"
-    assert r.world.counts()["B"] == {"hammer": 1, "screw": 2, "screwdriver": 1}
+    assert r.counts()["B"] == {"hammer": 1, "screw": 2, "screwdriver": 1}
     assert len(r.tables) == 2  # initial table, rebuilt once
 
 
@@ -50,7 +50,7 @@ def test_model_building_fig8(model_building):
     r = run_task(model_building, events("model_building_fig8.yaml", model_building))
     assert r.satisfied
     assert keys(r) == [("move", "p1"), ("discard_held", "scissors"), ("move", "p3")]
-    assert r.world.counts() == {
+    assert r.counts() == {
         "A": {},
         "B": {"hammer": 1, "saw": 1, "scissors": 1},
         "waste": {"scissors": 1},
@@ -62,10 +62,10 @@ def test_model_building_fig9(model_building):
     r = run_task(model_building, events("model_building_fig9.yaml", model_building))
     assert r.satisfied
     assert keys(r) == [("move", "p1"), ("move", "p2"), ("move", "p2"), ("move", "p3")]
-    counts = r.world.counts()
+    counts = r.counts()
     assert counts["B"] == {"hammer": 1, "saw": 1, "scissors": 1}
     assert counts["A"] == {"scissors": 1, "wrench": 1}
-    assert [e.disturbance for _, _, e in r.world.log] == ["dis_1", "dis_2"]
+    assert [e.disturbance for _, _, e in r.person.log] == ["dis_1", "dis_2"]
 
 
 def test_tower_fig10(tower):
@@ -79,7 +79,7 @@ def test_tower_fig10(tower):
         ("move", "p2"),  # 10.9-10.13: body moved back to W^A, rebuilt again
         ("move", "p3"),  # 10.14-10.16
     ]
-    assert r.world.counts() == {
+    assert r.counts() == {
         "A": {"toy_car": 1},
         "B": {"body": 1, "bottom": 1, "peak": 1},
         "waste": {"body": 1},
@@ -96,7 +96,7 @@ def test_every_hammer_taken_away_is_infeasible(model_building):
     assert not r.satisfied
     assert "no hammer left in W^A for p3" in r.reason
     assert [a.kind for a in r.actions][-2:] == ["wait", "wait"]
-    assert r.world.counts()["B"] == {"saw": 1, "scissors": 1}
+    assert r.counts()["B"] == {"saw": 1, "scissors": 1}
 
 
 def test_person_fixes_the_task_while_the_robot_waits(model_building):

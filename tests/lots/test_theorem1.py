@@ -13,6 +13,7 @@ from __future__ import annotations
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tamp.lots.cell import held_kind, side_counts
 from tamp.lots.run import run_task
 from tamp.lots.task import Event, Proposition, Task, load_task
 from tamp.scenarios import path
@@ -49,20 +50,23 @@ abstract_event = st.tuples(
 
 
 def make_policy(task, final, abstract):
+    """A person acting in the slots ``abstract`` names; each event sees the previous one's."""
     classes = list(task.classes) + ["wrench"]
 
-    def concrete(op, k, world):
+    def concrete(op, k, state):
         cls = classes[k % len(classes)]
-        if op == "move_ab" and world.a[cls] > 0:
+        counts = side_counts(state)
+        a, b = counts["A"].get(cls, 0), counts["B"].get(cls, 0)
+        if op == "move_ab" and a > 0:
             return Event(after=0, kind="move", cls=cls, src="A", dst="B")
-        if op == "move_ba" and world.b[cls] > 0:
+        if op == "move_ba" and b > 0:
             return Event(after=0, kind="move", cls=cls, src="B", dst="A")
         if op == "add_a":
             return Event(after=0, kind="add", cls=cls, side="A")
         if op == "add_b" and cls in task.classes:
             return Event(after=0, kind="add", cls=cls, side="B")
-        if op == "remove_spare" and world.a[cls] > 0:
-            total = world.a[cls] + world.b[cls] + (world.held == cls)
+        if op == "remove_spare" and a > 0:
+            total = a + b + (held_kind(state) == cls)
             if total - 1 >= final.get(cls, 0):
                 return Event(after=0, kind="remove", cls=cls, side="A")
         return None
@@ -70,16 +74,13 @@ def make_policy(task, final, abstract):
     pending = list(abstract)
 
     def policy(n, phase, world):
-        out = []
         for item in list(pending):
             after, ph, op, k = item
             if after == n and ph == phase:
                 pending.remove(item)
-                e = concrete(op, k, world)
+                e = concrete(op, k, world.state)
                 if e is not None:
-                    world.apply(e, phase)
-                    out.append(e)
-        return []  # already applied (each sees the previous one's effect)
+                    yield e  # applied before the next one is made
 
     return policy
 
@@ -109,10 +110,10 @@ def test_interference_respecting_assumption1_ends_satisfied(name, abstract, mode
     policy = make_policy(task, final, abstract)
     checked = []
     r = run_task(task, mode=mode, seed=seed, policy=policy, check=lambda c: checked.append(gate(c)))
-    assert r.satisfied, (r.reason, [a.text() for a in r.actions], r.world.log)
+    assert r.satisfied, (r.reason, [a.text() for a in r.actions], r.person.log)
     assert len(checked) == 1 + r.replans
     c = r.controller
-    assert c.lots.vector(r.world.counts()["B"]) == c.lots.final
+    assert c.lots.vector(r.counts()["B"]) == c.lots.final
     assert len(r.actions) <= c.default_limit(len(abstract) + 4)
 
 
@@ -137,15 +138,13 @@ def test_taking_a_needed_class_away_ends_infeasible(name, abstract, when, k):
 
     def policy(n, phase, world):
         if n < when:  # afterwards nobody brings the class back
-            inner(n, phase, world)
+            yield from inner(n, phase, world)
         if n == when and phase == "idle":
             taken.append(n)
-            for side, counts in (("A", world.a), ("B", world.b)):
-                if counts[cls]:
-                    world.apply(
-                        Event(after=n, kind="remove", cls=cls, side=side, count=counts[cls]), phase
-                    )
-        return []
+            counts = side_counts(world.state)
+            for side in ("A", "B"):
+                if counts[side].get(cls):
+                    yield Event(after=n, kind="remove", cls=cls, side=side, count=counts[side][cls])
 
     r = run_task(task, policy=policy, max_waits=2)
     if not taken:  # a helpful person let the robot finish before the class was taken away

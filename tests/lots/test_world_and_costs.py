@@ -1,4 +1,4 @@
-"""The LocalWorld contract, event timing, per-action costs, peers as oracles, the benchmark."""
+"""The World contract of the LOTS workcell, event timing, per-action costs, peers, the benchmark."""
 
 from __future__ import annotations
 
@@ -8,32 +8,78 @@ from pathlib import Path
 
 import pytest
 
+from tamp.errors import InputError
+from tamp.lots.cell import skill, visible_counts
 from tamp.lots.controller import LotsController
+from tamp.lots.person import ScriptedPerson, actions_done
 from tamp.lots.product import ProductPlanner
-from tamp.lots.run import run_task
+from tamp.lots.run import lots_world, run_task
 from tamp.lots.task import Event, Proposition, Task
-from tamp.lots.world import LocalWorld, SymbolicLotsWorld
+from tamp.world.interface import Status, World
 
 
-def test_symbolic_world_implements_the_local_world_protocol(tower):
-    w = SymbolicLotsWorld(tower)
-    assert isinstance(w, LocalWorld)
-    assert w.observe("A") == {"bottom": 1, "body": 2, "peak": 1} and w.observe("B") == {}
-    assert w.pick("peak") and not w.pick.__self__.a["peak"]
-    with pytest.raises(RuntimeError):
-        w.pick("body")  # one object at a time
-    w.return_held()
-    assert w.actions_done == 1 and w.observe("A")["peak"] == 1
+def execute(world, name, *args, person=None):
+    """Start one skill and tick the world (and the person) until it ends."""
+    h = world.start(skill(name, *args))
+    while (st := world.poll(h)) is Status.RUNNING:
+        world.step()
+        if person is not None:
+            person.act(world)
+    return st
+
+
+def test_symbolic_workcell_speaks_the_world_contract(tower):
+    w = lots_world(tower)
+    assert isinstance(w, World)
+    assert visible_counts(w.observe(), "A") is None  # the camera looks at neither workspace
+    assert execute(w, "LookAt", "A") is Status.SUCCESS
+    assert visible_counts(w.observe(), "A") == {"body": 2, "bottom": 1, "peak": 1}
+    assert visible_counts(w.observe(), "B") is None  # one workspace at a time
+    assert execute(w, "LookAt", "B") is Status.SUCCESS
+    assert visible_counts(w.observe(), "B") == {}
+    assert execute(w, "Pick", "peak", "A") is Status.SUCCESS
+    assert execute(w, "Pick", "body", "A") is Status.FAILURE  # one object at a time
+    execute(w, "LookAt", "A")
+    assert "peak" not in visible_counts(w.observe(), "A")
+    assert execute(w, "Place", "A") is Status.SUCCESS  # put it back
+    assert actions_done(w) == 1 and visible_counts(w.observe(), "A")["peak"] == 1
+    with pytest.raises(RuntimeError):  # World protocol: one skill at a time
+        w.start(skill("LookAt", "B"))
+        w.start(skill("LookAt", "A"))
 
 
 def test_holding_event_without_a_pick_happens_during_that_action(tower):
-    """A 'holding' event scheduled for a removal or a wait is not lost."""
-    w = SymbolicLotsWorld(
-        tower, [Event(after=0, phase="holding", kind="add", cls="cube", side="A")]
-    )
-    w.wait()
-    assert w.observe("A")["cube"] == 1
-    assert [(n, phase) for n, phase, _ in w.log] == [(0, "holding")]
+    """A 'holding' event scheduled for an action without a pick (a wait) is not lost."""
+    w = lots_world(tower)
+    person = ScriptedPerson([Event(after=0, phase="holding", kind="add", cls="cube", side="A")])
+    person.act(w)
+    execute(w, "Wait", "A", person=person)
+    person.act(w)
+    execute(w, "LookAt", "A")
+    assert visible_counts(w.observe(), "A")["cube"] == 1
+    assert [(n, phase) for n, phase, _ in person.log] == [(0, "holding")]
+
+
+def test_person_slots_follow_the_robot_actions():
+    """idle N once N actions ended; holding N once the hand holds during action N+1, or
+    during action N+1 itself when it has no pick (a wait); each slot begins once."""
+    p = ScriptedPerson()
+    assert p.slots(0, False) == [(0, "idle")]
+    assert p.slots(0, False) == []
+    assert p.slots(0, True) == [(0, "holding")]  # picked
+    assert p.slots(0, True) == []
+    assert p.slots(1, False) == [(1, "idle")]  # placed
+    assert p.slots(2, False) == [(1, "holding"), (2, "idle")]  # a wait: no pick
+
+
+def test_impossible_scripted_event_names_the_file_and_field(tower):
+    ev = Event(after=0, kind="remove", cls="peak", side="B", where="ev.yaml: events[0]")
+    with pytest.raises(InputError) as err:
+        ScriptedPerson([ev]).act(lots_world(tower))
+    assert err.value.file == "ev.yaml" and err.value.field == "events[0]"
+    lax = ScriptedPerson([ev], strict=False)
+    lax.act(lots_world(tower))
+    assert lax.log == [] and lax.pending_events() == 0
 
 
 def test_per_action_costs_choose_the_cheaper_proposition():

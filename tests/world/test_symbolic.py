@@ -10,7 +10,7 @@ import pytest
 from tamp.errors import InputError
 from tamp.world import Area, ObjectState, Point, Pose, WorldState, default_domain
 from tamp.world.actions import Domain
-from tamp.world.events import AfterAction, Appear, AtTick, AtTime, Fail, parse_call
+from tamp.world.events import AfterAction, Appear, AtTick, AtTime, Fail, Remove, parse_call
 from tamp.world.interface import Status
 from tamp.world.outcomes import BranchingOutcomes, ScriptedOutcomes
 from tamp.world.symbolic import SymbolicWorld
@@ -149,3 +149,22 @@ def test_deepcopy_is_independent_and_fingerprints_compare() -> None:
     assert twin.fingerprint() != w.fingerprint()
     w.step()
     assert w.poll(h) is S and twin.state.held is None and w.state.held == "O1"
+
+
+def test_happen_applies_a_person_s_appear_or_remove_now() -> None:
+    w = SymbolicWorld(_state())
+    w.happen(Appear("cube", "L1", AtTick(99), kind="cube"))  # WHEN is ignored: now
+    assert w.state.objects["cube"].kind == "cube" and w.state.objects["cube"].pos == Point(3, 0)
+    w.happen(Appear("cube", "L2", kind="other"))  # a known object keeps its kind
+    assert w.state.objects["cube"].kind == "cube"
+    _run(w, "MoveTo(O1)", "Pick(O1)")
+    w.happen(Remove("O1"))  # taken out of the hand
+    assert "O1" not in w.state.objects and w.state.held is None
+    assert [(e.kind, e.what) for e in w.history if e.kind in ("appear", "move", "remove")] == [
+        ("appear", "cube at (3, 0)"),
+        ("move", "cube at (0.4, 0.3)"),
+        ("remove", "O1"),
+    ]
+    for bad in (Remove("nope"), Appear("cube", "L9")):
+        with pytest.raises(ValueError):
+            w.happen(bad)

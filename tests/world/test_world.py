@@ -19,6 +19,8 @@ from tamp.world import (
     default_domain,
     load_domain,
 )
+from tamp.world.actions import packaged_domain
+from tamp.world.predicates import IsGraspedKind, IsHandFreeOver, IsHolding, IsKindAt
 
 
 def _world() -> WorldState:
@@ -114,3 +116,60 @@ def test_domain_effect_no_skill_can_make_true_is_refused_at_load(tmp_path):
     with pytest.raises(InputError, match="no skill can make IsAreaFree true") as err:
         load_domain(p)
     assert err.value.field == "actions[0].eff[0]"
+
+
+# -- object kinds and the LOTS arm's domain (Zhou et al.: objects known by class) ------------
+def _cell() -> WorldState:
+    areas = {
+        "A": Area("A", Point(0.0, 0.0), 0.3),
+        "B": Area("B", Point(1.0, 0.0), 0.3),
+        "waste": Area("waste", Point(0.5, -0.6), 0.15),
+    }
+    objects = {
+        "body_1": ObjectState("body_1", Pose.at(0.05, 0.0), "body"),
+        "body_2": ObjectState("body_2", Pose.at(0.95, 0.0), "body"),
+        "peak_1": ObjectState("peak_1", Pose.at(0.0, 0.1), "peak"),
+    }
+    return WorldState(robot=Pose.at(0.5, 0.5), objects=objects, areas=areas)
+
+
+def test_objects_keep_their_kind_and_areas_count_kinds() -> None:
+    s = _cell()
+    assert s.kinds_in(s.area("A")) == {"body": 1, "peak": 1}
+    s = s.with_object_at("body_1", Pose.at(1.0, 0.0))  # moved: still a body
+    assert s.objects["body_1"].kind == "body" and s.kinds_in(s.area("B")) == {"body": 2}
+    s = s.with_object_at("cube_1", Pose.at(0.0, 0.0), "cube")
+    assert s.kinds_in(s.area("A")) == {"cube": 1, "peak": 1}
+    assert s.with_held("peak_1").kinds_in(s.area("A")) == {"cube": 1}  # carried, not there
+
+
+def test_lots_arm_skills_pick_by_kind_and_release_over_an_area() -> None:
+    d = packaged_domain("lots_arm")
+    assert set(d.templates) == {"LookAt", "Pick", "Place", "Wait"}
+    s = _cell()
+    assert not d.action("Place", "B").applicable(s)  # nothing held
+    assert not d.action("Pick", "peak", "B").applicable(s)  # no peak in W^B
+    s = d.action("Pick", "body", "A").apply(s)
+    assert s.held == "body_1"  # the body in W^A, not the nearer-to-home one in W^B
+    assert IsGraspedKind("body").holds(s) and IsHolding().holds(s)
+    assert not d.action("Pick", "peak", "A").applicable(s)  # one object at a time
+    s = d.action("Place", "waste").apply(s)
+    assert s.held is None and s.kinds_in(s.area("waste")) == {"body": 1}
+    assert IsHandFreeOver("waste").holds(s) and not IsHandFreeOver("A").holds(s)
+    s = d.action("LookAt", "A").apply(s)
+    assert IsRobotCloseTo("A", d.reach).holds(s) and not IsRobotCloseTo("B", d.reach).holds(s)
+    assert IsKindAt("peak", "A").holds(s) and not IsKindAt("body", "A").holds(s)
+
+
+def test_kind_predicates_contradict_a_free_hand() -> None:
+    assert IsHandFree().contradicts(IsGraspedKind("body"))
+    assert IsGraspedKind("body").contradicts(IsHandFreeOver("B"))
+    assert IsGraspedKind("body").contradicts(IsGraspedKind("peak"))
+    assert not IsGraspedKind("body").contradicts(IsGraspedKind("body"))
+    assert IsHolding().contradicts(IsHandFree()) and IsHandFreeOver("A").contradicts(IsHolding())
+
+
+def test_unknown_packaged_domain_is_bad_input() -> None:
+    with pytest.raises(InputError) as err:
+        packaged_domain("spaceship")
+    assert "lots_arm" in str(err.value) and "youbot" in str(err.value)
