@@ -7,8 +7,12 @@
 Plans the order (RG + A*), passes the verification gate, then simulates the youBot-like
 robot executing the grown behavior tree. Prints the executed actions with their sim
 start/end times, the final object poses (from the plant), sim time, wall time and the
-real-time factor. Exit 0 when the tree succeeded and every object rests in its final goal
-area on the plant, 1 otherwise (or when verification fails), 2 on a bad scenario.
+real-time factor. The status line is the one verdict (`tamp.sim.smp.runner.judge`):
+SUCCESS when the tree succeeded and every object rests in its final goal area on the plant
+in 3-D (inside it and upright on the floor, not on top of another object). Exit 0 on
+SUCCESS, 1 otherwise (FAILURE, TIMEOUT, or when verification fails), 2 on a bad scenario
+or flag (an appearance at time 0 onto an occupied place included). ``--json`` has the same
+``status``; its ``ok`` is ``status == "SUCCESS"``.
 """
 
 from __future__ import annotations
@@ -93,14 +97,12 @@ def run(args: argparse.Namespace) -> int:
         max_sim_time=args.max_sim_time,
         realtime_rate=args.rate if args.rate is not None else (1.0 if args.meshcat else 0.0),
     )
-    ok = result.status == "SUCCESS" and all(result.goals.values())
     if args.json:
         payload = result.to_json()
         payload["order"] = list(prepared.plan.order)
         payload["verified"] = {k: r.holds for k, r in prepared.reports.items()}
-        payload["ok"] = ok
         print_json(payload)
-        return 0 if ok else 1
+        return result.exit_code
     print(f"scenario {scenario.name}: order {' -> '.join(prepared.plan.order)}", end="")
     if prepared.reports:
         print(f"  (verified: {', '.join(prepared.reports)})")
@@ -109,12 +111,14 @@ def run(args: argparse.Namespace) -> int:
     print(f"{'action':<22} {'start':>8} {'end':>8}  status")
     for a in result.actions:
         end = "-" if a.end is None else f"{a.end:8.2f}"
-        print(f"{a.action:<22} {a.start:8.2f} {end:>8}  {a.status or 'RUNNING'}")
+        print(f"{a.action:<22} {a.start:8.2f} {end:>8}  {a.outcome}")
     print("final object poses (plant, m / rad):")
     for uid, p in sorted(result.final_poses.items()):
         print(f"  {uid:<4} x={p.x:7.3f} y={p.y:7.3f} z={p.z:6.3f} yaw={p.yaw:6.2f}")
     for goal, inside in result.goals.items():
         print(f"  {goal}: {'inside' if inside else 'NOT inside'}")
+    for w in result.warnings:
+        print(f"warning: {w}")
     print(
         f"{result.status}: {result.reason}; sim {result.sim_time:.2f} s, "
         f"wall {result.wall_time:.2f} s, real-time factor {result.realtime_factor:.1f}x "
@@ -122,4 +126,4 @@ def run(args: argparse.Namespace) -> int:
     )
     if result.recording:
         print(f"recording: {result.recording}")
-    return 0 if ok else 1
+    return result.exit_code

@@ -10,10 +10,17 @@ over the system's ports and state:
   ``skill_command`` output to the `SkillController`;
 - ``poll(h)``    -> the ``skill_status`` input when it reports command ``h`` (RUNNING until
   the controller picks the command up and finishes it; the result is sticky);
-- ``cancel(h)``  -> the same command with ``cancel=True``.
+- ``cancel(h)``  -> the same command with ``cancel=True``. The log says why: HALTED when the
+  action's effects already hold in the observed world (the reactive tree halts a running
+  ``MoveTo(x)`` as soon as ``IsRobotCloseTo(x)`` holds: its goal is reached), CANCELLED
+  otherwise (the skill was stopped short of its goal);
+- ``add_area(a)`` -> an area the tree found at run time (ring search), kept in the state.
 
-The state also keeps the action log with sim start/end times. Once the tree returns
-SUCCESS or FAILURE the executor stops ticking and reports ``done``.
+Everything a run changes lives in the Context (the abstract state): the tree, the current
+command and action, the log, and the areas found at run time. The System object holds only
+what the diagram was built with, so one diagram can run twice (two contexts) without one
+run leaking into the other. The state also keeps the action log with sim start/end times.
+Once the tree returns SUCCESS or FAILURE the executor stops ticking and reports ``done``.
 
 Cost. Drake deep-copies abstract state on every update (twice: into the scratch state and
 back). A grown tree of ~60 nodes takes ~4 ms to deep-copy, so the tree is kept in the
@@ -54,8 +61,16 @@ class ActionLog:
     action: str
     start: float
     end: float | None = None
-    status: str | None = None  # SUCCESS | FAILURE | CANCELLED
+    status: str | None = None  # SUCCESS | FAILURE | HALTED (goal reached) | CANCELLED
     detail: str = ""
+
+    @property
+    def outcome(self) -> str:
+        """What happened, for the action table: ``done (halted)`` for a skill halted at its
+        goal, else the status (RUNNING while it runs)."""
+        if self.status == "HALTED":
+            return "done (halted)"
+        return self.status or "RUNNING"
 
     def to_json(self) -> dict:
         return {
@@ -80,6 +95,7 @@ class ExecutorState:
     result: Status | None = None
     finished_at: float | None = None
     ticks: int = 0
+    action: Action | None = None  # the action of ``command`` (its effects tell HALTED)
 
     def __deepcopy__(self, memo: dict) -> ExecutorState:
         # the tree is copied by its own __deepcopy__ (tamp.bt shares predicates and
@@ -93,6 +109,7 @@ class ExecutorState:
             self.result,
             self.finished_at,
             self.ticks,
+            self.action,
         )
 
 
@@ -120,6 +137,7 @@ class PortWorld:
             s.extra_areas[a] for a in action.args if a in s.extra_areas
         )  # areas found at run time travel with the command
         s.command = SkillCommand(s.next_id, action.name, tuple(action.args), areas=areas)
+        s.action = action
         s.log.append(ActionLog(s.next_id, str(action), self._t))
         s.next_id += 1
         return s.command.id
@@ -127,7 +145,9 @@ class PortWorld:
     def poll(self, handle: int) -> Status:
         for rec in reversed(self._s.log):
             if rec.id == handle and rec.status is not None:
-                return Status.FAILURE if rec.status == "CANCELLED" else Status(rec.status)
+                if rec.status in ("CANCELLED", "HALTED"):
+                    return Status.FAILURE
+                return Status(rec.status)
         st = self._status
         if st.id == handle and st.status is not Status.RUNNING:
             for rec in reversed(self._s.log):
@@ -145,13 +165,30 @@ class PortWorld:
                 if rec.id == handle and rec.status is None:
                     rec.end, rec.status, rec.detail = self._t, st.status.value, st.detail
             return
+        reached = self._goal_reached(handle)
         if s.command.id == handle:
             s.command = SkillCommand(
                 handle, s.command.name, s.command.args, cancel=True, areas=s.command.areas
             )
         for rec in reversed(s.log):
             if rec.id == handle and rec.status is None:
-                rec.end, rec.status = self._t, "CANCELLED"
+                rec.end = self._t
+                if reached:
+                    rec.status, rec.detail = "HALTED", f"goal reached: {reached}"
+                else:
+                    rec.status = "CANCELLED"
+
+    def _goal_reached(self, handle: int) -> str:
+        """The effects of command ``handle``'s action, when all hold in the observed world
+        (the tree halted it at its goal); "" otherwise."""
+        s = self._s
+        action = s.action if s.command.id == handle else None
+        if action is None or not action.eff:
+            return ""
+        world = self.observe()
+        if all(e.holds(world) for e in action.eff):
+            return ", ".join(str(e) for e in action.eff)
+        return ""
 
     def add_area(self, area: Area) -> None:
         """An l_free found at run time by the tree (ring search): places can use it."""

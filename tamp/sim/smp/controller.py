@@ -43,6 +43,7 @@ from tamp.sim.smp.motion import (
     standoff_pose,
     wrap,
 )
+from tamp.sim.smp.placement import Body, why_not_in
 from tamp.sim.smp.robot import HOME_ARM, ROBOT, ObjectKind
 from tamp.sim.smp.scenario import BaseLimits
 from tamp.world.events import Fail
@@ -99,6 +100,7 @@ class ControllerState:
     grasp: GraspRequest = field(default_factory=GraspRequest)
     attempts: dict = field(default_factory=dict)
     memo: dict = field(default_factory=dict)  # per-skill values: IK solutions, start heights
+    found: dict = field(default_factory=dict)  # areas the tree found at run time, by name
 
     def __deepcopy__(self, memo: dict) -> ControllerState:
         # Drake deep-copies abstract state on every update. Segments, arrays and messages
@@ -112,6 +114,7 @@ class ControllerState:
             self.grasp,
             dict(self.attempts),
             dict(self.memo),
+            dict(self.found),
         )
 
 
@@ -217,8 +220,8 @@ class SkillController(LeafSystem):
 
     def _begin(self, st: ControllerState, cmd: SkillCommand, t, q, poses) -> None:
         st.cmd = cmd
-        for area in cmd.areas:  # an l_free the tree found at run time: a fixed place,
-            self._areas.setdefault(area.name, area)  # so the table only ever grows
+        for area in cmd.areas:  # an l_free the tree found at run time: a fixed place, kept
+            st.found.setdefault(area.name, area)  # in the context (state), never on self
         st.memo = {}
         key = (cmd.name, tuple(cmd.args))
         st.attempts[key] = st.attempts.get(key, 0) + 1
@@ -282,13 +285,21 @@ class SkillController(LeafSystem):
                 out.append(Disc(p[0], p[1], self._kinds[uid].radius))
         return out
 
-    def _target_xy(self, ref: str, poses) -> tuple[float, float]:
+    def areas(self, context) -> dict[str, Area]:
+        """The areas known in ``context``: the demonstration's and those the tree found at
+        run time (`ControllerState.found`, per context: one diagram can run twice)."""
+        return {**self._areas, **self._st(context).found}
+
+    def _area(self, st: ControllerState, name: str) -> Area | None:
+        return self._areas.get(name) or st.found.get(name)
+
+    def _target_xy(self, st: ControllerState, ref: str, poses) -> tuple[float, float]:
         if ref in self._bodies:
             p = self._X(poses, ref).translation()
             return (p[0], p[1])
-        if ref in self._areas:
-            a = self._areas[ref].pos
-            return (a.x, a.y)
+        area = self._area(st, ref)
+        if area is not None:
+            return (area.pos.x, area.pos.y)
         raise SkillFailure(f"unknown object or area {ref!r}")
 
     def _check_start(self, st: ControllerState, q, poses) -> None:
@@ -296,7 +307,7 @@ class SkillController(LeafSystem):
         if name == "MoveTo":
             if len(args) != 1:
                 raise SkillFailure("MoveTo takes one target")
-            self._target_xy(args[0], poses)
+            self._target_xy(st, args[0], poses)
         elif name == "Pick":
             if len(args) != 1 or args[0] not in self._bodies:
                 raise SkillFailure(f"cannot pick {args}")
@@ -305,11 +316,11 @@ class SkillController(LeafSystem):
             if not self._visible(args[0], self._X(poses, args[0])):
                 raise SkillFailure(f"{args[0]} is not in the workspace")
         elif name == "Place":
-            if len(args) != 2 or args[1] not in self._areas:
+            if len(args) != 2 or self._area(st, args[1]) is None:
                 raise SkillFailure(f"cannot place {args}")
             if st.grasp.holding != args[0] or st.grasp.obj != args[0]:
                 raise SkillFailure(f"{args[0]} is not held")
-            area = self._areas[args[1]]
+            area = self._area(st, args[1])
             for uid in self._bodies:
                 if uid == args[0]:
                     continue
@@ -330,10 +341,10 @@ class SkillController(LeafSystem):
 
     def _phase_drive(self, st, t, q, poses):
         ref = st.cmd.args[0] if st.cmd.name != "Place" else st.cmd.args[1]
-        target = self._target_xy(ref, poses)
+        target = self._target_xy(st, ref, poses)
         exclude = {ref, st.grasp.obj} if st.grasp.obj else {ref}
-        if ref in self._areas:  # what lies in the target area is what the robot works on
-            a = self._areas[ref]
+        a = self._area(st, ref)
+        if a is not None:  # what lies in the target area is what the robot works on
             for uid in self._bodies:
                 p = self._X(poses, uid).translation()
                 if math.hypot(p[0] - a.pos.x, p[1] - a.pos.y) < a.radius + self._kinds[uid].radius:
@@ -435,7 +446,7 @@ class SkillController(LeafSystem):
 
     def _place_point(self, st, height: float) -> np.ndarray:
         uid, area = st.cmd.args
-        a = self._areas[area].pos
+        a = self._area(st, area).pos
         kind = self._kinds[uid]
         z = kind.half_height + PLACE_CLEARANCE + kind.grasp_height + height
         return np.array([a.x, a.y, z])
@@ -476,12 +487,15 @@ class SkillController(LeafSystem):
 
     def _phase_check_place(self, st, t, q, poses):
         uid, area = st.cmd.args
-        p = self._X(poses, uid).translation()
-        a = self._areas[area]
-        kind = self._kinds[uid]
-        if math.hypot(p[0] - a.pos.x, p[1] - a.pos.y) > a.radius:
-            raise SkillFailure(f"{uid} ended outside {area}")
-        if abs(p[2] - kind.half_height) > 0.01:
-            raise SkillFailure(f"{uid} is not resting on the floor (z = {p[2]:.3f} m)")
+        why = why_not_in(self._body(poses, uid), self._area(st, area), self._bodies_now(poses))
+        if why is not None:
+            raise SkillFailure(why)
         st.grasp = GraspRequest()
         return None
+
+    def _body(self, poses, uid: str) -> Body:
+        x, y, z = self._X(poses, uid).translation()
+        return Body(uid, float(x), float(y), float(z), self._kinds[uid])
+
+    def _bodies_now(self, poses) -> list[Body]:
+        return [self._body(poses, uid) for uid in self._bodies]

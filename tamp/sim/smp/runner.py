@@ -14,11 +14,21 @@ Appearances. An object that "appears" (Case 3's O_a) waits outside the workspace
 WHEN (`tamp.world.events`: a tick, a time, right after a named skill succeeds, or, without
 one, when the robot first comes within reach of the place) the runner puts it down at the
 place (an area's centre or a point) and zeroes its velocity. This is a person putting an
-object down (scripted), not the robot.
+object down (scripted), not the robot. A person does not put an object *into* another one:
+when the place is occupied at that moment (`tamp.sim.smp.placement.blocker`: another
+object's footprint, or the robot's base), the object is put down on the nearest free spot
+outside every area (run-time ones included) and every footprint instead, and the run
+carries a warning saying so (`SimResult.warnings`). Whether a place will be occupied can
+only be known when the time comes, except at time 0, which the scenario checks refuse
+(`tamp.sim.smp.scenario`, exit 2).
 
 The run ends when the BtExecutor's tree returns SUCCESS or FAILURE, or at
-``max_sim_time``. `SimResult` has the executed actions with sim start/end times, final
-plant poses of the objects, sim time, wall time and the real-time factor.
+``max_sim_time``. Its status is decided once, by `judge`, from the tree's result AND the
+plant: SUCCESS only when the tree succeeded and every goal object rests in its final goal
+area in 3-D (`tamp.sim.smp.placement.why_not_in`: inside the area in the plane and upright
+on the floor, not on top of another object). `SimResult.ok` and the exit code follow the
+status and nothing else. `SimResult` also has the executed actions with sim start/end times,
+final plant poses of the objects, sim time, wall time and the real-time factor.
 """
 
 from __future__ import annotations
@@ -35,6 +45,7 @@ from tamp.sim.core.executor import ActionLog
 from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.smp.builder import SimSystem
 from tamp.sim.smp.ik import grasp_transform
+from tamp.sim.smp.placement import Body, blocker, free_spot, why_not_in
 from tamp.sim.smp.robot import ROBOT
 from tamp.world.events import AfterAction, Appear, AtTick, AtTime, format_call
 from tamp.world.interface import Status
@@ -51,9 +62,29 @@ class ObjectPose:
         return {k: round(v, 4) for k, v in vars(self).items()}
 
 
+def judge(
+    tree: Status | None, tree_reason: str, goal_failures: list[str], limit: float
+) -> tuple[str, str]:
+    """The run's (status, reason), the one place that decides them: TIMEOUT when the tree
+    gave no result within ``limit`` s, FAILURE when it failed, or when it succeeded but the
+    plant disagrees (``goal_failures``: why goal objects do not rest in their areas),
+    else SUCCESS."""
+    if tree is None:
+        return "TIMEOUT", f"no result within {limit:g} s of sim time"
+    if tree is not Status.SUCCESS:
+        return "FAILURE", tree_reason or "tree failed"
+    if goal_failures:
+        return "FAILURE", "the tree succeeded but on the plant " + "; ".join(goal_failures)
+    return "SUCCESS", tree_reason or "every goal reached"
+
+
 @dataclass
 class SimResult:
-    """What a simulation run did, read from the plant and the executor's state."""
+    """What a simulation run did, read from the plant and the executor's state.
+
+    ``status`` (decided by `judge`) is the one verdict: ``ok`` and the CLI's exit code are
+    derived from it, so they cannot disagree.
+    """
 
     scenario: str
     status: str  # SUCCESS | FAILURE | TIMEOUT
@@ -67,6 +98,17 @@ class SimResult:
     appeared: dict[str, float] = field(default_factory=dict)
     goals: dict[str, bool] = field(default_factory=dict)
     recording: str | None = None
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        """The task is done: the status is SUCCESS (tree and plant agree)."""
+        return self.status == "SUCCESS"
+
+    @property
+    def exit_code(self) -> int:
+        """0 when ``ok``, else 1 (what ``tamp simulate`` exits with)."""
+        return 0 if self.ok else 1
 
     @property
     def realtime_factor(self) -> float:
@@ -84,6 +126,7 @@ class SimResult:
         return {
             "scenario": self.scenario,
             "status": self.status,
+            "ok": self.ok,  # = status == "SUCCESS", kept for scripts that read it
             "reason": self.reason,
             "actions": [a.to_json() for a in self.actions],
             "final_poses": {k: v.to_json() for k, v in sorted(self.final_poses.items())},
@@ -95,6 +138,7 @@ class SimResult:
             "cpu_time": round(self.cpu_time, 3),
             "cpu_realtime_factor": round(self.cpu_realtime_factor, 2),
             "recording": self.recording,
+            "warnings": list(self.warnings),
         }
 
 
@@ -114,6 +158,8 @@ class SimRunner:
         #: (time, object, variant, gap m, gap rad) each time a weld was switched on
         self.weld_log: list[tuple[float, str, int, float, float]] = []
         self.appeared: dict[str, float] = {}
+        self.warnings: list[str] = []
+        self._handled: set[str] = set()  # appearances done (or impossible)
         self.reach = system.scenario.demo.domain().reach  # IsRobotCloseTo's d (§V-A2)
         self.base_path: list[tuple[float, float, float]] = []
 
@@ -147,16 +193,52 @@ class SimRunner:
         s = self.system
         done = {a.action for a in log if a.status == "SUCCESS"}
         for obj in s.scenario.objects:
-            if obj.appear is None or obj.id in self.appeared:
+            if obj.appear is None or obj.id in self._handled:
                 continue
             if not self._due(obj.appear, t, done):
                 continue
-            p = s.scenario.place_of(obj.appear)
-            X = RigidTransform([p.x, p.y, obj.kind.half_height + 0.003])
+            self._handled.add(obj.id)
+            spot = self._where_to_put(obj, t)
+            if spot is None:
+                continue
+            X = RigidTransform([spot[0], spot[1], obj.kind.half_height + 0.003])
             body = s.bodies[obj.id]
             s.plant.SetFreeBodyPose(self.plant_context, body, X)
             s.plant.SetFreeBodySpatialVelocity(self.plant_context, body, SpatialVelocity.Zero())
             self.appeared[obj.id] = t
+
+    def _where_to_put(self, obj, t: float) -> tuple[float, float] | None:
+        """The appearance's place, or the nearest free spot when something occupies it (with
+        a warning); None (with a warning) when no free spot is left."""
+        s = self.system
+        p = s.scenario.place_of(obj.appear)
+        bodies = [b for b in self.bodies_now() if b.id != obj.id]
+        x, y, _ = self.robot_pose()
+        robot = (x, y, ROBOT.footprint_radius)
+        who = blocker(p.x, p.y, obj.kind, bodies, robot)
+        if who is None:
+            return (p.x, p.y)
+        ex_context = s.executor.GetMyContextFromRoot(self.root)
+        areas = {**s.areas, **s.executor.state(ex_context).extra_areas}
+        spot = free_spot(
+            p.x,
+            p.y,
+            obj.kind,
+            bodies=bodies,
+            areas=areas,
+            workspace=s.scenario.workspace,
+            robot=robot,
+        )
+        what = f"t={t:.2f} s: {obj.appear}: the place is occupied by {who}"
+        if spot is None:
+            self.warnings.append(f"{what}; no free spot near it, {obj.id} was not put down")
+        else:
+            d = math.hypot(spot[0] - p.x, spot[1] - p.y)
+            self.warnings.append(
+                f"{what}; {obj.id} was put down {d:.2f} m away at ({spot[0]:.2f}, "
+                f"{spot[1]:.2f}), outside every area"
+            )
+        return spot
 
     def _due(self, appear: Appear, t: float, done: set[str]) -> bool:
         """Whether ``appear``'s WHEN has come (`tamp.world.events`: tick, time, after, reach)."""
@@ -170,6 +252,15 @@ class SimRunner:
         x, y, _ = self.robot_pose()  # no WHEN: when the robot first comes within reach
         p = self.system.scenario.place_of(appear)
         return math.hypot(p.x - x, p.y - y) <= self.reach
+
+    def bodies_now(self) -> list[Body]:
+        """The objects inside the workspace as the plant has them now (3-D centres)."""
+        s = self.system
+        out = []
+        for uid, p in self.object_poses().items():
+            if s.scenario.in_workspace(p.x, p.y):
+                out.append(Body(uid, p.x, p.y, p.z, s.scenario.object(uid).kind))
+        return out
 
     def object_poses(self) -> dict[str, ObjectPose]:
         s = self.system
@@ -215,14 +306,13 @@ class SimRunner:
             self.simulator, chunk=s.scenario.controller_period, limit=limit, between=between
         )
         ex = s.executor.state(ex_context)
-        status, reason = "TIMEOUT", f"no result within {limit:g} s of sim time"
+        tree_reason = ""
         if ex.result is not None:
-            status = ex.result.value
-            policy = s.executor.policy(ex_context)
-            reason = getattr(policy, "reason", "") or (
-                "every goal reached" if ex.result is Status.SUCCESS else "tree failed"
-            )
+            tree_reason = getattr(s.executor.policy(ex_context), "reason", "") or ""
         poses = self.object_poses()
+        why = self.goal_check(poses)
+        failures = [w for w in why.values() if w is not None]
+        status, reason = judge(ex.result, tree_reason, failures, limit)
         return SimResult(
             scenario=s.scenario.name,
             status=status,
@@ -234,22 +324,25 @@ class SimRunner:
             cpu_time=run.cpu_time,
             base_path=list(self.base_path),
             appeared=dict(self.appeared),
-            goals=self.goals_on_plant(poses),
+            goals={k: w is None for k, w in why.items()},
+            warnings=list(self.warnings),
         )
 
-    def goals_on_plant(self, poses: dict[str, ObjectPose] | None = None) -> dict[str, bool]:
-        """For each goal object, whether it rests inside its *final* goal area (plant)."""
+    def goal_check(self, poses: dict[str, ObjectPose] | None = None) -> dict[str, str | None]:
+        """For each goal object ``O@L`` (its *final* goal area): None when it rests in L on
+        the plant in 3-D (`why_not_in`), else why not."""
         s = self.system
         poses = poses or self.object_poses()
         final: dict[str, str] = {}
         for g in s.scenario.demo.goals:
             final[g.object] = g.area.name
-        out = {}
-        for uid, area_name in final.items():
-            a = s.areas[area_name]
-            p = poses[uid]
-            inside = math.hypot(p.x - a.pos.x, p.y - a.pos.y) <= a.radius
-            out[f"{uid}@{area_name}"] = bool(
-                inside and abs(p.z - s.scenario.object(uid).kind.half_height) < 0.01
-            )
-        return out
+        bodies = [Body(uid, p.x, p.y, p.z, s.scenario.object(uid).kind) for uid, p in poses.items()]
+        by_id = {b.id: b for b in bodies}
+        return {
+            f"{uid}@{area}": why_not_in(by_id[uid], s.areas[area], bodies)
+            for uid, area in final.items()
+        }
+
+    def goals_on_plant(self, poses: dict[str, ObjectPose] | None = None) -> dict[str, bool]:
+        """For each goal object, whether it rests in its final goal area (`goal_check`)."""
+        return {k: w is None for k, w in self.goal_check(poses).items()}

@@ -37,8 +37,9 @@ from tamp import scenarios
 from tamp.demo import Demonstration, load_demonstration
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
+from tamp.sim.smp.placement import Body, blocker
 from tamp.sim.smp.robot import OBJECT_KINDS, ROBOT, ObjectKind
-from tamp.world.events import AfterAction, Appear, Fail, parse_appear, parse_fail
+from tamp.world.events import AfterAction, Appear, AtTick, AtTime, Fail, parse_appear, parse_fail
 from tamp.world.geometry import Area, Point
 
 COSTS = ("distance", "time", "success")
@@ -138,6 +139,7 @@ class SimScenario:
                     SimObject(a.obj, OBJECT_KINDS["bottle"], (math.nan, math.nan), 0.0, a)
                 )
         out = dataclasses.replace(self, objects=tuple(objects))
+        _check_start_places(out, {a.obj: ("--appear", None) for a in appear})
         flagged = {(f.action, f.args) for f in fail}
         kept = [f for f in self.failures if (f.action, f.args) not in flagged]
         for f in fail:
@@ -436,3 +438,48 @@ def _check_geometry(s: SimScenario, f: Fields) -> None:
             raise InputError(
                 f"robot start overlaps object {o.id}", file=s.source, field="robot.start"
             )
+    fields = {}
+    for i, text in enumerate(f.raw("appear", []) or []):
+        fields[parse_appear(text, field=f"appear[{i}]", file=s.source).obj] = (
+            f"appear[{i}]",
+            s.source,
+        )
+    _check_start_places(s, fields)
+
+
+def at_start(appear: Appear) -> bool:
+    """Whether an appearance happens at time 0 (tick 0 or ``t=0``), before anything moves."""
+    when = appear.when
+    return (isinstance(when, AtTick) and when.tick == 0) or (
+        isinstance(when, AtTime) and when.seconds == 0.0
+    )
+
+
+def _check_start_places(s: SimScenario, fields: dict[str, tuple[str, str | None]]) -> None:
+    """Refuse an appearance at time 0 onto a place that is certainly occupied then: by an
+    object standing there from the start, an earlier appearance at time 0, or the robot.
+
+    Later appearances can only be checked when they happen (the runner puts the object
+    down on the nearest free spot instead, with a warning: `tamp.sim.smp.runner`).
+    ``fields``: object id -> (field, file) that names its appearance in errors.
+    """
+    rx, ry, _ = s.robot_start
+    standing = [
+        Body(o.id, o.xy[0], o.xy[1], o.kind.half_height, o.kind)
+        for o in s.objects
+        if o.appear is None
+    ]
+    for o in s.objects:
+        if o.appear is None or not at_start(o.appear):
+            continue
+        p = s.place_of(o.appear)
+        who = blocker(p.x, p.y, o.kind, standing, (rx, ry, ROBOT.footprint_radius))
+        if who is not None:
+            field, file = fields.get(o.id) or fields.get(who) or ("appear", s.source)
+            raise InputError(
+                f"{o.appear}: the place is occupied by {who} at the start "
+                f"(an object cannot appear inside another)",
+                file=file,
+                field=field,
+            )
+        standing.append(Body(o.id, p.x, p.y, o.kind.half_height, o.kind))

@@ -63,3 +63,39 @@ def test_areas_found_at_run_time_travel_with_the_command():
     assert "free_auto1" in w.observe().areas
     w.start(default_domain().action("MoveTo", "free_auto1"))
     assert [a.name for a in s.command.areas] == ["free_auto1"]
+
+
+def test_a_skill_halted_at_its_goal_is_halted_not_cancelled():
+    """The reactive tree halts ``MoveTo(L0)`` once ``IsRobotCloseTo(L0)`` holds (issue 17:
+    the table said CANCELLED for a MoveTo that had done its job)."""
+    s = ExecutorState(b"")
+    near = WorldState(robot=Pose.at(0.5, 0.0), areas=STATE.areas)  # 0.5 m < reach 0.9 m
+    h = world(s, SkillStatus()).start(default_domain().action("MoveTo", "L0"))
+    PortWorld(s, near, SkillStatus(h, Status.RUNNING), 0.7).cancel(h)
+    rec = s.log[-1]
+    assert s.command.cancel and s.command.id == h  # the controller is still told to stop
+    assert (rec.status, rec.end, rec.detail) == ("HALTED", 0.7, "goal reached: IsRobotCloseTo(L0)")
+    assert rec.outcome == "done (halted)"
+    assert rec.to_json()["status"] == "HALTED"
+    assert world(s, SkillStatus(h, Status.RUNNING), 0.8).poll(h) is Status.FAILURE
+    # the same skill halted short of its goal stays CANCELLED
+    s2 = ExecutorState(b"")
+    h2 = world(s2, SkillStatus()).start(default_domain().action("MoveTo", "L0"))
+    world(s2, SkillStatus(h2, Status.RUNNING), 0.5).cancel(h2)
+    assert s2.log[-1].outcome == "CANCELLED" and s2.log[-1].detail == ""
+
+
+def test_the_state_keeps_what_a_run_changes():
+    """Areas found at run time and the current action live in the state; copies (Drake's
+    contexts) do not share them."""
+    s = ExecutorState(b"")
+    w = world(s, SkillStatus())
+    w.add_area(Area("free_auto1", Point(2.0, 2.0), 0.15))
+    w.start(default_domain().action("MoveTo", "free_auto1"))
+    fresh = ExecutorState(b"")
+    assert fresh.extra_areas == {} and fresh.action is None
+    import copy
+
+    c = copy.deepcopy(s)
+    c.extra_areas["free_auto2"] = Area("free_auto2", Point(3.0, 2.0), 0.15)
+    assert "free_auto2" not in s.extra_areas and c.action is s.action

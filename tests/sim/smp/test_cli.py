@@ -46,6 +46,9 @@ def test_human_readable_output(tmp_path, capsys):
     assert code == 0
     assert "Place(O0, L0)" in out and "real-time factor" in out
     assert "O0@L0: inside" in out
+    # the MoveTo the tree halted once the robot was close is reported as done, not cancelled
+    assert "MoveTo(O0)" in out and "done (halted)" in out and "CANCELLED" not in out
+    assert out.rstrip().splitlines()[-1].startswith("SUCCESS: ") and "warning" not in out
 
 
 def test_bad_options_exit_2_before_simulating(tmp_path, capsys):

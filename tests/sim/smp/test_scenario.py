@@ -165,3 +165,39 @@ def test_with_events_errors_name_the_flag(tmp_path, appear, fail, flag, words):
     with pytest.raises(InputError) as info:
         s.with_events([parse_appear(a) for a in appear], [parse_fail(f) for f in fail])
     assert info.value.field == flag and words in info.value.reason
+
+
+@pytest.mark.parametrize(
+    ("appear", "field", "who"),
+    [
+        (["Y@1.0,0.0@0"], "appear[0]", "O0"),  # onto O0's start place, at tick 0
+        (["Y@1.02,0.05@t=0"], "appear[0]", "O0"),  # footprints overlap, at t=0
+        (["Y@0.1,0.0@0"], "appear[0]", "the robot"),  # under the robot's base
+        (["Y@L0@0", "Z@L0@0"], "appear[1]", "Y"),  # two at once onto the same place
+    ],
+)
+def test_an_appearance_at_time_0_onto_an_occupied_place_is_refused(tmp_path, appear, field, who):
+    """Issue 17: an object put down inside another one at the start is certain from the
+    file alone: exit 2 naming the entry (later ones are set aside at run time)."""
+    lines = "".join(f"  - '{a}'\n" for a in appear)
+    info = _bad(tmp_path, f"appear:\n{lines}")
+    assert info.field == field
+    assert f"occupied by {who} at the start" in info.reason
+
+
+def test_a_later_appearance_onto_an_occupied_place_loads(tmp_path):
+    """At tick 1 or later the place may be free by then: the runner decides (it sets the
+    object aside with a warning when it is not)."""
+    s = load_scenario(write_one_bottle(tmp_path, "appear: ['Y@1.0,0.0@1', 'Z@L0@0']\n"))
+    assert s.object("Y").appear.when is not None and s.object("Z").appear is not None
+
+
+def test_an_appearance_flag_at_time_0_onto_an_occupied_place_exits_2(tmp_path, capsys):
+    path = write_one_bottle(tmp_path)
+    s = load_scenario(path)
+    with pytest.raises(InputError) as info:
+        s.with_events([parse_appear("Y@1.0,0.0@0")])
+    assert info.value.field == "--appear" and "occupied by O0" in info.value.reason
+    code = main(["simulate", "smp-mro", "--scenario", str(path), "--appear", "Y@1.0,0.0@0"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--appear" in err and "occupied by O0" in err

@@ -1,0 +1,81 @@
+"""Where objects stand, in 3-D (`tamp.sim.smp.placement`), and the one verdict of a run
+(`tamp.sim.smp.runner.judge`): no simulation needed."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from tamp.sim.smp.placement import ON_FLOOR_TOL, Body, blocker, free_spot, why_not_in
+from tamp.sim.smp.robot import OBJECT_KINDS
+from tamp.world.geometry import Area, Point
+from tamp.world.interface import Status
+
+BOTTLE = OBJECT_KINDS["bottle"]
+BOX = OBJECT_KINDS["obstacle"]
+L0 = Area("L0", Point(1.0, 0.7), 0.15)
+WORKSPACE = (-1.0, 2.5, -1.5, 2.0)
+
+
+def test_an_object_on_top_of_another_is_not_in_the_area():
+    """Issue 17: O0 pushed up onto O_a rests at z = 0.25 m inside L0's circle: not at L0."""
+    oa = Body("Oa", 1.02, 0.7, BOX.half_height, BOX)
+    o0 = Body("O0", 1.0, 0.71, 2 * BOX.half_height + BOTTLE.half_height, BOTTLE)
+    why = why_not_in(o0, L0, [oa, o0])
+    assert why is not None and "not resting on the floor" in why and "on top of Oa" in why
+    assert "z = 0.250 m" in why
+    assert why_not_in(Body("O0", 1.0, 0.71, BOTTLE.half_height, BOTTLE), L0) is None
+    assert why_not_in(Body("O0", 1.0, 0.71, 0.1 + ON_FLOOR_TOL * 0.9, BOTTLE), L0) is None
+    fallen = Body("O0", 1.0, 0.7, BOTTLE.radius, BOTTLE)  # lying on its side
+    assert "not resting on the floor" in why_not_in(fallen, L0)
+    outside = Body("O0", 1.0, 0.7 + 0.151, BOTTLE.half_height, BOTTLE)
+    assert why_not_in(outside, L0) == "O0 ended outside L0"
+
+
+def test_blocker_sees_footprints_the_robot_and_not_what_is_carried_above():
+    o1 = Body("O1", 1.0, 0.7, BOTTLE.half_height, BOTTLE)
+    assert blocker(1.0, 0.7, BOX, [o1]) == "O1"
+    assert blocker(1.05, 0.7, BOX, [o1]) == "O1"  # footprints overlap (0.035 + 0.049)
+    assert blocker(1.2, 0.7, BOX, [o1]) is None
+    carried = Body("O1", 1.0, 0.7, 2 * BOX.half_height + BOTTLE.half_height + 0.01, BOTTLE)
+    assert blocker(1.0, 0.7, BOX, [carried]) is None  # held high: the box fits under it
+    lifted = Body("O1", 1.0, 0.7, BOTTLE.half_height + 0.06, BOTTLE)  # just lifted
+    assert blocker(1.0, 0.7, BOX, [lifted]) == "O1"
+    assert blocker(1.0, 0.7, BOX, [], robot=(1.2, 0.7, 0.345)) == "the robot"
+    assert blocker(1.0, 0.7, BOX, [], robot=(1.5, 0.7, 0.345)) is None
+
+
+def test_free_spot_is_the_nearest_outside_every_area_and_footprint():
+    o0 = Body("O0", 1.0, 0.7, BOTTLE.half_height, BOTTLE)
+    other = Area("L1", Point(1.35, 0.7), 0.15)  # blocks the +x side
+    areas = {"L0": L0, "L1": other}
+    spot = free_spot(1.0, 0.7, BOX, bodies=[o0], areas=areas, workspace=WORKSPACE)
+    assert spot is not None
+    x, y = spot
+    for a in areas.values():
+        assert math.hypot(x - a.pos.x, y - a.pos.y) >= a.radius + BOX.radius
+    assert math.hypot(x - o0.x, y - o0.y) >= BOTTLE.radius + BOX.radius
+    d = math.hypot(x - 1.0, y - 0.7)
+    assert d == pytest.approx(0.25)  # first ring clear of L0 (0.15 + 0.049 + 0.01 gap)
+    # on that ring, +x (0 deg) to 30 deg fall in L1; 45 deg is the first clear angle
+    c = math.cos(math.pi / 4) * 0.25
+    assert (x, y) == pytest.approx((1.0 + c, 0.7 + c))
+    tiny = (0.9, 1.1, 0.6, 0.8)  # a workspace with no room outside L0
+    assert free_spot(1.0, 0.7, BOX, bodies=[o0], areas=areas, workspace=tiny) is None
+
+
+def test_one_verdict_decides_status_reason_and_exit():
+    from tamp.sim.smp.runner import SimResult, judge
+
+    assert judge(Status.SUCCESS, "every goal reached", [], 60) == ("SUCCESS", "every goal reached")
+    status, reason = judge(Status.SUCCESS, "every goal reached", ["O0 is not resting"], 60)
+    assert status == "FAILURE" and "the tree succeeded but on the plant O0 is not" in reason
+    assert judge(Status.FAILURE, "", [], 60) == ("FAILURE", "tree failed")
+    assert judge(None, "", [], 60)[0] == "TIMEOUT"
+    for status in ("SUCCESS", "FAILURE", "TIMEOUT"):
+        r = SimResult("x", status, "", [], {}, 1.0, 1.0)
+        data = r.to_json()
+        assert data["status"] == status and data["ok"] is (status == "SUCCESS")
+        assert r.exit_code == (0 if status == "SUCCESS" else 1)
+        assert data["warnings"] == []
