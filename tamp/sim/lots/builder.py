@@ -102,9 +102,10 @@ def build_diagram(scenario: CellScenario, *, meshcat: Meshcat | None = None) -> 
     hand = plant.GetBodyByName(ARM.hand_body, cell.arm)
     X_HC = plant.GetFrameByName(ARM.camera_frame, cell.arm).GetFixedPoseInBodyFrame()
     camera = builder.AddSystem(
-        RgbdSensor(plant.GetBodyFrameIdOrThrow(hand.index()), RigidTransform(X_HC), color_cam,
-                   depth_cam)
-    )  # fmt: skip
+        RgbdSensor(
+            plant.GetBodyFrameIdOrThrow(hand.index()), RigidTransform(X_HC), color_cam, depth_cam
+        )
+    )
     camera.set_name("wrist_camera")
     builder.Connect(scene_graph.get_query_output_port(), camera.query_object_input_port())
 
@@ -125,7 +126,9 @@ def build_diagram(scenario: CellScenario, *, meshcat: Meshcat | None = None) -> 
 
     kin = ArmKinematics(scenario.control.period)
     planner = GraspPlanner(scenario.grasp, intrinsics)
-    skills = builder.AddSystem(SkillController(scenario, kin, planner, cell.q0, cell.actuator_order))
+    skills = builder.AddSystem(
+        SkillController(scenario, kin, planner, cell.q0, cell.actuator_order)
+    )
     builder.Connect(plant.get_state_output_port(cell.arm), skills.arm_state_port)
     builder.Connect(perception.observation_port, skills.observation_port)
     builder.Connect(skills.view_request_port, perception.request_port)
@@ -143,11 +146,15 @@ def build_diagram(scenario: CellScenario, *, meshcat: Meshcat | None = None) -> 
         visualizer = MeshcatVisualizer.AddToBuilder(builder, scene_graph, meshcat, params)
     diagram = builder.Build()
     diagram.set_name(f"lots_cell_{scenario.name}")
-    return LotsCell(diagram, scenario, cell, camera, config, perception, skills, planner,
-                    visualizer, meshcat)  # fmt: skip
+    return LotsCell(
+        diagram, scenario, cell, camera, config, perception, skills, planner, visualizer, meshcat
+    )
 
 
 def fov_deg(intrinsics: tuple[float, float, float, float], width: int, height: int):
     """(horizontal, vertical) field of view in degrees."""
     fx, fy, _, _ = intrinsics
-    return (2 * math.degrees(math.atan(width / 2 / fx)), 2 * math.degrees(math.atan(height / 2 / fy)))
+    return (
+        2 * math.degrees(math.atan(width / 2 / fx)),
+        2 * math.degrees(math.atan(height / 2 / fy)),
+    )

@@ -72,9 +72,13 @@ class Footprint:
         """The footprint's four corners (4 x 2) for the object at (x, y, yaw) on the table."""
         c, s = math.cos(yaw), math.sin(yaw)
         pts = np.array(
-            [[self.xmin, self.ymin], [self.xmax, self.ymin], [self.xmax, self.ymax],
-             [self.xmin, self.ymax]]
-        )  # fmt: skip
+            [
+                [self.xmin, self.ymin],
+                [self.xmax, self.ymin],
+                [self.xmax, self.ymax],
+                [self.xmin, self.ymax],
+            ]
+        )
         return pts @ np.array([[c, s], [-s, c]]) + [x, y]
 
 
@@ -100,7 +104,14 @@ def read_footprint(path: Path) -> Footprint:
 
 
 def _rpy(r: float, p: float, y: float) -> np.ndarray:
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    cr, sr, cp, sp, cy, sy = (
+        math.cos(r),
+        math.sin(r),
+        math.cos(p),
+        math.sin(p),
+        math.cos(y),
+        math.sin(y),
+    )
     rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
     ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
     rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
@@ -135,7 +146,9 @@ class ObjectClass:
 
 
 def _cls(name: str, colour: str, *palette: tuple[float, float, float]) -> ObjectClass:
-    return ObjectClass(name, colour, palette, read_footprint(MODELS_DIR / "sdf" / f"lots_{name}.sdf"))
+    return ObjectClass(
+        name, colour, palette, read_footprint(MODELS_DIR / "sdf" / f"lots_{name}.sdf")
+    )
 
 
 CLASSES: dict[str, ObjectClass] = {
@@ -143,11 +156,15 @@ CLASSES: dict[str, ObjectClass] = {
     for c in (
         _cls("hammer", "0.80 0.55 0.25 1", (0.8, 0.55, 0.25), (0.55, 0.35, 0.2), (0.9, 0.7, 0.45)),
         _cls("saw", "0.85 0.20 0.15 1", (0.85, 0.2, 0.15), (0.2, 0.2, 0.2), (0.95, 0.5, 0.1)),
-        _cls("scissors", "0.20 0.45 0.85 1", (0.2, 0.45, 0.85), (0.1, 0.75, 0.8), (0.45, 0.25, 0.8)),
+        _cls(
+            "scissors", "0.20 0.45 0.85 1", (0.2, 0.45, 0.85), (0.1, 0.75, 0.8), (0.45, 0.25, 0.8)
+        ),
         _cls("toy_car", "0.95 0.75 0.10 1", (0.95, 0.75, 0.1), (0.85, 0.1, 0.5), (0.3, 0.8, 0.3)),
         _cls("wrench", "0.55 0.55 0.60 1", (0.55, 0.55, 0.6), (0.3, 0.35, 0.5), (0.6, 0.4, 0.4)),
         _cls("screw", "0.70 0.70 0.20 1", (0.7, 0.7, 0.2), (0.75, 0.5, 0.2), (0.5, 0.6, 0.3)),
-        _cls("screwdriver", "0.20 0.70 0.30 1", (0.2, 0.7, 0.3), (0.85, 0.25, 0.25), (0.2, 0.3, 0.8)),
+        _cls(
+            "screwdriver", "0.20 0.70 0.30 1", (0.2, 0.7, 0.3), (0.85, 0.25, 0.25), (0.2, 0.3, 0.8)
+        ),
         _cls("bottom", "0.60 0.25 0.70 1", (0.6, 0.25, 0.7), (0.35, 0.2, 0.55), (0.8, 0.45, 0.85)),
         _cls("body", "0.25 0.70 0.70 1", (0.25, 0.7, 0.7), (0.15, 0.5, 0.55), (0.5, 0.85, 0.8)),
         _cls("peak", "0.90 0.40 0.60 1", (0.9, 0.4, 0.6), (0.95, 0.6, 0.3), (0.7, 0.2, 0.4)),

@@ -46,6 +46,10 @@ class GraspPlanner:
         self.predictor = GraspPredictor.load(self.weights)
         self.intrinsics = intrinsics
         self.calls = 0
+        #: (crop, all predicted grasps, kept candidates) of every call when ``record`` is set:
+        #: what notebooks and tests show of the descending views (not simulation state)
+        self.record = False
+        self.history: list[tuple[TargetCrop, list, list[GraspCandidate]]] = []
 
     def candidates(
         self, crop: TargetCrop, X_WC: np.ndarray, view_height: float, n: int = 5
@@ -73,6 +77,8 @@ class GraspPlanner:
             out.append(
                 GraspCandidate(x, y, z, g.yaw, min(g.width_m, MAX_OPENING), g.quality, view_height)
             )
+        if self.record:
+            self.history.append((crop, grasps, out))
         return out
 
 

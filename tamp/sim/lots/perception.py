@@ -125,9 +125,15 @@ def analyse(
         occupied |= on_table
         vs, us = np.nonzero(on_table)
         detections.append(
-            Detection(int(value), cls, n, float(us.mean()), float(vs.mean()),
-                      float(np.median(depth[on_table])))
-        )  # fmt: skip
+            Detection(
+                int(value),
+                cls,
+                n,
+                float(us.mean()),
+                float(vs.mean()),
+                float(np.median(depth[on_table])),
+            )
+        )
     counts = dict(Counter(d.cls for d in detections))
     return counts, tuple(detections), tuple(sorted(in_hand)), occupied
 

@@ -54,9 +54,7 @@ class Workspace:
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         cx, cy = self.center
-        return (
-            abs(x - cx) <= self.size[0] / 2 - margin and abs(y - cy) <= self.size[1] / 2 - margin
-        )
+        return abs(x - cx) <= self.size[0] / 2 - margin and abs(y - cy) <= self.size[1] / 2 - margin
 
 
 @dataclass(frozen=True)
@@ -142,9 +140,20 @@ def load_cell_scenario(path: str | Path) -> CellScenario:
     data, file = load_yaml(scenario_path(path), kind="LOTS workcell scenario")
     f = Fields(data, file)
     f.check_keys(
-        {"version", "name", "description", "plant", "camera", "control", "grasp", "workspaces",
-         "waste_basket", "objects", "max_sim_time"}
-    )  # fmt: skip
+        {
+            "version",
+            "name",
+            "description",
+            "plant",
+            "camera",
+            "control",
+            "grasp",
+            "workspaces",
+            "waste_basket",
+            "objects",
+            "max_sim_time",
+        }
+    )
     name = f.str("name")
     if f.has("description"):
         f.str("description")
@@ -212,7 +221,8 @@ def load_cell_scenario(path: str | Path) -> CellScenario:
     a, b = workspaces["A"], workspaces["B"]
     if abs(a.center[1] - b.center[1]) < (a.size[1] + b.size[1]) / 2 + 0.1:
         raise ws.error(
-            "B.center", "W^A and W^B must lie side by side in y, at least 0.1 m apart (one view each)"
+            "B.center",
+            "W^A and W^B must lie side by side in y, at least 0.1 m apart (one view each)",
         )
     basket = f.vector("waste_basket", 2)
     _check_reach(f, "waste_basket", basket)

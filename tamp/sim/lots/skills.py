@@ -14,6 +14,8 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   ``grasp.attempts`` times.
 - ``Place(side)``: look at W^side, put the held object down on the freest spot seen.
 - ``Discard()``: drop the held object into the waste basket.
+- ``PickAt(side, x, y, yaw_deg)``: a scripted top grasp at a given TCP position and yaw (no
+  network, one attempt; the grasp tests use it), then the same lift and check as ``Pick``.
 
 Each skill is a queue of small steps (move, settle, grip, view, check, finish) kept in the
 abstract state; views end in a handler that appends the next steps from what was seen, so
@@ -45,7 +47,7 @@ from tamp.sim.lots.perception import Observation, ViewRequest
 from tamp.sim.lots.scenario import CellScenario
 from tamp.world.interface import Status
 
-SKILLS = ("LookAt", "Pick", "Place", "Discard")
+SKILLS = ("LookAt", "Pick", "PickAt", "Place", "Discard")
 OPEN = ARM.finger_max
 CLOSED = 0.0
 #: fingers closer than this (sum of both, m) after closing: nothing between them
@@ -55,7 +57,7 @@ MIN_GRASP_Z = 0.017
 GRASP_DEPTH = 0.012  # how far below the object's top the TCP goes
 LIFT_Z = 0.16
 ANGULAR_SPEED = 1.2  # rad/s, mean over a move
-APPROACH_SPEED = 0.08  # m/s, the last 12 cm to the grasp
+APPROACH_SPEED = 0.15  # m/s (mean 0.08), the last 12 cm to the grasp
 
 
 @dataclass(frozen=True)
@@ -117,8 +119,14 @@ def min_jerk(s: float) -> float:
 class SkillController(LeafSystem):
     """Runs the workcell's skills; see the module docstring."""
 
-    def __init__(self, scenario: CellScenario, kin: ArmKinematics, planner: GraspPlanner | None,
-                 q0: np.ndarray, actuator_order: list[int]):  # fmt: skip
+    def __init__(
+        self,
+        scenario: CellScenario,
+        kin: ArmKinematics,
+        planner: GraspPlanner | None,
+        q0: np.ndarray,
+        actuator_order: list[int],
+    ):
         super().__init__()
         self.set_name("skills")
         self.scenario = scenario
@@ -141,13 +149,17 @@ class SkillController(LeafSystem):
             "desired_state", 18, self._calc_desired, prerequisites_of_calc=ticket
         )
         self.view_request_port = self.DeclareAbstractOutputPort(
-            "view_request", lambda: AbstractValue.Make(ViewRequest()), self._calc_request,
+            "view_request",
+            lambda: AbstractValue.Make(ViewRequest()),
+            self._calc_request,
             prerequisites_of_calc=ticket,
-        )  # fmt: skip
+        )
         self.status_port = self.DeclareAbstractOutputPort(
-            "skill_status", lambda: AbstractValue.Make(SkillStatus()), self._calc_status,
+            "skill_status",
+            lambda: AbstractValue.Make(SkillStatus()),
+            self._calc_status,
             prerequisites_of_calc=ticket,
-        )  # fmt: skip
+        )
 
     # ---- outputs -------------------------------------------------------------------------
     def state(self, context) -> SkillState:
@@ -199,6 +211,17 @@ class SkillController(LeafSystem):
             s.side = args[1] if len(args) == 2 else "A"
             s.target_cls, s.track, s.attempt = args[0], None, 1
             self._begin_attempt(s)
+        elif name == "PickAt" and len(args) == 4 and args[0] in sides:
+            if s.held is not None:
+                return self._finish(s, t, Status.FAILURE, f"already holding {s.held}")
+            try:
+                x, y, yaw = (float(a) for a in args[1:])
+            except ValueError:
+                return self._finish(s, t, Status.FAILURE, f"PickAt needs numbers: {cmd}")
+            s.side, s.target_cls, s.track, s.attempt = args[0], "object", None, 1
+            s.hold_z = MIN_GRASP_Z
+            s.grasp_attempts += 1
+            s.steps = self._grasp_steps(x, y, MIN_GRASP_Z, math.radians(yaw), args[0])
         elif name == "Place" and len(args) == 1 and args[0] in sides:
             if s.held is None:
                 return self._finish(s, t, Status.FAILURE, "nothing held")
@@ -224,8 +247,9 @@ class SkillController(LeafSystem):
         s.log.append((t, f"{status.value} {s.command}{': ' + detail if detail else ''}"))
 
     # ---- step plans ----------------------------------------------------------------------
-    def look_pose(self, side: str, height: float | None = None,
-                  at: tuple[float, float] | None = None) -> tuple[float, float, float, float]:  # fmt: skip
+    def look_pose(
+        self, side: str, height: float | None = None, at: tuple[float, float] | None = None
+    ) -> tuple[float, float, float, float]:
         """TCP pose (x, y, z, yaw 0) that puts the camera ``height`` above ``at`` (default:
         the look height over the workspace centre), looking straight down."""
         h = self.scenario.control.look_height if height is None else height
@@ -235,8 +259,9 @@ class SkillController(LeafSystem):
         return (float(p[0]), float(p[1]), float(p[2]), 0.0)
 
     def _move(self, pose, speed: float | None = None) -> Step:
-        return Step("move", pose=tuple(float(v) for v in pose),
-                    speed=speed or self.scenario.control.speed)  # fmt: skip
+        return Step(
+            "move", pose=tuple(float(v) for v in pose), speed=speed or self.scenario.control.speed
+        )
 
     def _look(self, side: str) -> tuple[Step, ...]:
         return (self._move(self.look_pose(side)), Step("settle"))
@@ -341,10 +366,14 @@ class SkillController(LeafSystem):
         if cands:
             s.candidates = (*s.candidates, cands[0])
         s.log.append(
-            (t, f"view {s.views_done} at {height:.2f} m: {s.target_cls} at "
-                f"({p[0]:.3f}, {p[1]:.3f}), best q={cands[0].quality:.2f}" if cands else
-                f"view {s.views_done} at {height:.2f} m: no grasp on the {s.target_cls}")
-        )  # fmt: skip
+            (
+                t,
+                f"view {s.views_done} at {height:.2f} m: {s.target_cls} at "
+                f"({p[0]:.3f}, {p[1]:.3f}), best q={cands[0].quality:.2f}"
+                if cands
+                else f"view {s.views_done} at {height:.2f} m: no grasp on the {s.target_cls}",
+            )
+        )
         s.views_done += 1
         if s.views_done <= len(heights):
             h = heights[s.views_done - 1]
@@ -363,16 +392,25 @@ class SkillController(LeafSystem):
         yaw = hand_yaw_for_closing(g.yaw)
         s.hold_z = z
         s.grasp_attempts += 1
-        s.log.append((t, f"grasp at ({g.x:.3f}, {g.y:.3f}, {z:.3f}) yaw {math.degrees(yaw):.0f} "
-                         f"deg, q={g.quality:.2f} (view at {g.view_height:.2f} m)"))  # fmt: skip
-        s.steps = (
+        s.log.append(
+            (
+                t,
+                f"grasp at ({g.x:.3f}, {g.y:.3f}, {z:.3f}) yaw {math.degrees(yaw):.0f} "
+                f"deg, q={g.quality:.2f} (view at {g.view_height:.2f} m)",
+            )
+        )
+        s.steps = self._grasp_steps(g.x, g.y, z, yaw, s.side)
+
+    def _grasp_steps(self, x: float, y: float, z: float, yaw: float, side: str) -> tuple:
+        """Open, approach from 12 cm above, close, check the fingers, lift, look again."""
+        return (
             Step("grip", width=OPEN),
-            self._move((g.x, g.y, z + 0.12, yaw)),
-            self._move((g.x, g.y, z, yaw), APPROACH_SPEED),
+            self._move((x, y, z + 0.12, yaw)),
+            self._move((x, y, z, yaw), APPROACH_SPEED),
             Step("grip", width=CLOSED),
             Step("check_fingers"),
-            self._move((g.x, g.y, LIFT_Z, yaw)),
-            *self._look(s.side),
+            self._move((x, y, LIFT_Z, yaw)),
+            *self._look(side),
             Step("view", handler="lifted"),
         )
 
@@ -387,7 +425,7 @@ class SkillController(LeafSystem):
 
     def _retry(self, s: SkillState, t: float, why: str) -> None:
         s.log.append((t, f"grasp attempt {s.attempt} failed: {why}"))
-        if s.attempt >= self.scenario.grasp.attempts:
+        if s.attempt >= self.scenario.grasp.attempts or s.command.name == "PickAt":
             return self._finish(s, t, Status.FAILURE, f"{why} ({s.attempt} attempts)")
         s.attempt += 1
         x, y, z, _ = self.kin_pose(s)
@@ -405,7 +443,9 @@ class SkillController(LeafSystem):
 
     def _on_place(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         X_WC = self.kin.camera_pose(q_meas[:7])
-        x, y = free_spot(self.scenario.workspaces[s.side], obs.occupied, X_WC, self.planner.intrinsics)
+        x, y = free_spot(
+            self.scenario.workspaces[s.side], obs.occupied, X_WC, self.planner.intrinsics
+        )
         tray = 0.01 if self.scenario.workspaces[s.side].tray else 0.0
         z = s.hold_z + 0.008 + tray
         s.log.append((t, f"place the {s.held} at ({x:.3f}, {y:.3f})"))
@@ -419,17 +459,26 @@ class SkillController(LeafSystem):
         )
 
 
-def free_spot(workspace, occupied: np.ndarray | None, X_WC: RigidTransform,
-              intrinsics, margin: float = 0.06, step: float = 0.02) -> tuple[float, float]:  # fmt: skip
+def free_spot(
+    workspace,
+    occupied: np.ndarray | None,
+    X_WC: RigidTransform,
+    intrinsics,
+    margin: float = 0.06,
+    step: float = 0.02,
+) -> tuple[float, float]:
     """The point of ``workspace`` (``margin`` inside its edges) farthest from every object
     pixel of the view, measured in the table plane."""
     fx, fy, cx, cy = intrinsics
     cxw, cyw = workspace.center
     hx, hy = workspace.size[0] / 2 - margin, workspace.size[1] / 2 - margin
     grid = np.array(
-        [[cxw + dx, cyw + dy] for dx in np.arange(-hx, hx + 1e-9, step)
-         for dy in np.arange(-hy, hy + 1e-9, step)]
-    )  # fmt: skip
+        [
+            [cxw + dx, cyw + dy]
+            for dx in np.arange(-hx, hx + 1e-9, step)
+            for dy in np.arange(-hy, hy + 1e-9, step)
+        ]
+    )
     if occupied is None or not occupied.any():
         return workspace.center
     vs, us = np.nonzero(occupied)
@@ -442,4 +491,3 @@ def free_spot(workspace, occupied: np.ndarray | None, X_WC: RigidTransform,
     d = np.min(np.linalg.norm(grid[:, None, :] - pts[None, :, :], axis=2), axis=1)
     best = grid[int(np.argmax(d))]
     return (float(best[0]), float(best[1]))
-
