@@ -20,6 +20,7 @@ the request asks for it (grasping). ``frames`` in the state counts the renders.
 
 from __future__ import annotations
 
+import time
 from collections import Counter
 from dataclasses import dataclass, field
 
@@ -184,6 +185,8 @@ class Perception(LeafSystem):
         self._min_pixels = min_pixels
         self._hand_depth = hand_depth
         self._center = ((width - 1) / 2, (height - 1) / 2)
+        #: wall seconds of every render (measurement only; not simulation state)
+        self.render_seconds: list[float] = []
         self._crop = min(width, height)
         self.color_port = self.DeclareAbstractInputPort(
             "color_image", AbstractValue.Make(ImageRgba8U(width, height))
@@ -217,8 +220,10 @@ class Perception(LeafSystem):
         req: ViewRequest = self.request_port.Eval(context)
         if req.id == 0 or req.id == s.served:
             return EventStatus.DidNothing()
+        t0 = time.perf_counter()
         label = self.label_port.Eval(context).data[..., 0]
         depth = self.depth_port.Eval(context).data[..., 0]
+        self.render_seconds.append(time.perf_counter() - t0)
         kinds = 2
         counts, dets, in_hand, occupied = analyse(
             label, depth, self._classes, min_pixels=self._min_pixels, hand_depth=self._hand_depth
@@ -227,7 +232,9 @@ class Perception(LeafSystem):
         if req.target is not None:
             det = choose_target(dets, req.target, req.track, self._center)
             if det is not None:
+                t0 = time.perf_counter()
                 rgb = self.color_port.Eval(context).data[..., :3]
+                self.render_seconds[-1] += time.perf_counter() - t0
                 kinds += 1
                 u0, v0 = crop_square(self._crop, label.shape, det.u, det.v)
                 sl = (slice(v0, v0 + self._crop), slice(u0, u0 + self._crop))
