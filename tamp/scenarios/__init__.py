@@ -15,10 +15,14 @@ def path(name: str) -> Path:
     return p
 
 
-def resolve(name_or_path: str | Path) -> Path:
-    """A user path if it exists, else the packaged scenario of that name."""
+def resolve(name_or_path: str | Path, folder: str = "") -> Path:
+    """A user path if it exists, else the packaged scenario of that name (under ``folder``,
+    ``.yaml`` optional); the given path when neither exists (the loader reports it)."""
     p = Path(name_or_path)
     if p.exists():
         return p
-    packaged = ROOT / str(name_or_path)
-    return packaged if packaged.exists() else p
+    base = ROOT / folder if folder else ROOT
+    for packaged in (base / str(name_or_path), base / f"{name_or_path}.yaml"):
+        if packaged.exists():
+            return packaged
+    return p

@@ -8,7 +8,7 @@ per class, the instances in view (pixel area, centroid, depth), never a plant po
 
 Counting (Zhou et al. §III-B: the observed state is the count per class of the visible
 workspace): an instance counts when at least ``min_pixels`` of its pixels lie farther than
-``hand_depth`` from the camera (nearer pixels are in the gripper). For a grasp, the target
+``hand_depth`` (0.12 m) from the camera (nearer pixels are in the gripper). For a grasp, the target
 (the instance of the requested class tracked so far, else the one nearest the image centre)
 comes with a square crop of colour, depth and its mask around it: the grasp network's input.
 
@@ -103,7 +103,7 @@ def analyse(
     classes: dict[int, str],
     *,
     min_pixels: int = 25,
-    hand_depth: float = 0.15,
+    hand_depth: float = 0.12,
 ) -> tuple[dict[str, int], tuple[Detection, ...], tuple[str, ...], np.ndarray]:
     """(counts per class, detections, classes in the gripper, table-object mask) of one view."""
     valid = np.isfinite(depth) & (depth > 0)
@@ -177,7 +177,7 @@ class Perception(LeafSystem):
         height: int,
         period: float,
         min_pixels: int = 25,
-        hand_depth: float = 0.15,
+        hand_depth: float = 0.12,
     ):
         super().__init__()
         self.set_name("perception")

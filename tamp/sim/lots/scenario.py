@@ -35,7 +35,6 @@ from tamp.sim.lots.catalogue import CLASSES
 CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
 NETWORKS = ("hrgnet", "grconvnet", "ggcnn")
 SIDES = ("A", "B")
-SIM_DIR = scenarios.ROOT / "lots_sim"
 #: Where each network's shipped weights are (relative to the repository's models/ folder).
 DEFAULT_WEIGHTS = {"hrgnet": "weights/hrgnet_synth_rgbd.pt"}
 #: The arm's comfortable reach on the table (Franka: 0.855 m from joint 2; keep a margin).
@@ -92,7 +91,8 @@ class ControlSettings:
 
 @dataclass(frozen=True)
 class GraspSettings:
-    """Which network, its weights, the camera heights of the descending views, attempts."""
+    """Which network, its weights, the camera heights above the target of the descending
+    views (the last is the paper's preset 0.2 m), attempts."""
 
     network: str = "hrgnet"
     weights: str | None = None
@@ -124,20 +124,10 @@ class CellScenario:
         raise KeyError(uid)
 
 
-def scenario_path(name: str | Path) -> Path:
-    """A user path if it exists, else ``tamp/scenarios/lots_sim/<name>`` (``.yaml`` optional)."""
-    p = Path(name)
-    if p.exists():
-        return p
-    for cand in (SIM_DIR / str(name), SIM_DIR / f"{name}.yaml"):
-        if cand.exists():
-            return cand
-    return p
-
-
 def load_cell_scenario(path: str | Path) -> CellScenario:
     """Load and validate a workcell scenario; `InputError` names file and field."""
-    data, file = load_yaml(scenario_path(path), kind="LOTS workcell scenario")
+    path = scenarios.resolve(path, folder="lots_sim")  # packaged: tamp/scenarios/lots_sim
+    data, file = load_yaml(path, kind="LOTS workcell scenario")
     f = Fields(data, file)
     f.check_keys(
         {

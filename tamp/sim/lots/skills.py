@@ -7,13 +7,15 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   detail lists the counts, e.g. ``hammer=1,saw=1``.
 - ``Pick(cls[, side])``: closed-loop multi-view grasp (Zhou et al. §IV-B, Fig. 6): a view at
   the look pose finds the target; the hand then descends keeping the target centred under
-  the camera, viewing it at each height of ``grasp.view_heights`` (down to 0.2 m); the grasp
-  network runs on every view and the best grasp over all views is taken; approach, close,
-  lift. A grasp fails when the fingers close on nothing (finger width) or when the target is
-  still on the table in the next view (not lifted); it is retried with new predictions up to
-  ``grasp.attempts`` times.
+  the camera, viewing it at each height of ``grasp.view_heights`` above the target's top
+  (down to the paper's preset 0.2 m); the grasp network runs on every view and the best
+  grasp over all views is taken; approach, close, lift. A grasp fails when the fingers close
+  on nothing (finger width) or when the target is still on the table in the next view (not
+  lifted); it is retried with new predictions up to ``grasp.attempts`` times.
 - ``Place(side)``: look at W^side, put the held object down on the freest spot seen.
 - ``Discard()``: drop the held object into the waste basket.
+  Both check the fingers before letting go: an object lost on the way is reported (FAILURE,
+  "dropped ... while carrying it") and the robot no longer believes it holds it.
 - ``PickAt(side, x, y, yaw_deg)``: a scripted top grasp at a given TCP position and yaw (no
   network, one attempt; the grasp tests use it), then the same lift and check as ``Pick``.
 
@@ -54,7 +56,7 @@ CLOSED = 0.0
 MIN_HOLD_WIDTH = 0.004
 #: lowest TCP height over the table for a grasp: the pads' lower edge 2 mm above it
 MIN_GRASP_Z = 0.017
-GRASP_DEPTH = 0.012  # how far below the object's top the TCP goes
+GRASP_DEPTH = 0.025  # how far below the object's top the TCP goes (pads reach 15 mm lower)
 LIFT_Z = 0.16
 ANGULAR_SPEED = 1.2  # rad/s, mean over a move
 APPROACH_SPEED = 0.15  # m/s (mean 0.08), the last 12 cm to the grasp
@@ -64,7 +66,7 @@ APPROACH_SPEED = 0.15  # m/s (mean 0.08), the last 12 cm to the grasp
 class Step:
     """One step of a skill. ``pose``: TCP goal (x, y, z, yaw) of a move."""
 
-    kind: str  # move | settle | grip | wait | view | check_fingers | finish
+    kind: str  # move | settle | grip | wait | view | check_fingers | check_held | finish
     pose: tuple[float, float, float, float] | None = None
     speed: float = 0.0
     width: float = 0.0
@@ -93,6 +95,7 @@ class SkillState:
     target_cls: str | None = None
     track: int | None = None
     target_xy: tuple[float, float] | None = None
+    target_top: float = 0.0  # the target's top above the table, from the last view
     views_done: int = 0
     candidates: tuple[GraspCandidate, ...] = ()
     chosen: GraspCandidate | None = None
@@ -233,6 +236,7 @@ class SkillController(LeafSystem):
             bx, by = self.scenario.waste_basket
             s.steps = (
                 self._move((bx, by, 0.30, 0.0)),
+                Step("check_held"),
                 Step("grip", width=OPEN),
                 Step("wait", duration=0.4),
                 Step("finish", detail="discarded", handler="released"),
@@ -250,8 +254,8 @@ class SkillController(LeafSystem):
     def look_pose(
         self, side: str, height: float | None = None, at: tuple[float, float] | None = None
     ) -> tuple[float, float, float, float]:
-        """TCP pose (x, y, z, yaw 0) that puts the camera ``height`` above ``at`` (default:
-        the look height over the workspace centre), looking straight down."""
+        """TCP pose (x, y, z, yaw 0) that puts the camera ``height`` above the table at ``at``
+        (default: the look height over the workspace centre), looking straight down."""
         h = self.scenario.control.look_height if height is None else height
         x, y = self.scenario.workspaces[side].center if at is None else at
         X_WC = RigidTransform(down(0.0), [x, y, h])
@@ -297,6 +301,11 @@ class SkillController(LeafSystem):
             if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
                 s.steps, s.step_t0 = s.steps[1:], None
                 return self._retry(s, t, "missed: the fingers closed on nothing")
+            done = True
+        elif step.kind == "check_held":
+            if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
+                lost, s.held = s.held, None
+                return self._finish(s, t, Status.FAILURE, f"dropped the {lost} while carrying it")
             done = True
         elif step.kind == "finish":
             if step.handler == "released":
@@ -361,7 +370,8 @@ class SkillController(LeafSystem):
         pc = np.array([(det.u - cx) * det.depth / fx, (det.v - cy) * det.depth / fy, det.depth])
         p = X_WC @ pc
         s.target_xy = (float(p[0]), float(p[1]))
-        height = float(X_WC.translation()[2])
+        s.target_top = max(float(p[2]), 0.0)  # median depth of its pixels: about its top
+        height = float(X_WC.translation()[2]) - s.target_top  # camera above the target
         cands = self.planner.candidates(crop, X_WC.GetAsMatrix4(), height)
         if cands:
             s.candidates = (*s.candidates, cands[0])
@@ -378,7 +388,7 @@ class SkillController(LeafSystem):
         if s.views_done <= len(heights):
             h = heights[s.views_done - 1]
             s.steps = (
-                self._move(self.look_pose(s.side, h, s.target_xy)),
+                self._move(self.look_pose(s.side, h + s.target_top, s.target_xy)),
                 Step("settle"),
                 Step("view", handler="target"),
                 *s.steps,
@@ -452,6 +462,7 @@ class SkillController(LeafSystem):
         yaw = 0.0
         s.steps = (
             self._move((x, y, z + 0.12, yaw)),
+            Step("check_held"),
             self._move((x, y, z, yaw), APPROACH_SPEED),
             Step("grip", width=OPEN),
             self._move((x, y, LIFT_Z, yaw)),
