@@ -106,5 +106,5 @@ class ArmKinematics:
 def pose_error(X_now: RigidTransform, X_goal: RigidTransform) -> np.ndarray:
     """[rotation vector; translation] that takes ``X_now`` to ``X_goal``, in the world frame."""
     R = X_goal.rotation() @ X_now.rotation().inverse()
-    aa = R.ToAngleAxis()
+    aa = RotationMatrix(R.ToQuaternion()).ToAngleAxis()  # re-orthonormalised
     return np.r_[aa.axis() * aa.angle(), X_goal.translation() - X_now.translation()]

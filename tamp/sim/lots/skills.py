@@ -337,11 +337,14 @@ class SkillController(LeafSystem):
         X1 = RigidTransform(down(yaw), [x, y, z])
         a = min_jerk((el + self.dt) / T)
         q0 = Quaternion(np.asarray(w0))
-        rot = RotationMatrix(q0.slerp(a, X1.rotation().ToQuaternion()))
+        w = q0.slerp(a, X1.rotation().ToQuaternion()).wxyz()
+        rot = RotationMatrix(Quaternion(w / np.linalg.norm(w)))
         X_des = RigidTransform(rot, (1 - a) * np.asarray(p0) + a * X1.translation())
         X_now = self.kin.tcp_pose(s.q)
         V = pose_error(X_now, X_des) / self.dt
         v, _ = self.kin.step(s.q, s.v, V)
+        if not np.all(np.isfinite(v)):  # never command a non-finite target: hold instead
+            v = np.zeros(7)
         s.q = s.q + v * self.dt
         s.v = v
         if el >= T:

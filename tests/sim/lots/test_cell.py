@@ -3,6 +3,7 @@ perception never reads object poses, and the camera renders only when a view is 
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from pydrake.math import RigidTransform
 
@@ -151,3 +152,19 @@ def test_closed_loop_pick_with_hrgnet(building):
     ]
     assert len(held) == 1 and held[0].startswith("scissors")
     assert d.skill_state().grasp_successes == 1
+
+
+def test_start_poll_cancel(building):
+    d = CellDriver(building)
+    h = d.start("LookAt(B)")
+    for _ in range(10):  # 0.5 s: the arm is on its way
+        assert d.poll(h) is Status.RUNNING
+    with pytest.raises(RuntimeError):
+        d.start("LookAt(A)")
+    d.cancel(h)
+    assert d.poll(h) is Status.FAILURE and d.status().detail == "cancelled"
+    d.advance(0.5)
+    v = building.plant.GetVelocities(d.plant_context(), building.cell.arm)[:7]
+    assert np.max(np.abs(v)) < 0.02  # stopped where it was
+    assert d.run("Discard()").detail == "nothing held"
+    assert d.run("Fly(A)").status is Status.FAILURE
