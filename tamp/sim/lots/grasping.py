@@ -22,7 +22,7 @@ from tamp.sim.lots.scenario import DEFAULT_WEIGHTS, GraspSettings
 
 MAX_OPENING = 0.08  # the gripper's opening (2 x 0.04 m)
 #: the object's top must stand this high above the table where the fingers close: the pads
-#: stop 2 mm above the table, so a 4 mm saw blade gives them nothing to squeeze
+#: stop 2 mm above the table, so a 6 mm saw blade gives them nothing to squeeze
 MIN_TOP = 0.008
 
 
