@@ -1,0 +1,157 @@
+"""Builds the LOTS workcell diagram from a `CellScenario` (the manipulation course's station
+idiom: one function, one named Diagram, exported ports).
+
+    MultibodyPlant + SceneGraph (tamp.sim.lots.plant: table, arm, baskets, objects)
+      wrist RgbdSensor (CameraConfig, VTK over EGL) ─► color/depth/label ─► Perception
+      Perception.observation ─► SkillController ─► desired_state (the arm's PD actuators)
+      SkillController.view_request ─► Perception
+    exported: skill_command (in); skill_status, observation, view_request, arm_state (out)
+    MeshcatVisualizer (optional)
+
+The camera is configured through Drake's `CameraConfig` (D435 colour intrinsics at a reduced
+resolution) but added as a plain `RgbdSensor`, not through `ApplyCameraConfig`: that adds an
+`RgbdSensorDiscrete` whose zero-order hold renders at ``fps`` whatever happens; a plain
+sensor renders only when Perception evaluates its ports (see `tamp.sim.lots.perception`).
+Nothing outside the plant reads object poses: the skills see the arm's state and the
+camera's answers only (a test checks the diagram's connections).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from pydrake.geometry import (
+    MakeRenderEngineVtk,
+    RenderEngineVtkParams,
+)
+from pydrake.math import RigidTransform
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.sensors import CameraConfig, RgbdSensor
+
+from tamp.sim.core.recording import add_visualizer
+from tamp.sim.lots.catalogue import ARM
+from tamp.sim.lots.grasping import GraspPlanner
+from tamp.sim.lots.kinematics import ArmKinematics
+from tamp.sim.lots.perception import Perception
+from tamp.sim.lots.plant import CellPlant, add_cell_plant
+from tamp.sim.lots.scenario import CellScenario
+from tamp.sim.lots.skills import SkillController
+
+RENDERER = "vtk"
+
+
+@dataclass
+class LotsCell:
+    """The built diagram and the handles the driver, tests and notebooks need."""
+
+    diagram: Diagram
+    scenario: CellScenario
+    cell: CellPlant
+    camera: RgbdSensor
+    camera_config: CameraConfig
+    perception: Perception
+    skills: SkillController
+    planner: GraspPlanner
+    visualizer: object = None
+    meshcat: Any = None
+
+    @property
+    def plant(self) -> MultibodyPlant:
+        return self.cell.plant
+
+    @property
+    def intrinsics(self) -> tuple[float, float, float, float]:
+        return self.planner.intrinsics
+
+
+def camera_config(scenario: CellScenario) -> CameraConfig:
+    """The wrist camera as a `CameraConfig`: colour, depth and label at the scenario's size and
+    vertical field of view, mounted at the arm's ``camera`` frame."""
+    cam = scenario.camera
+    return CameraConfig(
+        width=cam.width,
+        height=cam.height,
+        focal=CameraConfig.FovDegrees(y=cam.fov_y_deg),
+        clipping_near=cam.near,
+        clipping_far=cam.far,
+        z_near=cam.near,
+        z_far=cam.far,
+        renderer_name=RENDERER,
+        renderer_class="RenderEngineVtk",
+        name="wrist_camera",
+        rgb=True,
+        depth=True,
+        label=True,
+    )
+
+
+def build_diagram(scenario: CellScenario, *, meshcat: Any = None) -> LotsCell:
+    """The named Diagram of ``scenario``; drive it through ``skill_command`` (see `CellDriver`)."""
+    builder = DiagramBuilder()
+    cell = add_cell_plant(builder, scenario)
+    plant, scene_graph = cell.plant, cell.scene_graph
+    scene_graph.AddRenderer(RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL")))
+
+    config = camera_config(scenario)
+    color_cam, depth_cam = config.MakeCameras()
+    hand = plant.GetBodyByName(ARM.hand_body, cell.arm)
+    X_HC = plant.GetFrameByName(ARM.camera_frame, cell.arm).GetFixedPoseInBodyFrame()
+    camera = builder.AddSystem(
+        RgbdSensor(
+            plant.GetBodyFrameIdOrThrow(hand.index()), RigidTransform(X_HC), color_cam, depth_cam
+        )
+    )
+    camera.set_name("wrist_camera")
+    builder.Connect(scene_graph.get_query_output_port(), camera.query_object_input_port())
+
+    K = color_cam.core().intrinsics()
+    intrinsics = (K.focal_x(), K.focal_y(), K.center_x(), K.center_y())
+    labels = {int(body.index()): cell.classes[uid] for uid, body in cell.bodies.items()}
+    perception = builder.AddSystem(
+        Perception(
+            labels,
+            width=scenario.camera.width,
+            height=scenario.camera.height,
+            period=scenario.control.perception_period,
+        )
+    )
+    builder.Connect(camera.color_image_output_port(), perception.color_port)
+    builder.Connect(camera.depth_image_32F_output_port(), perception.depth_port)
+    builder.Connect(camera.label_image_output_port(), perception.label_port)
+
+    kin = ArmKinematics(scenario.control.period)
+    planner = GraspPlanner(scenario.grasp, intrinsics)
+    skills = builder.AddSystem(
+        SkillController(scenario, kin, planner, cell.q0, cell.actuator_order)
+    )
+    builder.Connect(plant.get_state_output_port(cell.arm), skills.arm_state_port)
+    builder.Connect(perception.observation_port, skills.observation_port)
+    builder.Connect(skills.view_request_port, perception.request_port)
+    builder.Connect(skills.desired_state_port, plant.get_desired_state_input_port(cell.arm))
+
+    builder.ExportInput(skills.command_port, "skill_command")
+    builder.ExportOutput(skills.status_port, "skill_status")
+    builder.ExportOutput(perception.observation_port, "observation")
+    builder.ExportOutput(skills.view_request_port, "view_request")
+    builder.ExportOutput(plant.get_state_output_port(cell.arm), "arm_state")
+
+    visualizer = None
+    if meshcat is not None:
+        visualizer = add_visualizer(builder, scene_graph, meshcat)
+    diagram = builder.Build()
+    diagram.set_name(f"lots_cell_{scenario.name}")
+    return LotsCell(
+        diagram, scenario, cell, camera, config, perception, skills, planner, visualizer, meshcat
+    )
+
+
+def fov_deg(intrinsics: tuple[float, float, float, float], width: int, height: int):
+    """(horizontal, vertical) field of view in degrees."""
+    fx, fy, _, _ = intrinsics
+    return (
+        2 * math.degrees(math.atan(width / 2 / fx)),
+        2 * math.degrees(math.atan(height / 2 / fy)),
+    )

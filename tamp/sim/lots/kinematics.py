@@ -1,0 +1,110 @@
+"""The arm's own kinematic model: forward kinematics of the TCP and camera, and one step of
+Drake's differential IK (the skills' only way of moving the end effector).
+
+A separate arm-only `MultibodyPlant` (same SDF, base welded) serves as the controller's
+model, as on a real robot: it never sees the objects. `step` solves Drake's
+``DoDifferentialInverseKinematics`` QP over the 7 arm joints for a desired TCP spatial
+velocity, with Franka's joint position, velocity and acceleration limits and a small
+joint-centring term towards the ready posture (it resolves the arm's redundancy).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.inverse_kinematics import (
+    DifferentialInverseKinematicsParameters,
+    DifferentialInverseKinematicsStatus,
+    DoDifferentialInverseKinematics,
+)
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import JacobianWrtVariable
+
+from tamp.sim.core.parsing import make_parser
+from tamp.sim.lots.catalogue import ARM, READY
+
+#: TCP pointing down, hand x along world x: the orientation of the look poses (yaw 0).
+R_DOWN = RotationMatrix(np.diag([1.0, -1.0, -1.0]))
+
+
+def down(yaw: float) -> RotationMatrix:
+    """TCP orientation pointing down, turned by ``yaw`` about the world z axis."""
+    return RotationMatrix.MakeZRotation(yaw) @ R_DOWN
+
+
+def hand_yaw_for_closing(closing_yaw: float) -> float:
+    """The TCP yaw whose fingers close along world direction ``closing_yaw``, in (-pi/2, pi/2].
+
+    The fingers close along the hand's y axis, which at TCP yaw psi points along psi - pi/2;
+    a parallel gripper is symmetric, so psi is taken modulo pi, nearest the ready yaw 0.
+    """
+    psi = closing_yaw + math.pi / 2
+    return (psi + math.pi / 2) % math.pi - math.pi / 2
+
+
+class ArmKinematics:
+    """Forward kinematics and differential IK of ``lots_arm.sdf`` (7 joints, fingers ignored)."""
+
+    def __init__(self, period: float):
+        self.plant = MultibodyPlant(0.0)
+        (self.model,) = make_parser(self.plant).AddModelsFromUrl(ARM.url)
+        self.plant.WeldFrames(
+            self.plant.world_frame(), self.plant.GetFrameByName(ARM.base_frame, self.model)
+        )
+        self.plant.Finalize()
+        self.context = self.plant.CreateDefaultContext()
+        self.tcp = self.plant.GetFrameByName(ARM.tcp_frame, self.model)
+        self.camera = self.plant.GetFrameByName(ARM.camera_frame, self.model)
+        self.X_TC = self.camera.CalcPose(self.context, self.tcp)  # camera in the TCP frame
+        self.params = DifferentialInverseKinematicsParameters(7, 7)
+        self.params.set_time_step(period)
+        self.params.set_joint_position_limits((np.array(ARM.lower), np.array(ARM.upper)))
+        vmax = np.array(ARM.max_velocity)
+        self.params.set_joint_velocity_limits((-vmax, vmax))
+        amax = np.array(ARM.max_acceleration)
+        self.params.set_joint_acceleration_limits((-amax, amax))
+        self.params.set_nominal_joint_position(np.array(READY))
+        self.params.set_joint_centering_gain(0.5 * np.eye(7))
+
+    def _set(self, q7: np.ndarray) -> None:
+        q = self.plant.GetPositions(self.context)
+        q[:7] = q7
+        self.plant.SetPositions(self.context, q)
+
+    def tcp_pose(self, q7: np.ndarray) -> RigidTransform:
+        self._set(q7)
+        return self.tcp.CalcPoseInWorld(self.context)
+
+    def camera_pose(self, q7: np.ndarray) -> RigidTransform:
+        self._set(q7)
+        return self.camera.CalcPoseInWorld(self.context)
+
+    def tcp_for_camera(self, X_WC: RigidTransform) -> RigidTransform:
+        """The TCP pose that puts the camera at ``X_WC``."""
+        return X_WC @ self.X_TC.inverse()
+
+    def step(self, q7: np.ndarray, v7: np.ndarray, V_WT: np.ndarray) -> tuple[np.ndarray, bool]:
+        """Joint velocities that move the TCP at spatial velocity ``V_WT`` ([w; v] in the
+        world frame), within the limits; (v, solved)."""
+        self._set(q7)
+        J = self.plant.CalcJacobianSpatialVelocity(
+            self.context,
+            JacobianWrtVariable.kV,
+            self.tcp,
+            np.zeros(3),
+            self.plant.world_frame(),
+            self.plant.world_frame(),
+        )[:, :7]
+        result = DoDifferentialInverseKinematics(q7, v7, V_WT, J, self.params)
+        if result.status != DifferentialInverseKinematicsStatus.kSolutionFound:
+            return np.zeros(7), False
+        return np.asarray(result.joint_velocities).reshape(-1), True
+
+
+def pose_error(X_now: RigidTransform, X_goal: RigidTransform) -> np.ndarray:
+    """[rotation vector; translation] that takes ``X_now`` to ``X_goal``, in the world frame."""
+    R = X_goal.rotation() @ X_now.rotation().inverse()
+    aa = RotationMatrix(R.ToQuaternion()).ToAngleAxis()  # re-orthonormalised
+    return np.r_[aa.axis() * aa.angle(), X_goal.translation() - X_now.translation()]

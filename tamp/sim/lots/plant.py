@@ -1,0 +1,113 @@
+"""The LOTS workcell's MultibodyPlant: table, arm, baskets, objects (friction grasps, SAP).
+
+Plant settings come from Drake's `MultibodyPlantConfig`: the discrete SAP solver and
+hydroelastic contact (with point-contact fallback): the objects and finger pads are
+compliant-hydroelastic boxes, the table and baskets rigid, so objects rest steadily on flat
+faces and a closed gripper holds an object only by friction. Nothing is welded to the hand.
+
+The arm's joints are driven by the plant's PD-controlled actuators (`PdControllerGains`,
+implicit in SAP) tracking a desired state; gravity is switched off for the arm's model
+instance only, which is ideal gravity compensation (Franka's controller compensates the
+arm's own gravity too). Objects, and so a held object's weight, feel gravity. The finger
+actuators' effort limit (40 N, from the SDF) bounds the squeeze force.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.geometry import Box
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant, MultibodyPlantConfig
+from pydrake.multibody.tree import PdControllerGains
+
+from tamp.sim.core.models import sdf_path
+from tamp.sim.core.parsing import make_parser
+from tamp.sim.lots.catalogue import ARM, CLASSES, READY, TABLE_URL, TRAY_URL, WASTE_BASKET_URL
+from tamp.sim.lots.scenario import CellScenario
+
+#: colours of the workspace mats (W^A green, W^B blue), drawn 1 mm above the table
+MAT_RGBA = {"A": (0.55, 0.75, 0.55, 1.0), "B": (0.55, 0.65, 0.85, 1.0)}
+
+
+@dataclass
+class CellPlant:
+    """The plant and the handles the builder, skills and tests need."""
+
+    plant: MultibodyPlant
+    scene_graph: object
+    arm: object  # ModelInstanceIndex
+    bodies: dict[str, object]  # object id -> RigidBody
+    classes: dict[str, str]  # object id -> class
+    q0: np.ndarray  # the arm's 9 positions at the start (7 joints + 2 fingers)
+    actuator_order: list[int]  # actuator k drives ARM.joints[actuator_order[k]]
+
+
+def object_sdf(cls: str, uid: str, rgb: tuple[float, float, float]) -> str:
+    """The class's SDF text with the model renamed to ``uid`` and its primary colour ``rgb``."""
+    c = CLASSES[cls]
+    text = sdf_path(f"lots_{cls}").read_text()
+    text = text.replace(f'<model name="{cls}">', f'<model name="{uid}">')
+    colour = f"<diffuse>{rgb[0]:.3f} {rgb[1]:.3f} {rgb[2]:.3f} 1</diffuse>"
+    return re.sub(rf"<diffuse>{re.escape(c.colour)}</diffuse>", colour, text)
+
+
+def add_cell_plant(builder, scenario: CellScenario) -> CellPlant:
+    """Adds the finalised plant + scene graph of ``scenario`` to ``builder``."""
+    config = MultibodyPlantConfig(
+        time_step=scenario.time_step,
+        discrete_contact_approximation="sap",
+        contact_model=scenario.contact_model,
+    )
+    plant, scene_graph = AddMultibodyPlant(config, builder)
+    parser = make_parser(plant)
+    (table,) = parser.AddModelsFromUrl(TABLE_URL)
+    table_body = plant.GetBodyByName("lots_table", table)
+    plant.WeldFrames(plant.world_frame(), table_body.body_frame())
+    for side, w in scenario.workspaces.items():
+        X = RigidTransform([w.center[0], w.center[1], 0.0005])
+        plant.RegisterVisualGeometry(
+            table_body, X, Box(w.size[0], w.size[1], 0.001), f"mat_{side}", np.array(MAT_RGBA[side])
+        )
+        if w.tray:
+            (tray,) = parser.AddModelsFromUrl(TRAY_URL)
+            plant.WeldFrames(
+                plant.world_frame(),
+                plant.GetFrameByName("lots_tray", tray),
+                RigidTransform([w.center[0], w.center[1], 0.0]),
+            )
+    (basket,) = parser.AddModelsFromUrl(WASTE_BASKET_URL)
+    bx, by = scenario.waste_basket
+    plant.WeldFrames(
+        plant.world_frame(),
+        plant.GetFrameByName("lots_waste_basket", basket),
+        RigidTransform([bx, by, 0.0]),
+    )
+
+    (arm,) = parser.AddModelsFromUrl(ARM.url)
+    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(ARM.base_frame, arm))
+    q0 = np.r_[READY, ARM.finger_max, ARM.finger_max]
+    for k, name in enumerate(ARM.joints):
+        plant.GetJointByName(name, arm).set_default_positions([q0[k]])
+        kp, kd = ARM.gains(name)
+        plant.GetJointActuatorByName(name, arm).set_controller_gains(PdControllerGains(p=kp, d=kd))
+
+    bodies, classes = {}, {}
+    for o in scenario.objects:
+        (m,) = parser.AddModelsFromString(object_sdf(o.cls, o.id, o.rgb), "sdf")
+        body = plant.GetBodyByName(CLASSES[o.cls].body, m)
+        z = 0.0 if not scenario.workspaces[o.workspace].tray else 0.01
+        X = RigidTransform(RotationMatrix.MakeZRotation(o.yaw), [o.xy[0], o.xy[1], z + 1e-4])
+        plant.SetDefaultFloatingBaseBodyPose(body, X)
+        bodies[o.id] = body
+        classes[o.id] = o.cls
+
+    plant.mutable_gravity_field().set_enabled(arm, False)
+    plant.Finalize()
+    actuator_order = [
+        ARM.joints.index(plant.get_joint_actuator(i).joint().name())
+        for i in plant.GetJointActuatorIndices(arm)
+    ]
+    return CellPlant(plant, scene_graph, arm, bodies, classes, q0, actuator_order)

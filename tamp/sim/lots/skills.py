@@ -1,0 +1,507 @@
+"""The LOTS workcell's skills as one LeafSystem: a `SkillCommand` in, joint targets, view
+requests and a `SkillStatus` out (the same messages as the SMP-MRO workcell, `tamp.sim.core`).
+
+Skills (arguments are strings, as in `tamp.world.actions.Action`):
+
+- ``LookAt(side)``: move the camera over W^side, settle, count what is in view; the status
+  detail lists the counts, e.g. ``hammer=1,saw=1``.
+- ``Pick(cls[, side])``: closed-loop multi-view grasp (Zhou et al. §IV-B, Fig. 6): a view at
+  the look pose finds the target; the hand then descends keeping the target centred under
+  the camera, viewing it at each height of ``grasp.view_heights`` above the target's top
+  (down to the paper's preset 0.2 m); the grasp network runs on every view and the best
+  grasp over all views is taken; approach, close, lift. A grasp fails when the fingers close
+  on nothing (finger width) or when the target is still on the table in the next view (not
+  lifted); it is retried with new predictions up to ``grasp.attempts`` times.
+- ``Place(side)``: look at W^side, put the held object down on the freest spot seen.
+- ``Discard()``: drop the held object into the waste basket.
+  Both check the fingers before letting go: an object lost on the way is reported (FAILURE,
+  "dropped ... while carrying it") and the robot no longer believes it holds it.
+- ``PickAt(side, x, y, yaw_deg)``: a scripted top grasp at a given TCP position and yaw (no
+  network, one attempt; the grasp tests use it), then the same lift and check as ``Pick``.
+
+Each skill is a queue of small steps (move, settle, grip, view, check, finish) kept in the
+abstract state; views end in a handler that appends the next steps from what was seen, so
+the whole skill is data in the Context and one update advances it by one control period.
+Moves are straight TCP lines with a minimum-jerk profile, tracked by Drake's differential
+IK (`tamp.sim.lots.kinematics`). The target is kept centred by re-aiming the camera at
+each view (position-based visual servoing at the view rate: images cost ~50 ms each).
+A new command id starts a skill (while another runs it is cancelled first); ``cancel=True``
+stops the arm where it is and reports FAILURE ("cancelled").
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from pydrake.common.eigen_geometry import Quaternion
+from pydrake.common.value import AbstractValue
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
+
+from tamp.sim.core.messages import SkillCommand, SkillStatus
+from tamp.sim.lots.catalogue import ARM
+from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner
+from tamp.sim.lots.kinematics import ArmKinematics, down, hand_yaw_for_closing, pose_error
+from tamp.sim.lots.perception import Observation, ViewRequest
+from tamp.sim.lots.scenario import CellScenario
+from tamp.world.interface import Status
+
+SKILLS = ("LookAt", "Pick", "PickAt", "Place", "Discard")
+OPEN = ARM.finger_max
+CLOSED = 0.0
+#: fingers closer than this (sum of both, m) after closing: nothing between them
+MIN_HOLD_WIDTH = 0.004
+#: lowest TCP height over the table for a grasp: the pads' lower edge 2 mm above it
+MIN_GRASP_Z = 0.017
+GRASP_DEPTH = 0.025  # how far below the object's top the TCP goes (pads reach 15 mm lower)
+LIFT_Z = 0.16
+ANGULAR_SPEED = 1.2  # rad/s, mean over a move
+APPROACH_SPEED = 0.15  # m/s (mean 0.08), the last 12 cm to the grasp
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of a skill. ``pose``: TCP goal (x, y, z, yaw) of a move."""
+
+    kind: str  # move | settle | grip | wait | view | check_fingers | check_held | finish
+    pose: tuple[float, float, float, float] | None = None
+    speed: float = 0.0
+    width: float = 0.0
+    handler: str = ""
+    duration: float = 0.0
+    status: Status = Status.SUCCESS
+    detail: str = ""
+
+
+@dataclass
+class SkillState:
+    """The controller's abstract state: the running command, the arm targets, the step
+    queue, what the pick has learned so far, and a log of what happened (sim times)."""
+
+    q: np.ndarray
+    v: np.ndarray = field(default_factory=lambda: np.zeros(7))
+    finger: float = OPEN
+    command: SkillCommand = field(default_factory=SkillCommand)
+    status: SkillStatus = field(default_factory=SkillStatus)
+    steps: tuple[Step, ...] = ()
+    step_t0: float | None = None
+    move_from: tuple | None = None  # (p, quaternion wxyz, duration)
+    request: ViewRequest = field(default_factory=ViewRequest)
+    next_view: int = 1
+    side: str = "A"
+    target_cls: str | None = None
+    track: int | None = None
+    target_xy: tuple[float, float] | None = None
+    target_top: float = 0.0  # the target's top above the table, from the last view
+    views_done: int = 0
+    candidates: tuple[GraspCandidate, ...] = ()
+    chosen: GraspCandidate | None = None
+    attempt: int = 0
+    held: str | None = None
+    hold_z: float = MIN_GRASP_Z  # TCP height above the object's bottom when it was picked
+    grasp_attempts: int = 0
+    grasp_successes: int = 0
+    log: list[tuple[float, str]] = field(default_factory=list)
+
+    def __deepcopy__(self, memo: dict) -> SkillState:
+        new = copy.copy(self)
+        new.q = self.q.copy()
+        new.v = self.v.copy()
+        new.log = list(self.log)
+        return new
+
+
+def min_jerk(s: float) -> float:
+    s = min(max(s, 0.0), 1.0)
+    return s**3 * (10 - 15 * s + 6 * s * s)
+
+
+class SkillController(LeafSystem):
+    """Runs the workcell's skills; see the module docstring."""
+
+    def __init__(
+        self,
+        scenario: CellScenario,
+        kin: ArmKinematics,
+        planner: GraspPlanner | None,
+        q0: np.ndarray,
+        actuator_order: list[int],
+    ):
+        super().__init__()
+        self.set_name("skills")
+        self.scenario = scenario
+        self.kin = kin
+        self.planner = planner
+        self.dt = scenario.control.period
+        self._order = list(actuator_order)
+        self.command_port = self.DeclareAbstractInputPort(
+            "skill_command", AbstractValue.Make(SkillCommand())
+        )
+        self.arm_state_port = self.DeclareVectorInputPort("arm_state", 18)
+        self.observation_port = self.DeclareAbstractInputPort(
+            "observation", AbstractValue.Make(Observation())
+        )
+        init = SkillState(q=np.array(q0[:7], float), finger=float(q0[7]))
+        self._state = self.DeclareAbstractState(AbstractValue.Make(init))
+        self.DeclarePeriodicUnrestrictedUpdateEvent(self.dt, 0.0, self._update)
+        ticket = {self.abstract_state_ticket(self._state)}
+        self.desired_state_port = self.DeclareVectorOutputPort(
+            "desired_state", 18, self._calc_desired, prerequisites_of_calc=ticket
+        )
+        self.view_request_port = self.DeclareAbstractOutputPort(
+            "view_request",
+            lambda: AbstractValue.Make(ViewRequest()),
+            self._calc_request,
+            prerequisites_of_calc=ticket,
+        )
+        self.status_port = self.DeclareAbstractOutputPort(
+            "skill_status",
+            lambda: AbstractValue.Make(SkillStatus()),
+            self._calc_status,
+            prerequisites_of_calc=ticket,
+        )
+
+    # ---- outputs -------------------------------------------------------------------------
+    def state(self, context) -> SkillState:
+        return context.get_abstract_state(self._state).get_value()
+
+    def _calc_desired(self, context, output: BasicVector) -> None:
+        s = self.state(context)
+        q9 = np.r_[s.q, s.finger, s.finger]
+        output.SetFromVector(np.r_[q9[self._order], np.zeros(9)])
+
+    def _calc_request(self, context, output) -> None:
+        output.set_value(self.state(context).request)
+
+    def _calc_status(self, context, output) -> None:
+        output.set_value(self.state(context).status)
+
+    # ---- the update ----------------------------------------------------------------------
+    def _update(self, context, state) -> EventStatus:
+        s: SkillState = copy.deepcopy(self.state(context))
+        t = context.get_time()
+        cmd: SkillCommand = self.command_port.Eval(context)
+        x = self.arm_state_port.Eval(context)
+        q_meas, v_meas = x[:9], x[9:]
+        if cmd.id != s.command.id and cmd.id != 0 and not cmd.cancel:
+            if s.steps and s.status.status is Status.RUNNING:
+                s.log.append((t, f"{s.command} preempted by {cmd}"))
+            self._start(s, cmd, t)
+        elif cmd.cancel and cmd.id == s.command.id and s.status.status is Status.RUNNING:
+            self._finish(s, t, Status.FAILURE, "cancelled")
+        if s.steps and s.status.status is Status.RUNNING:
+            obs: Observation = self.observation_port.Eval(context)
+            self._advance(s, t, q_meas, v_meas, obs)
+        state.get_mutable_abstract_state(self._state).set_value(s)
+        return EventStatus.Succeeded()
+
+    def _start(self, s: SkillState, cmd: SkillCommand, t: float) -> None:
+        s.command = cmd
+        s.status = SkillStatus(cmd.id, Status.RUNNING)
+        s.steps, s.step_t0, s.move_from = (), None, None
+        s.log.append((t, f"start {cmd}"))
+        name, args = cmd.name, cmd.args
+        sides = self.scenario.workspaces
+        if name == "LookAt" and len(args) == 1 and args[0] in sides:
+            s.side = args[0]
+            s.steps = (*self._look(args[0]), Step("view", handler="counted"))
+        elif name == "Pick" and 1 <= len(args) <= 2 and (len(args) == 1 or args[1] in sides):
+            if s.held is not None:
+                return self._finish(s, t, Status.FAILURE, f"already holding {s.held}")
+            s.side = args[1] if len(args) == 2 else "A"
+            s.target_cls, s.track, s.attempt = args[0], None, 1
+            self._begin_attempt(s)
+        elif name == "PickAt" and len(args) == 4 and args[0] in sides:
+            if s.held is not None:
+                return self._finish(s, t, Status.FAILURE, f"already holding {s.held}")
+            try:
+                x, y, yaw = (float(a) for a in args[1:])
+            except ValueError:
+                return self._finish(s, t, Status.FAILURE, f"PickAt needs numbers: {cmd}")
+            s.side, s.target_cls, s.track, s.attempt = args[0], "object", None, 1
+            s.hold_z = MIN_GRASP_Z
+            s.grasp_attempts += 1
+            s.steps = self._grasp_steps(x, y, MIN_GRASP_Z, math.radians(yaw), args[0])
+        elif name == "Place" and len(args) == 1 and args[0] in sides:
+            if s.held is None:
+                return self._finish(s, t, Status.FAILURE, "nothing held")
+            s.side = args[0]
+            s.steps = (*self._look(args[0]), Step("view", handler="place"))
+        elif name == "Discard" and not args:
+            if s.held is None:
+                return self._finish(s, t, Status.FAILURE, "nothing held")
+            bx, by = self.scenario.waste_basket
+            s.steps = (
+                self._move((bx, by, 0.30, 0.0)),
+                Step("check_held"),
+                Step("grip", width=OPEN),
+                Step("wait", duration=0.4),
+                Step("finish", detail="discarded", handler="released"),
+            )
+        else:
+            self._finish(s, t, Status.FAILURE, f"unknown skill {cmd} (known: {', '.join(SKILLS)})")
+
+    def _finish(self, s: SkillState, t: float, status: Status, detail: str = "") -> None:
+        s.v = np.zeros(7)
+        s.status = SkillStatus(s.command.id, status, detail)
+        s.steps, s.step_t0, s.move_from = (), None, None
+        s.log.append((t, f"{status.value} {s.command}{': ' + detail if detail else ''}"))
+
+    # ---- step plans ----------------------------------------------------------------------
+    def look_pose(
+        self, side: str, height: float | None = None, at: tuple[float, float] | None = None
+    ) -> tuple[float, float, float, float]:
+        """TCP pose (x, y, z, yaw 0) that puts the camera ``height`` above the table at ``at``
+        (default: the look height over the workspace centre), looking straight down."""
+        h = self.scenario.control.look_height if height is None else height
+        x, y = self.scenario.workspaces[side].center if at is None else at
+        X_WC = RigidTransform(down(0.0), [x, y, h])
+        p = self.kin.tcp_for_camera(X_WC).translation()
+        return (float(p[0]), float(p[1]), float(p[2]), 0.0)
+
+    def _move(self, pose, speed: float | None = None) -> Step:
+        return Step(
+            "move", pose=tuple(float(v) for v in pose), speed=speed or self.scenario.control.speed
+        )
+
+    def _look(self, side: str) -> tuple[Step, ...]:
+        return (self._move(self.look_pose(side)), Step("settle"))
+
+    def _begin_attempt(self, s: SkillState) -> None:
+        s.candidates, s.chosen, s.views_done, s.target_xy = (), None, 0, None
+        s.steps = (*self._look(s.side), Step("view", handler="target"))
+
+    # ---- step execution ------------------------------------------------------------------
+    def _advance(self, s, t, q_meas, v_meas, obs: Observation) -> None:
+        step = s.steps[0]
+        if s.step_t0 is None:
+            s.step_t0 = t
+            self._enter(s, step, t)
+        el = t - s.step_t0
+        done = False
+        if step.kind == "move":
+            done = self._track(s, el)
+        elif step.kind == "settle":
+            ok = np.max(np.abs(v_meas[:7])) < 0.03 and np.max(np.abs(q_meas[:7] - s.q)) < 0.01
+            done = (el >= 0.1 and ok) or el >= 1.0
+        elif step.kind == "grip":
+            done = (el >= 0.3 and np.max(np.abs(v_meas[7:])) < 0.003) or el >= 1.5
+        elif step.kind == "wait":
+            done = el >= step.duration
+        elif step.kind == "view":
+            if obs.id == s.request.id:
+                s.steps = s.steps[1:]
+                s.step_t0 = None
+                getattr(self, f"_on_{step.handler}")(s, t, obs, q_meas)
+                return
+        elif step.kind == "check_fingers":
+            if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
+                s.steps, s.step_t0 = s.steps[1:], None
+                return self._retry(s, t, "missed: the fingers closed on nothing")
+            done = True
+        elif step.kind == "check_held":
+            if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
+                lost, s.held = s.held, None
+                return self._finish(s, t, Status.FAILURE, f"dropped the {lost} while carrying it")
+            done = True
+        elif step.kind == "finish":
+            if step.handler == "released":
+                s.held = None
+            return self._finish(s, t, step.status, step.detail)
+        if done:
+            s.steps, s.step_t0, s.move_from = s.steps[1:], None, None
+            s.v = np.zeros(7)
+
+    def _enter(self, s: SkillState, step: Step, t: float) -> None:
+        if step.kind == "move":
+            X0 = self.kin.tcp_pose(s.q)
+            x, y, z, yaw = step.pose
+            X1 = RigidTransform(down(yaw), [x, y, z])
+            dist = float(np.linalg.norm(X1.translation() - X0.translation()))
+            ang = float(np.linalg.norm(pose_error(X0, X1)[:3]))
+            T = max(1.875 * dist / step.speed, 1.875 * ang / ANGULAR_SPEED, 0.2)
+            s.move_from = (X0.translation().copy(), X0.rotation().ToQuaternion().wxyz(), T)
+        elif step.kind == "grip":
+            s.finger = step.width
+        elif step.kind == "view":
+            s.request = ViewRequest(s.next_view, s.side, s.target_cls, s.track)
+            s.next_view += 1
+
+    def _track(self, s: SkillState, el: float) -> bool:
+        """One differential-IK step along the current move; True when it has arrived."""
+        p0, w0, T = s.move_from
+        x, y, z, yaw = s.steps[0].pose
+        X1 = RigidTransform(down(yaw), [x, y, z])
+        a = min_jerk((el + self.dt) / T)
+        q0 = Quaternion(np.asarray(w0))
+        w = q0.slerp(a, X1.rotation().ToQuaternion()).wxyz()
+        rot = RotationMatrix(Quaternion(w / np.linalg.norm(w)))
+        X_des = RigidTransform(rot, (1 - a) * np.asarray(p0) + a * X1.translation())
+        X_now = self.kin.tcp_pose(s.q)
+        V = pose_error(X_now, X_des) / self.dt
+        v, _ = self.kin.step(s.q, s.v, V)
+        if not np.all(np.isfinite(v)):  # never command a non-finite target: hold instead
+            v = np.zeros(7)
+        s.q = s.q + v * self.dt
+        s.v = v
+        if el >= T:
+            err = pose_error(self.kin.tcp_pose(s.q), X1)
+            return bool(np.linalg.norm(err[3:]) < 0.002 and np.linalg.norm(err[:3]) < 0.01) or (
+                el >= T + 1.0
+            )
+        return False
+
+    # ---- view handlers -------------------------------------------------------------------
+    def _on_counted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
+        detail = ",".join(f"{k}={v}" for k, v in sorted(obs.counts.items()))
+        self._finish(s, t, Status.SUCCESS, detail)
+
+    def _on_target(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
+        crop = obs.target
+        heights = self.scenario.grasp.view_heights
+        if crop is None:
+            if s.views_done == 0:
+                return self._finish(s, t, Status.FAILURE, f"no {s.target_cls} in W^{s.side}")
+            return self._retry(s, t, f"lost the {s.target_cls} during the descent")
+        det = crop.detection
+        s.track = det.label
+        X_WC = self.kin.camera_pose(q_meas[:7])
+        fx, fy, cx, cy = self.planner.intrinsics
+        pc = np.array([(det.u - cx) * det.depth / fx, (det.v - cy) * det.depth / fy, det.depth])
+        p = X_WC @ pc
+        s.target_xy = (float(p[0]), float(p[1]))
+        s.target_top = max(float(p[2]), 0.0)  # median depth of its pixels: about its top
+        height = float(X_WC.translation()[2]) - s.target_top  # camera above the target
+        cands = self.planner.candidates(crop, X_WC.GetAsMatrix4(), height)
+        if cands:
+            s.candidates = (*s.candidates, cands[0])
+        s.log.append(
+            (
+                t,
+                f"view {s.views_done} at {height:.2f} m: {s.target_cls} at "
+                f"({p[0]:.3f}, {p[1]:.3f}), best q={cands[0].quality:.2f}"
+                if cands
+                else f"view {s.views_done} at {height:.2f} m: no grasp on the {s.target_cls}",
+            )
+        )
+        s.views_done += 1
+        if s.views_done <= len(heights):
+            h = heights[s.views_done - 1]
+            s.steps = (
+                self._move(self.look_pose(s.side, h + s.target_top, s.target_xy)),
+                Step("settle"),
+                Step("view", handler="target"),
+                *s.steps,
+            )
+            return
+        if not s.candidates:
+            return self._retry(s, t, f"no grasp found on the {s.target_cls}")
+        g = max(s.candidates, key=lambda c: c.quality)
+        s.chosen = g
+        z = max(g.z - GRASP_DEPTH, MIN_GRASP_Z)
+        yaw = hand_yaw_for_closing(g.yaw)
+        s.hold_z = z
+        s.grasp_attempts += 1
+        s.log.append(
+            (
+                t,
+                f"grasp at ({g.x:.3f}, {g.y:.3f}, {z:.3f}) yaw {math.degrees(yaw):.0f} "
+                f"deg, q={g.quality:.2f} (view at {g.view_height:.2f} m)",
+            )
+        )
+        s.steps = self._grasp_steps(g.x, g.y, z, yaw, s.side)
+
+    def _grasp_steps(self, x: float, y: float, z: float, yaw: float, side: str) -> tuple:
+        """Open, approach from 12 cm above, close, check the fingers, lift, look again."""
+        return (
+            Step("grip", width=OPEN),
+            self._move((x, y, z + 0.12, yaw)),
+            self._move((x, y, z, yaw), APPROACH_SPEED),
+            Step("grip", width=CLOSED),
+            Step("check_fingers"),
+            self._move((x, y, LIFT_Z, yaw)),
+            *self._look(side),
+            Step("view", handler="lifted"),
+        )
+
+    def _on_lifted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
+        if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
+            return self._retry(s, t, "slipped: the fingers closed after the lift")
+        if any(d.label == s.track for d in obs.detections):
+            return self._retry(s, t, f"not lifted: the {s.target_cls} is still on the table")
+        s.held = s.target_cls
+        s.grasp_successes += 1
+        self._finish(s, t, Status.SUCCESS, f"holding {s.held}")
+
+    def _retry(self, s: SkillState, t: float, why: str) -> None:
+        s.log.append((t, f"grasp attempt {s.attempt} failed: {why}"))
+        if s.attempt >= self.scenario.grasp.attempts or s.command.name == "PickAt":
+            return self._finish(s, t, Status.FAILURE, f"{why} ({s.attempt} attempts)")
+        s.attempt += 1
+        x, y, z, _ = self.kin_pose(s)
+        s.candidates, s.chosen, s.views_done = (), None, 0
+        s.steps = (
+            Step("grip", width=OPEN),
+            self._move((x, y, max(z, LIFT_Z), 0.0)),
+            *self._look(s.side),
+            Step("view", handler="target"),
+        )
+
+    def kin_pose(self, s: SkillState) -> tuple[float, float, float, float]:
+        p = self.kin.tcp_pose(s.q).translation()
+        return (float(p[0]), float(p[1]), float(p[2]), 0.0)
+
+    def _on_place(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
+        X_WC = self.kin.camera_pose(q_meas[:7])
+        x, y = free_spot(
+            self.scenario.workspaces[s.side], obs.occupied, X_WC, self.planner.intrinsics
+        )
+        tray = 0.01 if self.scenario.workspaces[s.side].tray else 0.0
+        z = s.hold_z + 0.008 + tray
+        s.log.append((t, f"place the {s.held} at ({x:.3f}, {y:.3f})"))
+        yaw = 0.0
+        s.steps = (
+            self._move((x, y, z + 0.12, yaw)),
+            Step("check_held"),
+            self._move((x, y, z, yaw), APPROACH_SPEED),
+            Step("grip", width=OPEN),
+            self._move((x, y, LIFT_Z, yaw)),
+            Step("finish", detail=f"placed {s.held} in W^{s.side}", handler="released"),
+        )
+
+
+def free_spot(
+    workspace,
+    occupied: np.ndarray | None,
+    X_WC: RigidTransform,
+    intrinsics,
+    margin: float = 0.06,
+    step: float = 0.02,
+) -> tuple[float, float]:
+    """The point of ``workspace`` (``margin`` inside its edges) farthest from every object
+    pixel of the view, measured in the table plane."""
+    fx, fy, cx, cy = intrinsics
+    cxw, cyw = workspace.center
+    hx, hy = workspace.size[0] / 2 - margin, workspace.size[1] / 2 - margin
+    grid = np.array(
+        [
+            [cxw + dx, cyw + dy]
+            for dx in np.arange(-hx, hx + 1e-9, step)
+            for dy in np.arange(-hy, hy + 1e-9, step)
+        ]
+    )
+    if occupied is None or not occupied.any():
+        return workspace.center
+    vs, us = np.nonzero(occupied)
+    # object pixels on the table plane (z = 0) through the camera
+    R, p = X_WC.rotation().matrix(), X_WC.translation()
+    rays = R @ np.stack([(us - cx) / fx, (vs - cy) / fy, np.ones_like(us, float)])
+    s_ = -p[2] / rays[2]
+    pts = (p[:2, None] + rays[:2] * s_).T
+    pts = pts[:: max(1, len(pts) // 2000)]
+    d = np.min(np.linalg.norm(grid[:, None, :] - pts[None, :, :], axis=2), axis=1)
+    best = grid[int(np.argmax(d))]
+    return (float(best[0]), float(best[1]))

@@ -1,0 +1,170 @@
+"""The workcell in simulation: looks count what is in view, grasps hold by friction only,
+perception never reads object poses, and the camera renders only when a view is asked for."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pydrake.math import RigidTransform
+
+from tamp.sim.lots.builder import build_diagram
+from tamp.sim.lots.driver import CellDriver
+from tamp.sim.lots.scenario import load_cell_scenario
+from tamp.world.interface import Status
+from tests.sim.lots.helpers import write_scenario
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def building():
+    """The packaged model-building scene (W^A: saw, 2 scissors, hammer; W^B empty)."""
+    return build_diagram(load_cell_scenario("model_building"))
+
+
+@pytest.fixture(scope="module")
+def block_cell(tmp_path_factory):
+    """One tower body (0.07 x 0.04 x 0.05 m) at the centre of W^A, long side along x."""
+    path = write_scenario(
+        tmp_path_factory.mktemp("cell"),
+        [{"class": "body", "workspace": "A", "xy": [0.0, 0.0], "yaw": 0}],
+    )
+    return build_diagram(load_cell_scenario(path))
+
+
+def test_diagram_is_named_and_exports_its_ports(building):
+    d = building.diagram
+    assert d.get_name() == "lots_cell_model_building"
+    assert d.get_input_port(0).get_name() == "skill_command"
+    for name in ("skill_status", "observation", "view_request", "arm_state"):
+        assert d.HasOutputPort(name)
+
+
+def test_controller_side_never_reads_object_poses(building):
+    """Skills and perception are fed by the camera, the arm's own state and each other."""
+    plant = building.plant
+    allowed = {
+        (building.camera.get_name(), p.get_name())
+        for p in (
+            building.camera.color_image_output_port(),
+            building.camera.depth_image_32F_output_port(),
+            building.camera.label_image_output_port(),
+        )
+    } | {
+        (plant.get_name(), plant.get_state_output_port(building.cell.arm).get_name()),
+        ("skills", "view_request"),
+        ("perception", "observation"),
+    }
+    consumers = {building.skills.get_name(), building.perception.get_name()}
+    fed = []
+    for (sys_in, _), (sys_out, out_index) in building.diagram.connection_map().items():
+        if sys_in.get_name() in consumers:
+            fed.append((sys_out.get_name(), sys_out.get_output_port(out_index).get_name()))
+    assert fed and set(fed) <= allowed
+    # the camera's images go to perception only
+    cams = [k for k, v in building.diagram.connection_map().items() if v[0] is building.camera]
+    assert {k[0].get_name() for k in cams} == {"perception"}
+
+
+def test_looks_count_one_workspace_at_a_time(building):
+    d = CellDriver(building)
+    a = d.run("LookAt(A)")
+    assert a.status is Status.SUCCESS
+    assert a.detail == "hammer=1,saw=1,scissors=2"
+    assert d.observation().counts == {"hammer": 1, "saw": 1, "scissors": 2}
+    b = d.run("LookAt(B)")
+    assert b.status is Status.SUCCESS and d.observation().counts == {}
+    assert d.observation().side == "B"
+    assert d.stats().frames == 2  # one render per look, nothing else
+
+
+def test_hidden_state_does_not_change_counts_but_visible_state_does(building):
+    d = CellDriver(building)
+    plant, pc = building.plant, d.plant_context()
+    assert d.run("LookAt(B)").status is Status.SUCCESS
+    before = d.observation().counts
+    # a person moves the hammer inside W^A while the camera looks at W^B: nothing changes
+    hammer = building.cell.bodies["hammer_0"]
+    plant.SetFreeBodyPose(pc, hammer, RigidTransform([0.43, 0.16, 0.0]))
+    assert d.run("LookAt(B)").detail == "" and d.observation().counts == before
+    # the same person puts it into W^B: the next look at W^B sees it
+    plant.SetFreeBodyPose(pc, hammer, RigidTransform([0.5, -0.25, 0.0]))
+    assert d.run("LookAt(B)").detail == "hammer=1"
+    assert d.run("LookAt(A)").detail == "saw=1,scissors=2"
+
+
+def test_renders_only_when_asked(building):
+    d = CellDriver(building)
+    d.advance(1.0)
+    assert d.stats().frames == 0
+    d.run("LookAt(A)")
+    d.advance(1.0)  # idle: the camera stays dark
+    assert d.stats().frames == 1
+    p = building.perception
+    assert p.state(p.GetMyContextFromRoot(d.context)).render_kinds == 2  # label + depth
+
+
+def test_friction_grasp_lifts_the_block(block_cell):
+    d = CellDriver(block_cell)
+    body = block_cell.cell.bodies["body_0"]
+    # close across the block's 4 cm side (fingers along world y at yaw 0)
+    st = d.run("PickAt(A, 0.5, 0.25, 0)")
+    assert st.status is Status.SUCCESS, d.skill_state().log
+    z = body.EvalPoseInWorld(d.plant_context()).translation()[2]
+    assert z > 0.08  # lifted with the hand (no weld: friction holds it)
+    q = d.plant_context()
+    fingers = block_cell.plant.GetPositions(q, block_cell.cell.arm)[7:]
+    assert 0.035 < fingers.sum() < 0.042  # the fingers rest on the 4 cm block
+    assert d.run("Place(B)").status is Status.SUCCESS
+    xyz = body.EvalPoseInWorld(d.plant_context()).translation()
+    assert abs(xyz[1] + 0.25) < 0.15 and xyz[2] < 0.005
+    assert d.run("LookAt(B)").detail == "body=1"
+
+
+@pytest.mark.parametrize("offset", [(0.06, 0.0), (0.0, 0.07)])
+def test_offset_grasp_misses(block_cell, offset):
+    d = CellDriver(block_cell)
+    body = block_cell.cell.bodies["body_0"]
+    st = d.run(f"PickAt(A, {0.5 + offset[0]}, {0.25 + offset[1]}, 0)")
+    assert st.status is Status.FAILURE
+    assert "missed" in st.detail
+    z = body.EvalPoseInWorld(d.plant_context()).translation()[2]
+    assert z < 0.005  # still on the table
+
+
+def test_closed_loop_pick_with_hrgnet(building):
+    """Pick(scissors): several views while descending, a network grasp, a friction lift."""
+    building.planner.record = True
+    building.planner.history.clear()
+    d = CellDriver(building)
+    st = d.run("Pick(scissors)", timeout=90)
+    log = [text for _, text in d.skill_state().log]
+    views = [t for t in log if t.startswith("view ")]
+    assert len(views) >= 4  # the look pose + three descending heights (per attempt)
+    heights = [float(t.split(" at ")[1].split(" m")[0]) for t in views[:4]]
+    assert heights == pytest.approx([0.47, 0.34, 0.27, 0.20], abs=0.015)
+    assert len(building.planner.history) >= 4
+    assert st.status is Status.SUCCESS, log
+    held = [
+        uid
+        for uid, b in building.cell.bodies.items()
+        if b.EvalPoseInWorld(d.plant_context()).translation()[2] > 0.05
+    ]
+    assert len(held) == 1 and held[0].startswith("scissors")
+    assert d.skill_state().grasp_successes == 1
+
+
+def test_start_poll_cancel(building):
+    d = CellDriver(building)
+    h = d.start("LookAt(B)")
+    for _ in range(10):  # 0.5 s: the arm is on its way
+        assert d.poll(h) is Status.RUNNING
+    with pytest.raises(RuntimeError):
+        d.start("LookAt(A)")
+    d.cancel(h)
+    assert d.poll(h) is Status.FAILURE and d.status().detail == "cancelled"
+    d.advance(0.5)
+    v = building.plant.GetVelocities(d.plant_context(), building.cell.arm)[:7]
+    assert np.max(np.abs(v)) < 0.02  # stopped where it was
+    assert d.run("Discard()").detail == "nothing held"
+    assert d.run("Fly(A)").status is Status.FAILURE

@@ -1,0 +1,82 @@
+"""The workcell scenario loader: packaged files load; bad input names file and field."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tamp.errors import InputError
+from tamp.sim.lots.catalogue import CLASSES
+from tamp.sim.lots.scenario import load_cell_scenario, rectangles_overlap
+from tests.sim.lots.helpers import write_scenario
+
+
+def test_packaged_model_building_loads():
+    s = load_cell_scenario("model_building")
+    assert [o.cls for o in s.objects] == ["saw", "scissors", "scissors", "hammer"]
+    assert {o.workspace for o in s.objects} == {"A"}
+    # instances of one class get different colours
+    assert s.objects[1].rgb != s.objects[2].rgb
+    assert s.camera.width == 320 and s.camera.height == 180
+
+
+@pytest.mark.parametrize(
+    ("objects", "changes", "field"),
+    [
+        ([{"class": "anvil", "workspace": "A", "xy": [0, 0]}], {}, "objects[0].class"),
+        ([{"class": "saw", "workspace": "C", "xy": [0, 0]}], {}, "objects[0].workspace"),
+        ([{"class": "saw", "workspace": "A", "xy": [0.12, 0]}], {}, "objects[0].xy"),
+        (
+            [{"class": "body", "workspace": "A", "xy": [0, 0], "colour": [1, 0, 0]}],
+            {},
+            "objects[0].colour",
+        ),
+        (
+            [
+                {"class": "body", "workspace": "A", "xy": [0, 0]},
+                {"class": "body", "workspace": "A", "xy": [0.03, 0]},
+            ],
+            {},
+            "objects[1]",
+        ),
+        ([], {"camera": {"width": 8}}, "camera.width"),
+        ([], {"grasp": {"view_heights": [0.2, 0.3]}}, "grasp.view_heights"),
+        ([], {"grasp": {"network": "ggcnn"}}, "grasp.network"),
+        ([], {"waste_basket": [0.5, 0.05]}, "waste_basket"),
+        ([], {"waste_basket": [2.0, 0.0]}, "waste_basket"),
+        ([], {"plant": {"time_step": 0.5}}, "plant.time_step"),
+        ([], {"speed": 1}, "speed"),
+    ],
+)
+def test_bad_scenarios_name_the_field(tmp_path, objects, changes, field):
+    path = write_scenario(tmp_path, objects, **changes)
+    with pytest.raises(InputError) as err:
+        load_cell_scenario(path)
+    assert err.value.field == field
+    assert err.value.file == str(path)
+
+
+def test_workspaces_must_be_apart(tmp_path):
+    ws = {
+        "A": {"center": [0.5, 0.1], "size": [0.3, 0.3]},
+        "B": {"center": [0.5, -0.1], "size": [0.3, 0.3]},
+    }
+    with pytest.raises(InputError, match="side by side"):
+        load_cell_scenario(write_scenario(tmp_path, [], workspaces=ws))
+
+
+def test_footprints_come_from_the_sdf():
+    hammer = CLASSES["hammer"].footprint
+    assert (hammer.xmin, hammer.xmax, hammer.ymin, hammer.top) == (-0.1, 0.1, -0.045, 0.035)
+    for c in CLASSES.values():  # low tools, each fits a 0.34 m workspace
+        assert 0.0 < c.footprint.top <= 0.06, c.name
+        assert c.footprint.xmax - c.footprint.xmin <= 0.25, c.name
+
+
+def test_rectangles_overlap():
+    a = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
+    assert rectangles_overlap(a, a + [0.5, 0.5])
+    assert not rectangles_overlap(a, a + [1.2, 0])
+    assert rectangles_overlap(a, a + [1.005, 0], gap=0.01)
+    turned = np.array([[1.5, 0.5], [2.0, 0.0], [2.5, 0.5], [2.0, 1.0]])
+    assert not rectangles_overlap(a, turned)
