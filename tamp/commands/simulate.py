@@ -13,6 +13,13 @@ in 3-D (inside it and upright on the floor, not on top of another object). Exit 
 SUCCESS, 1 otherwise (FAILURE, TIMEOUT, or when verification fails), 2 on a bad scenario
 or flag (an appearance at time 0 onto an occupied place included). ``--json`` has the same
 ``status``; its ``ok`` is ``status == "SUCCESS"``.
+
+    tamp simulate lots --task TASK.yaml [--scenario CELL.yaml] [--grasp hrgnet|grconvnet|ggcnn]
+                       [--seed N] [--record out.html] [--max-sim-time S] [--json]
+
+Runs a LOTS task by the LOTS controller inside the Drake workcell (`tamp.sim.lots.simulate`);
+exit 0 only when the task's final W^B holds on the plant. ``--interference`` is refused
+(exit 2): the person is not simulated in Drake yet.
 """
 
 from __future__ import annotations
@@ -47,6 +54,106 @@ def register(subparsers) -> None:
     s.add_argument("--max-sim-time", type=float, help="override the scenario's time limit (s)")
     s.add_argument("--json", action="store_true", help="machine-readable output")
     s.set_defaults(func=run)
+    register_lots(sub)
+
+
+def register_lots(sub) -> None:
+    """``tamp simulate lots``: a LOTS task in the Drake workcell (seed 003)."""
+    s = sub.add_parser(
+        "lots",
+        help="LOTS task in the Drake workcell (arm with wrist camera, LOTS controller)",
+        description=(
+            "Run a LOTS task (tamp lots' TASK.yaml) by the LOTS controller inside the Drake "
+            "workcell; the verdict is measured on the plant. Exit 0 when the task's final W^B "
+            "holds on the plant, 1 otherwise, 2 on bad input."
+        ),
+    )
+    s.add_argument("--task", required=True, help="LTL task file or packaged task name")
+    s.add_argument(
+        "--scenario",
+        help="workcell scenario file (default: the packaged lots_sim scenario of the task's name)",
+    )
+    s.add_argument(
+        "--interference",
+        metavar="EVENTS.yaml",
+        help="human interference script (not simulated yet)",
+    )
+    s.add_argument("--grasp", choices=("hrgnet", "grconvnet", "ggcnn"), help="grasp network")
+    s.add_argument("--seed", type=int, default=0, help="seed of the controller's tree update")
+    s.add_argument("--record", metavar="HTML", help="write a Meshcat animation (static HTML)")
+    s.add_argument("--max-sim-time", type=float, help="override the scenario's time limit (s)")
+    s.add_argument("--json", action="store_true", help="machine-readable output")
+    s.set_defaults(func=run_lots)
+
+
+def run_lots(args: argparse.Namespace) -> int:
+    import os
+
+    os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
+    import math
+
+    from tamp.errors import InputError
+    from tamp.lots.task import load_events, load_task
+    from tamp.scenarios import resolve
+    from tamp.sim.lots.scenario import load_cell_scenario
+    from verification import gate
+
+    if args.max_sim_time is not None and not (
+        math.isfinite(args.max_sim_time) and args.max_sim_time > 0
+    ):
+        raise InputError(
+            f"must be a positive number of seconds, got {args.max_sim_time}", field="--max-sim-time"
+        )
+    if args.record:
+        output_file(args.record, "--record", make_parents=True)
+    task = load_task(args.task)
+    if args.interference:
+        load_events(args.interference, task)  # a bad file names its field first
+        raise InputError("not yet simulated in the Drake workcell", field="--interference")
+    if args.scenario is None and not resolve(task.name, "lots_sim").is_file():
+        raise InputError(
+            f"no packaged workcell scenario for task {task.name!r}: give one", field="--scenario"
+        )
+    scenario = load_cell_scenario(args.scenario or task.name)
+    from tamp.sim.lots.simulate import simulate_lots
+
+    progress(f"simulating task {task.name} in workcell {scenario.name}", quiet=args.json)
+    result = simulate_lots(
+        scenario,
+        task,
+        grasp=args.grasp,
+        seed=args.seed,
+        record=args.record,
+        max_sim_time=args.max_sim_time,
+        check=gate,
+    )
+    if args.json:
+        print_json(result.to_json())
+        return result.exit_code
+    print(f"task {task.name}: {task.formula}  (workcell {scenario.name}, grasp {result.network})")
+    print(f"{'skill':<22} {'start':>8} {'end':>8}  status")
+    for a in result.actions:
+        end = "-" if a.end is None else f"{a.end:8.2f}"
+        print(f"{a.action:<22} {a.start:8.2f} {end:>8}  {a.outcome}  {a.detail}")
+    for a in result.robot_actions:
+        print(f"  {a.index:2d}. {a.text()}")
+    c = result.final_counts
+    print(f"final (plant): W^A {c['A']}  W^B {c['B']}  waste {c['waste']}")
+    if result.elsewhere:
+        print(f"elsewhere: {', '.join(result.elsewhere)}")
+    g = result.grasps
+    print(
+        f"replans {result.replans}, grasps {g['successes']}/{g['attempts']}, "
+        f"frames {result.frames_rendered}"
+    )
+    verdict = "task satisfied" if result.satisfied else f"task NOT satisfied: {result.reason}"
+    print(
+        f"{result.status}: {verdict}; sim {result.sim_time:.2f} s, wall {result.wall_time:.2f} s, "
+        f"real-time factor {result.rtf:.2f}x"
+    )
+    if result.recording:
+        print(f"recording: {result.recording}")
+    return result.exit_code
 
 
 def run(args: argparse.Namespace) -> int:

@@ -13,9 +13,12 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   on nothing (finger width) or when the target is still on the table in the next view (not
   lifted); it is retried with new predictions up to ``grasp.attempts`` times.
 - ``Place(side)``: look at W^side, put the held object down on the freest spot seen.
-- ``Discard()``: drop the held object into the waste basket.
-  Both check the fingers before letting go: an object lost on the way is reported (FAILURE,
-  "dropped ... while carrying it") and the robot no longer believes it holds it.
+- ``Discard()`` (also ``Place(waste)``, the ``lots_arm`` domain's name for it): drop the
+  held object into the waste basket. Both places check the fingers before letting go: an
+  object lost on the way is reported (FAILURE, "dropped ... while carrying it") and the
+  robot no longer believes it holds it.
+- ``Wait(side)``: the camera over W^side, then hold still for the ``lots_arm`` domain's
+  ``Wait`` duration (Alg. 1 line 23: let one action slot pass).
 - ``PickAt(side, x, y, yaw_deg)``: a scripted top grasp at a given TCP position and yaw (no
   network, one attempt; the grasp tests use it), then the same lift and check as ``Pick``.
 
@@ -41,6 +44,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 
+from tamp.lots.cell import WASTE, lots_domain
 from tamp.sim.core.messages import SkillCommand, SkillStatus
 from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner
@@ -49,7 +53,7 @@ from tamp.sim.lots.perception import Observation, ViewRequest
 from tamp.sim.lots.scenario import CellScenario
 from tamp.world.interface import Status
 
-SKILLS = ("LookAt", "Pick", "PickAt", "Place", "Discard")
+SKILLS = ("LookAt", "Pick", "PickAt", "Place", "Discard", "Wait")
 OPEN = ARM.finger_max
 CLOSED = 0.0
 #: fingers closer than this (sum of both, m) after closing: nothing between them
@@ -230,7 +234,14 @@ class SkillController(LeafSystem):
                 return self._finish(s, t, Status.FAILURE, "nothing held")
             s.side = args[0]
             s.steps = (*self._look(args[0]), Step("view", handler="place"))
-        elif name == "Discard" and not args:
+        elif name == "Wait" and len(args) == 1 and args[0] in sides:
+            s.side = args[0]
+            s.steps = (
+                *self._look(args[0]),
+                Step("wait", duration=lots_domain().templates["Wait"].duration),
+                Step("finish", detail="waited"),
+            )
+        elif (name == "Discard" and not args) or (name == "Place" and args == (WASTE,)):
             if s.held is None:
                 return self._finish(s, t, Status.FAILURE, "nothing held")
             bx, by = self.scenario.waste_basket

@@ -1,0 +1,71 @@
+"""``tamp simulate lots`` end to end: the tower task run by the LOTS controller inside the
+Drake workcell, judged on the plant; and the inputs it refuses before simulating."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from tamp.errors import InputError
+from tamp.lots.task import load_task
+from tamp.sim.lots.scenario import load_cell_scenario
+from tamp.sim.lots.simulate import check_matches, with_network
+
+ENV = {**os.environ, "DRAKE_ALLOW_NETWORK": "meshcat"}
+
+
+def cli(*args: str, timeout: float = 60) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "tamp.commands.main", "simulate", "lots", *args],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        timeout=timeout,
+    )
+
+
+def test_task_and_scene_must_start_from_the_same_objects():
+    check_matches(load_task("tower"), load_cell_scenario("tower"))
+    with pytest.raises(InputError, match="W\\^A holds") as e:
+        check_matches(load_task("model_building"), load_cell_scenario("tower"))
+    assert e.value.field == "objects"
+
+
+def test_networks_without_weights_are_refused():
+    scene = load_cell_scenario("tower")
+    assert with_network(scene, "hrgnet") is scene
+    with pytest.raises(InputError, match="no shipped weights") as e:
+        with_network(scene, "ggcnn")
+    assert e.value.field == "--grasp"
+
+
+def test_cli_refuses_interference_and_mismatched_scenes_with_exit_2():
+    r = cli("--task", "tower", "--interference", "tower_interference")
+    assert r.returncode == 2 and "--interference: not yet simulated" in r.stderr
+    r = cli("--task", "tower", "--scenario", "model_building")
+    assert r.returncode == 2 and "objects" in r.stderr
+    r = cli("--task", "tower", "--grasp", "ggcnn")
+    assert r.returncode == 2 and "--grasp" in r.stderr
+
+
+@pytest.mark.slow
+def test_tower_in_drake_through_the_cli(tmp_path):
+    r = cli("--task", "tower", "--json", "--max-sim-time", "300", timeout=3000)
+    assert r.returncode == 0, r.stderr[-2000:] + r.stdout[-2000:]
+    out = json.loads(r.stdout)
+    assert out["satisfied"] is True and out["status"] == "SUCCESS"
+    # measured on the plant: the tower in W^B, the spare body left in W^A
+    assert out["final_counts"]["B"] == {"bottom": 1, "body": 1, "peak": 1}
+    assert out["final_counts"]["A"] == {"body": 1}
+    assert out["final_counts"]["waste"] == {} and out["elsewhere"] == []
+    moves = [a["prop"] for a in out["robot_actions"] if a["kind"] == "move"]
+    assert moves == ["p1", "p2", "p3"]  # F(p1 & F(p2 & F p3)): in this order
+    picks = [a for a in out["actions"] if a["action"].startswith("Pick")]
+    assert [a["action"] for a in picks] == ["Pick(bottom, A)", "Pick(body, A)", "Pick(peak, A)"]
+    assert all(a["end"] > a["start"] for a in out["actions"])
+    assert out["grasps"]["successes"] == 3 and out["grasps"]["attempts"] >= 3
+    assert out["frames_rendered"] > 0 and out["sim_time"] > 20 and out["wall_time"] > 0
