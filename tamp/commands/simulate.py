@@ -86,18 +86,14 @@ def register_lots(sub) -> None:
     s.set_defaults(func=run_lots)
 
 
-def run_lots(args: argparse.Namespace) -> int:
+def check_common(args: argparse.Namespace) -> None:
+    """The flags every ``tamp simulate`` system has, checked before any work is done."""
+    import math
     import os
 
-    os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
-    import math
-
     from tamp.errors import InputError
-    from tamp.lots.task import load_events, load_task
-    from tamp.scenarios import resolve
-    from tamp.sim.lots.scenario import load_cell_scenario
-    from verification import gate
 
+    os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
     if args.max_sim_time is not None and not (
         math.isfinite(args.max_sim_time) and args.max_sim_time > 0
     ):
@@ -106,6 +102,16 @@ def run_lots(args: argparse.Namespace) -> int:
         )
     if args.record:
         output_file(args.record, "--record", make_parents=True)
+
+
+def run_lots(args: argparse.Namespace) -> int:
+    from tamp.errors import InputError
+    from tamp.lots.task import load_events, load_task
+    from tamp.scenarios import resolve
+    from tamp.sim.lots.scenario import load_cell_scenario
+    from verification import gate
+
+    check_common(args)
     task = load_task(args.task)
     if args.interference:
         load_events(args.interference, task)  # a bad file names its field first
@@ -157,25 +163,15 @@ def run_lots(args: argparse.Namespace) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    import os
-
-    os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
     import math
 
     from tamp.errors import InputError
     from tamp.sim.smp.scenario import load_scenario, scenario_path
     from tamp.sim.smp.simulate import simulate_smp_mro
 
-    if args.max_sim_time is not None and not (
-        math.isfinite(args.max_sim_time) and args.max_sim_time > 0
-    ):
-        raise InputError(
-            f"must be a positive number of seconds, got {args.max_sim_time}", field="--max-sim-time"
-        )
+    check_common(args)
     if args.rate is not None and not (math.isfinite(args.rate) and args.rate >= 0):
         raise InputError(f"must be >= 0 (0: as fast as possible), got {args.rate}", field="--rate")
-    if args.record:
-        output_file(args.record, "--record", make_parents=True)
     name = args.scenario or f"case{args.case or 1}.yaml"
     scenario = load_scenario(args.scenario or scenario_path(name))
     if args.appear or args.fail:

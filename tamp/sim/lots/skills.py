@@ -64,6 +64,7 @@ GRASP_DEPTH = 0.025  # how far below the object's top the TCP goes (pads reach 1
 LIFT_Z = 0.16
 ANGULAR_SPEED = 1.2  # rad/s, mean over a move
 APPROACH_SPEED = 0.15  # m/s (mean 0.08), the last 12 cm to the grasp
+CARRY_SPEED = 0.2  # m/s, mean TCP speed of moves while the fingers are closed
 
 
 @dataclass(frozen=True)
@@ -333,7 +334,9 @@ class SkillController(LeafSystem):
             X1 = RigidTransform(down(yaw), [x, y, z])
             dist = float(np.linalg.norm(X1.translation() - X0.translation()))
             ang = float(np.linalg.norm(pose_error(X0, X1)[:3]))
-            T = max(1.875 * dist / step.speed, 1.875 * ang / ANGULAR_SPEED, 0.2)
+            # with the fingers closed (carrying) the arm moves slower: friction grasps slip
+            speed = step.speed if s.finger != CLOSED else min(step.speed, CARRY_SPEED)
+            T = max(1.875 * dist / speed, 1.875 * ang / ANGULAR_SPEED, 0.2)
             s.move_from = (X0.translation().copy(), X0.rotation().ToQuaternion().wxyz(), T)
         elif step.kind == "grip":
             s.finger = step.width
