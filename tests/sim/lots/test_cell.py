@@ -168,3 +168,14 @@ def test_start_poll_cancel(building):
     assert np.max(np.abs(v)) < 0.02  # stopped where it was
     assert d.run("Discard()").detail == "nothing held"
     assert d.run("Fly(A)").status is Status.FAILURE
+
+
+def test_skills_speak_the_lots_arm_domain(building):
+    """``Wait(l)``: a look at W^l and the domain's 2 s hold; ``Place(waste)`` is ``Discard()``."""
+    d = CellDriver(building)
+    t0 = d.context.get_time()
+    st = d.run("Wait(A)")
+    assert st.status is Status.SUCCESS and st.detail == "waited"
+    assert d.context.get_time() - t0 >= 2.0 + 0.2  # the move over W^A, then the hold
+    assert d.run("Place(waste)").detail == "nothing held"  # the Discard branch
+    assert d.run("Place(floor)").status is Status.FAILURE
