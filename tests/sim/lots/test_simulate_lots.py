@@ -43,13 +43,19 @@ def test_networks_without_weights_are_refused():
     assert e.value.field == "--grasp"
 
 
-def test_cli_refuses_interference_and_mismatched_scenes_with_exit_2():
-    r = cli("--task", "tower", "--interference", "tower_interference")
-    assert r.returncode == 2 and "--interference: not yet simulated" in r.stderr
-    r = cli("--task", "tower", "--scenario", "model_building")
-    assert r.returncode == 2 and "objects" in r.stderr
-    r = cli("--task", "tower", "--grasp", "ggcnn")
-    assert r.returncode == 2 and "--grasp" in r.stderr
+def test_cli_refuses_interference_and_mismatched_scenes_with_exit_2(capsys):
+    from tamp.commands.main import main
+
+    def refused(*args: str) -> str:
+        assert main(["simulate", "lots", *args]) == 2
+        return capsys.readouterr().err
+
+    assert "--interference: not yet simulated" in refused(
+        "--task", "tower", "--interference", "tower_interference"
+    )
+    assert "objects: W^A holds" in refused("--task", "tower", "--scenario", "model_building")
+    assert "--grasp: no shipped weights" in refused("--task", "tower", "--grasp", "ggcnn")
+    assert "--max-sim-time" in refused("--task", "tower", "--max-sim-time", "-1")
 
 
 @pytest.mark.slow
