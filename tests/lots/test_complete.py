@@ -54,3 +54,65 @@ def test_unfired_event_is_reported_by_the_clis(tmp_path, capsys):
     assert data["holds"] and [e["after"] for e in data["unfired_events"]] == [99]
     assert main(["lots", "tower.yaml", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["unfired_events"] == []
+
+
+# -- alternatives and objects already in W^B --------------------------------------------------
+
+ALT = """version: 1
+name: alt
+formula: "F p | F q"
+propositions:
+  p: {class: cup}
+  q: {class: mug, cost: 2.0}
+initial:
+  A: {cup: 1, mug: 1}
+"""
+TAKE_CUP = "version: 1\nevents:\n  - {after: 0, kind: remove, class: cup, side: A}\n"
+IN_B = """version: 1
+name: inb
+formula: "F p"
+propositions:
+  p: {class: cup}
+initial:
+  A: {}
+  B: {cup: 1}
+"""
+
+
+def _files(tmp_path, **texts):
+    out = {}
+    for name, text in texts.items():
+        out[name] = tmp_path / f"{name}.yaml"
+        out[name].write_text(text)
+    return out
+
+
+def test_alternative_way_is_taken_when_the_planned_class_is_gone(tmp_path, capsys):
+    f = _files(tmp_path, alt=ALT, take=TAKE_CUP)
+    task = load_task(f["alt"])
+    report = run_task(task)
+    assert [a.key() for a in report.actions] == [("move", "p")]  # the cheaper way
+    c = report.controller
+    assert c.lots.goals == ((1, 0), (0, 1)) and c.lots.num_wb_states() == 4
+    report = run_task(task, load_events(f["take"], task))
+    assert report.satisfied and report.replans == 1
+    assert [a.key() for a in report.actions] == [("move", "q")]
+    assert report.counts()["B"] == {"mug": 1}
+    assert check_run_of(task, load_events(f["take"], task)).holds  # every table gated
+    assert main(["lots", str(f["alt"]), "--interference", str(f["take"])]) == 0
+    out = capsys.readouterr().out
+    assert "1. q: move mug W^A→W^B" in out and "task satisfied" in out
+
+
+def test_object_of_a_needed_class_already_in_wb_is_removed_and_delivered(tmp_path, capsys):
+    f = _files(tmp_path, inb=IN_B)
+    task = load_task(f["inb"])
+    report = run_task(task)
+    assert report.satisfied
+    assert [a.key() for a in report.actions] == [("remove", "cup"), ("move", "p")]
+    assert report.actions[0].dest == "A"  # back to W^A: the delivery needs it
+    assert check_run_of(task).holds
+    assert main(["lots", str(f["inb"]), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["satisfied"] and data["final"]["B"] == {"cup": 1}
+    assert [a["text"] for a in data["actions"]] == ["remove cup W^B→W^A", "p: move cup W^A→W^B"]
