@@ -382,8 +382,8 @@ class Planner:
         calls prune them.
         """
         lots = self.lots
-        bound = lots.bound if cap is None else tuple(min(x, c) for x, c in zip(lots.bound, cap))
-        goals = tuple(gl for gl in lots.goals if all(x <= n for x, n in zip(gl, bound)))
+        bound = lots.bound if cap is None else tuple(map(min, lots.bound, cap))
+        goals = tuple(gl for gl in lots.goals if all(map(int.__le__, gl, bound)))
         dead = self.dead if cap is None else self._dead_capped.setdefault(bound, set())
         if not goals or not lots.in_box(b) or (q, b) in dead:
             return None
