@@ -10,13 +10,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tamp.commands.main import main
+from tamp.commands.verify import main as verify_main
 from tamp.errors import InfeasibleError
 from tamp.lots.cell import objects_of, side_counts
 from tamp.lots.controller import LotsController
 from tamp.lots.lots import Lots
 from tamp.lots.person import actions_done
 from tamp.lots.product import ProductPlanner
-from tamp.commands.verify import main as verify_main
 from tamp.lots.run import run_task
 from tamp.lots.task import Event, Proposition, Task, load_events, load_task
 from verification.lots import check_run_of
