@@ -6,15 +6,16 @@ STAMP := $(VENV)/.installed
 export DRAKE_ALLOW_NETWORK := meshcat
 export MPLBACKEND := Agg
 
-.PHONY: demo test bench lint fmt clean system-deps
+.PHONY: demo test test-fast bench lint fmt clean system-deps
 
 $(BIN)/python:
 	@command -v $(PY) >/dev/null 2>&1 || { echo "need $(PY)"; exit 2; }
 	$(PY) -m venv $(VENV)
 
-$(STAMP): pyproject.toml | $(BIN)/python system-deps
+# pyproject.toml declares ranges; constraints.txt pins the versions the project is tested with.
+$(STAMP): pyproject.toml constraints.txt | $(BIN)/python system-deps
 	$(BIN)/pip install -q --upgrade pip
-	$(BIN)/pip install -q -e '.[dev]'
+	$(BIN)/pip install -q -c constraints.txt -e '.[dev]'
 	touch $(STAMP)
 
 # Graphviz (for rendering DOT exports) and EGL (headless Drake cameras) come from Debian.
@@ -33,15 +34,20 @@ demo: $(STAMP)
 	$(BIN)/tamp simulate smp-mro --case 3 --record build/case3.html
 	@echo "recording: build/case3.html (open it in a browser)"
 
+# Everything, as CI runs it: lint, then every test (simulations, notebooks, training, the wheel).
 test: $(STAMP)
 	$(BIN)/ruff check tamp verification tests benchmarks
 	$(BIN)/ruff format --check tamp verification tests benchmarks
 	$(BIN)/pytest -q
 
+# The quick loop while editing: every test not marked slow (under a minute on 2 cores).
+test-fast: $(STAMP)
+	$(BIN)/pytest -q -m "not slow"
+
 # Every benchmark, each side by side with its peer (the Fast Downward comparison alone takes
 # about 20 minutes because the peer runs into its 300 s limit at n >= 10).
 bench: $(STAMP)
-	$(BIN)/pip install -q -e '.[dev,bench]'
+	$(BIN)/pip install -q -c constraints.txt -e '.[dev,bench]'
 	$(BIN)/python benchmarks/rg_vs_planner.py
 	$(BIN)/python benchmarks/bt_tick.py
 	$(BIN)/python benchmarks/lots_vs_product.py

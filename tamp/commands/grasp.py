@@ -19,9 +19,14 @@ from pathlib import Path
 from tamp.commands.output import print_json
 from tamp.errors import InputError
 
-DEFAULT_WEIGHTS = (
-    Path(__file__).resolve().parents[2] / "models" / "weights" / "hrgnet_synth_rgbd.pt"
-)
+SHIPPED_WEIGHTS = "hrgnet_synth_rgbd.pt"  # in models/weights (the tamp_models package)
+
+
+def default_weights() -> Path:
+    """The shipped HRG-Net weights, wherever tamp is installed."""
+    from tamp.sim.core.models import models_dir
+
+    return models_dir() / "weights" / SHIPPED_WEIGHTS
 
 
 def register(subparsers) -> None:
@@ -100,7 +105,7 @@ def register(subparsers) -> None:
     p = sub.add_parser("predict", help="grasps in an image (pixels; world frame with a camera)")
     p.add_argument("image", help="RGB image (.png/.jpg) or depth image (.tiff, metres)")
     p.add_argument("--depth", help="depth image (.tiff, metres) when IMAGE is the RGB image")
-    p.add_argument("--weights", default=str(DEFAULT_WEIGHTS))
+    p.add_argument("--weights", help=f"weights file (default: the shipped {SHIPPED_WEIGHTS})")
     p.add_argument("--camera", help="JSON with K (3x3) and X_WC (4x4), as `grasp synth` writes")
     p.add_argument("--intrinsics", nargs=4, type=float, metavar=("FX", "FY", "CX", "CY"))
     p.add_argument("--pose", nargs=16, type=float, metavar="X", help="X_WC, 16 numbers row-major")
@@ -303,7 +308,7 @@ def run_predict(args) -> int:
     if args.depth:
         depth = formats.read_depth_tiff(args.depth)
     intrinsics, pose = _camera(args)
-    predictor = GraspPredictor.load(args.weights)
+    predictor = GraspPredictor.load(args.weights or default_weights())
     grasps = predictor.predict(rgb=rgb, depth=depth, intrinsics=intrinsics, X_WC=pose, n=args.top)
     if args.json:
         print_json([g.as_dict() for g in grasps])

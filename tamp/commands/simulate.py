@@ -81,9 +81,9 @@ def run(args: argparse.Namespace) -> int:
     progress(f"simulating {scenario.name} ({scenario.source})", quiet=args.json)
     meshcat = None
     if args.meshcat:
-        from pydrake.geometry import Meshcat
+        from tamp.sim.core.recording import new_meshcat
 
-        meshcat = Meshcat(0)
+        meshcat = new_meshcat()
         progress(f"meshcat: {meshcat.web_url()}", quiet=args.json)
     result, prepared, _ = simulate_smp_mro(
         scenario,

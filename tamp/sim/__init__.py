@@ -1,11 +1,11 @@
-"""Drake simulation of SMP-MRO (§V: youBot pick-and-place, Cases 1-3).
+"""Drake simulation of the workcells: one subpackage per workcell plus a shared core.
 
-A `MultibodyPlant` + `SceneGraph` diagram with a youBot-like mobile manipulator, bottles and
-area markers (``models/sdf``), where a `BtExecutor` LeafSystem ticks the very behavior tree
-of `tamp.bt` against the plant through `PortWorld`, a `SkillController` moves the robot
-(MoveTo / Pick / Place), and a `WorldStateEstimator` turns plant poses into the symbolic
-`WorldState`. Entry points: `load_scenario`, `build_diagram`, `SimRunner`, and
-`simulate_smp_mro` (plan, verify, build, run) in `tamp.sim.smp.simulate`.
+``tamp.sim.core`` holds what every workcell shares: where the models are
+(`core.models.models_dir`, the ``tamp_models`` package data), the offline parser, the port
+messages, the `BtExecutor` LeafSystem that ticks the very behavior tree of `tamp.bt`
+through `PortWorld`, the chunked runner and Meshcat recording. ``tamp.sim.smp`` is the
+SMP-MRO workcell (§V: a youBot-like mobile manipulator, bottles, area markers; Cases 1-3);
+the LOTS and refinement workcells sit beside it.
 
 This is the only package (with the grasp renderer) that imports Drake; import the
 submodules directly (``from tamp.sim.smp.builder import build_diagram``) so that importing

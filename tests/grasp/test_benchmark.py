@@ -22,6 +22,7 @@ def bench():
     return module
 
 
+@pytest.mark.slow
 def test_two_seeds_pooled_from_final_weights(bench, jacquard_dir: Path, tmp_path: Path, capsys):
     budget = dict(bench.FULL_BUDGET, size=32, epochs=1, batches_per_epoch=1, batch_size=2)
     budget["test_fraction"] = 0.25

@@ -6,12 +6,14 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 import torch
 
 from tamp.commands.main import main
 from tamp.grasp import formats
 
 
+@pytest.mark.slow
 def test_train_eval_predict_round_trip(jacquard_dir: Path, tmp_path: Path, capsys):
     out = tmp_path / "run"
     rc = main(["grasp", "train", "--dataset", "jacquard", str(jacquard_dir), "--model", "ggcnn",
@@ -65,6 +67,7 @@ def test_bad_model_arg(jacquard_dir: Path, tmp_path: Path, capsys):
     assert rc == 2 and "--model-arg" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_fusion_modes(jacquard_dir: Path, tmp_path: Path, capsys):
     base = ["grasp", "train", "--dataset", "jacquard", str(jacquard_dir), "--size", "32",
             "--epochs", "1", "--batches-per-epoch", "1", "--batch-size", "2", "--quiet",

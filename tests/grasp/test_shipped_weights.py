@@ -30,6 +30,7 @@ def test_weights_file_is_small_and_describes_itself(predictor):
     assert out.shape == (1, 4, 224, 224)
 
 
+@pytest.mark.slow
 def test_correct_grasps_on_new_scenes(predictor, tmp_path: Path):
     pytest.importorskip("pydrake")
     from tamp.grasp import formats

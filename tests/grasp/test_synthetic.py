@@ -71,6 +71,7 @@ def rendered(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.mark.slow
 def test_deterministic_with_a_seed_in_one_or_two_processes(rendered: Path):
     files_a = sorted(p.relative_to(rendered / "a") for p in (rendered / "a").rglob("*.*"))
     files_b = sorted(p.relative_to(rendered / "b") for p in (rendered / "b").rglob("*.*"))
@@ -79,6 +80,7 @@ def test_deterministic_with_a_seed_in_one_or_two_processes(rendered: Path):
         assert (rendered / "a" / rel).read_bytes() == (rendered / "b" / rel).read_bytes()
 
 
+@pytest.mark.slow
 def test_grasp_centres_lie_on_objects_above_the_table(rendered: Path):
     from tamp.grasp import formats
 
@@ -95,6 +97,7 @@ def test_grasp_centres_lie_on_objects_above_the_table(rendered: Path):
             assert 0.003 < pw[2] < 0.1
 
 
+@pytest.mark.slow
 def test_loader_reads_the_generated_set(rendered: Path):
     from tamp.grasp.datasets import GraspDataset
 

@@ -31,6 +31,7 @@ def _cfg(root: Path, out: Path, **kw) -> TrainConfig:
     return TrainConfig(**base)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["hrgnet", "ggcnn", "grconvnet"])
 def test_few_steps_write_checkpoints(jacquard_dir: Path, tmp_path: Path, model: str):
     kwargs = {"widths": [4, 8]} if model == "hrgnet" else {}
@@ -53,6 +54,7 @@ def test_few_steps_write_checkpoints(jacquard_dir: Path, tmp_path: Path, model: 
     assert json.loads((tmp_path / model / "summary.json").read_text())["parameters"] > 0
 
 
+@pytest.mark.slow
 def test_cosine_schedule_anneals_to_zero(jacquard_dir: Path, tmp_path: Path):
     cfg = _cfg(jacquard_dir, tmp_path)
     rates = [learning_rate(cfg, t, 100) for t in range(101)]
@@ -79,6 +81,7 @@ def test_unknown_schedule_is_an_input_error(jacquard_dir: Path, tmp_path: Path):
     assert not (tmp_path / "x").exists()
 
 
+@pytest.mark.slow
 def test_resume_continues_exactly(jacquard_dir: Path, tmp_path: Path):
     # a constant rate, so that a 1-epoch run is the first half of a 2-epoch one (a cosine
     # rate is a function of the step and the run's length, so it resumes exactly as well)
@@ -96,6 +99,7 @@ def test_resume_continues_exactly(jacquard_dir: Path, tmp_path: Path):
     assert all(torch.equal(a[k], b[k]) for k in a)
 
 
+@pytest.mark.slow
 def test_resume_refuses_a_different_network(jacquard_dir: Path, tmp_path: Path):
     from tamp.errors import InputError
 
@@ -134,6 +138,7 @@ def test_evaluation_with_oracles(jacquard_dir: Path):
     assert evaluate(_Oracle(ds, flip_angle=True), ds, idx, progress=False).accuracy == 0.0
 
 
+@pytest.mark.slow
 def test_distributed_two_cpu_processes(jacquard_dir: Path, tmp_path: Path):
     cfg = _cfg(jacquard_dir, tmp_path / "ddp", epochs=1, batches_per_epoch=4, device="cpu")
     r0, r1 = train_local_processes(cfg, 2)

@@ -1,1 +1,3 @@
-"""What every Drake workcell shares: model paths, the parser, port messages, the executor system."""
+"""What every Drake workcell shares: model data (`models`), the offline parser (`parsing`),
+port messages (`messages`), the BT executor system (`executor`), the chunked runner
+(`runner`) and Meshcat views and recordings (`recording`)."""

@@ -1,98 +1,52 @@
-"""Where the SDF models live and what the simulation needs to know about each of them.
+"""Where the project's model data lives: the SDF models and the network weights.
 
-The models are data files outside the Python package (``models/sdf`` at the repository
-root, registered as ``package://tamp_models/...`` through ``models/package.xml``); nothing
-is fetched. This module has no Drake import, so scenario validation runs without Drake.
+They are the top-level ``models/`` folder, installed as the data package ``tamp_models``
+(``pyproject.toml``) and found with `importlib.resources`, so a wheel works from any
+directory. The SDFs resolve in Drake as ``package://tamp_models/sdf/...`` through
+``models/package.xml`` (`tamp.sim.core.parsing.make_parser`); nothing is fetched. What each
+workcell knows about its models (joints, gains, object sizes) lives in its own subpackage.
+No Drake import here, so scenario validation and the grasp CLI run without Drake.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 import tamp
+from tamp.errors import TampError
 
-MODELS_DIR = Path(tamp.__file__).resolve().parent.parent / "models"
-PACKAGE_XML = MODELS_DIR / "package.xml"
 PACKAGE = "tamp_models"
+
+
+def models_dir() -> Path:
+    """The ``models/`` folder: the installed ``tamp_models`` package.
+
+    A source checkout that was never installed (only ``PYTHONPATH`` set) has no
+    ``tamp_models`` to import; then the folder beside the ``tamp`` package is used.
+    """
+    try:
+        root = resources.files(PACKAGE)
+    except ModuleNotFoundError:
+        root = Path(tamp.__file__).resolve().parent.parent / "models"
+    if not isinstance(root, Path) or not (root / "package.xml").is_file():
+        raise TampError(
+            f"the model data ({PACKAGE}: models/package.xml, models/sdf, models/weights) is "
+            "not installed; reinstall tamp (pip install .)"
+        )
+    return root
+
+
+def package_xml() -> Path:
+    """``models/package.xml``, which makes the SDFs ``package://tamp_models/...``."""
+    return models_dir() / "package.xml"
+
+
+def sdf_path(name: str) -> Path:
+    """The file of model ``name`` (``models/sdf/<name>.sdf``), for text substitution."""
+    return models_dir() / "sdf" / f"{name}.sdf"
 
 
 def model_url(name: str) -> str:
     """``package://tamp_models/sdf/<name>.sdf``."""
     return f"package://{PACKAGE}/sdf/{name}.sdf"
-
-
-@dataclass(frozen=True)
-class ObjectKind:
-    """A graspable object model: its SDF, body name and the numbers skills need.
-
-    ``grasp_height`` is where the fingers close, above the object's centre (a top grasp:
-    the palm stays clear of the object's top). ``radius`` is the footprint radius used for
-    overlap checks and base path planning; ``half_width`` is what the fingers close on.
-    """
-
-    name: str
-    body: str
-    half_height: float
-    radius: float
-    half_width: float
-    grasp_height: float
-    mass: float
-
-    @property
-    def url(self) -> str:
-        return model_url(self.name)
-
-
-OBJECT_KINDS: dict[str, ObjectKind] = {
-    "bottle": ObjectKind("bottle", "bottle", 0.10, 0.035, 0.035, 0.06, 0.3),
-    "obstacle": ObjectKind("obstacle", "obstacle", 0.075, 0.035 * math.sqrt(2), 0.035, 0.035, 0.4),
-}
-
-
-@dataclass(frozen=True)
-class RobotSpec:
-    """The youBot-like robot of ``models/sdf/youbot.sdf`` (SMP-MRO §V: KUKA youBot)."""
-
-    url: str = model_url("youbot")
-    base_joints: tuple[str, ...] = ("base_x", "base_y", "base_yaw")
-    arm_joints: tuple[str, ...] = (
-        "arm_joint_1",
-        "arm_joint_2",
-        "arm_joint_3",
-        "arm_joint_4",
-        "arm_joint_5",
-    )
-    finger_joints: tuple[str, ...] = ("finger_left_joint", "finger_right_joint")
-    base_body: str = "base_link"
-    palm_body: str = "gripper_palm"
-    grasp_offset: float = 0.10  # grasp point on the palm's z axis (SDF frame grasp_frame)
-    footprint_radius: float = 0.345  # half-diagonal of the 0.58 x 0.38 m base
-    planning_radius: float = 0.45  # base + the arm's ready pose / a carried object 0.4 m ahead
-    finger_open: float = 0.048
-    # PD gains of the plant's PD-controlled actuators (SAP, implicit): (kp, kd) per joint kind
-    base_gains: tuple[float, float] = (8000.0, 1500.0)
-    yaw_gains: tuple[float, float] = (1500.0, 300.0)
-    arm_gains: tuple[float, float] = (600.0, 40.0)
-    finger_gains: tuple[float, float] = (400.0, 10.0)
-
-    @property
-    def joints(self) -> tuple[str, ...]:
-        return self.base_joints + self.arm_joints + self.finger_joints
-
-    def gains(self, joint: str) -> tuple[float, float]:
-        if joint in ("base_x", "base_y"):
-            return self.base_gains
-        if joint == "base_yaw":
-            return self.yaw_gains
-        if joint in self.finger_joints:
-            return self.finger_gains
-        return self.arm_gains
-
-
-ROBOT = RobotSpec()
-
-#: The ready pose the robot drives in: palm down, grasp point 0.36 m ahead of the base
-#: centre and 0.27 m up (from `ArmIK.solve`), a short move from any pre-grasp pose.
-HOME_ARM = (0.0, 0.342, 1.111, 1.689, 0.0)

@@ -14,7 +14,7 @@ import os
 
 from pydrake.multibody.parsing import Parser
 
-from tamp.sim.core.models import PACKAGE_XML
+from tamp.sim.core.models import package_xml
 
 
 def make_parser(plant) -> Parser:
@@ -33,5 +33,5 @@ def make_parser(plant) -> Parser:
     pm = parser.package_map()
     if pm.Contains("drake_models"):
         pm.Remove("drake_models")
-    pm.AddPackageXml(str(PACKAGE_XML))
+    pm.AddPackageXml(str(package_xml()))
     return parser

@@ -24,14 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from pydrake.geometry import (
-    CollisionFilterDeclaration,
-    GeometrySet,
-    Meshcat,
-    MeshcatVisualizer,
-    MeshcatVisualizerParams,
-    Role,
-)
+from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import (
     AddMultibodyPlant,
@@ -42,11 +35,13 @@ from pydrake.multibody.tree import PdControllerGains
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from tamp.sim.core.executor import BtExecutor, Policy
-from tamp.sim.core.models import HOME_ARM, MODELS_DIR, ROBOT, model_url
+from tamp.sim.core.models import model_url, sdf_path
 from tamp.sim.core.parsing import make_parser
+from tamp.sim.core.recording import add_visualizer
 from tamp.sim.smp.controller import SkillController
 from tamp.sim.smp.estimator import WorldStateEstimator
 from tamp.sim.smp.ik import grasp_transform
+from tamp.sim.smp.robot import HOME_ARM, ROBOT
 from tamp.sim.smp.scenario import SimScenario
 from tamp.world.geometry import Area
 
@@ -66,20 +61,12 @@ class SimSystem:
     estimator: WorldStateEstimator
     areas: dict[str, Area]
     visualizer: Any = None
-    meshcat: Meshcat | None = None
+    meshcat: Any = None  # pydrake.geometry.Meshcat
     q_start: np.ndarray = field(default_factory=lambda: np.zeros(len(ROBOT.joints)))
 
 
-def scenario_areas(scenario: SimScenario) -> dict[str, Area]:
-    """Goal areas L_k and free areas of the demonstration, by name."""
-    demo = scenario.demo
-    areas = {g.area.name: g.area for g in demo.goals}
-    areas.update({a.name: a for a in demo.free_areas})
-    return areas
-
-
 def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
-    text = (MODELS_DIR / "sdf" / "area_marker.sdf").read_text()
+    text = sdf_path("area_marker").read_text()
     text = text.replace('<model name="area_marker">', f'<model name="area_{name}">')
     text = re.sub(r"<radius>[^<]*</radius>", f"<radius>{radius:.4f}</radius>", text, count=1)
     if free:
@@ -87,9 +74,7 @@ def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
     return text
 
 
-def build_diagram(
-    scenario: SimScenario, policy: Policy, *, meshcat: Meshcat | None = None
-) -> SimSystem:
+def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None) -> SimSystem:
     """The named Diagram of ``scenario`` with ``policy`` (the grown BT) in the BtExecutor."""
     builder = DiagramBuilder()
     config = MultibodyPlantConfig(
@@ -102,7 +87,7 @@ def build_diagram(
 
     (floor,) = parser.AddModelsFromUrl(model_url("floor"))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("floor", floor))
-    areas = scenario_areas(scenario)
+    areas = scenario.areas
     free_names = {a.name for a in scenario.demo.free_areas}
     for name, area in areas.items():
         (m,) = parser.AddModelsFromString(
@@ -133,7 +118,7 @@ def build_diagram(
     palm = plant.GetBodyByName(ROBOT.palm_body, robot)
     parser.SetAutoRenaming(True)
     for i, obj in enumerate(scenario.objects):
-        text = (MODELS_DIR / "sdf" / f"{obj.kind.name}.sdf").read_text()
+        text = sdf_path(obj.kind.name).read_text()
         text = text.replace(f'<model name="{obj.kind.name}">', f'<model name="{obj.id}">')
         (m,) = parser.AddModelsFromString(text, "sdf")
         body = plant.GetBodyByName(obj.kind.body, m)
@@ -166,7 +151,6 @@ def build_diagram(
         name = plant.get_joint_actuator(index).joint().name()
         actuator_order.append(ROBOT.joints.index(name))
 
-    failures = {f.action: f.attempts for f in scenario.failures}
     estimator = builder.AddSystem(
         WorldStateEstimator(
             bodies={k: int(b.index()) for k, b in bodies.items()},
@@ -186,7 +170,7 @@ def build_diagram(
             q_start=q_start,
             base_limits=scenario.base,
             workspace=scenario.workspace,
-            failures=failures,
+            failures=scenario.failures,
         )
     )
     executor = builder.AddSystem(BtExecutor(policy, period=scenario.bt_period))
@@ -203,8 +187,7 @@ def build_diagram(
 
     visualizer = None
     if meshcat is not None:
-        params = MeshcatVisualizerParams(publish_period=1.0 / 30.0, role=Role.kIllustration)
-        visualizer = MeshcatVisualizer.AddToBuilder(builder, scene_graph, meshcat, params)
+        visualizer = add_visualizer(builder, scene_graph, meshcat)
 
     diagram = builder.Build()
     diagram.set_name(f"smp_mro_{scenario.name}")

@@ -32,7 +32,6 @@ from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from tamp.sim.core.messages import GraspRequest, SkillCommand, SkillStatus
-from tamp.sim.core.models import HOME_ARM, ROBOT, ObjectKind
 from tamp.sim.smp.ik import ArmIK, grasp_rotation
 from tamp.sim.smp.motion import (
     STANDOFF,
@@ -44,7 +43,9 @@ from tamp.sim.smp.motion import (
     standoff_pose,
     wrap,
 )
+from tamp.sim.smp.robot import HOME_ARM, ROBOT, ObjectKind
 from tamp.sim.smp.scenario import BaseLimits
+from tamp.world.events import Fail
 from tamp.world.geometry import Area
 from tamp.world.interface import Status
 
@@ -133,7 +134,7 @@ class SkillController(LeafSystem):
         q_start: np.ndarray,
         base_limits: BaseLimits,
         workspace: tuple[float, float, float, float],
-        failures: dict[tuple[str, tuple[str, ...]], tuple[int, ...]] | None = None,
+        failures: tuple[Fail, ...] = (),
     ):
         super().__init__()
         self.set_name("skill_controller")
@@ -144,7 +145,7 @@ class SkillController(LeafSystem):
         self._order = list(actuator_order)  # actuator k drives robot joint _order[k]
         self._limits = base_limits
         self._workspace = workspace
-        self._failures = dict(failures or {})
+        self._failures = tuple(failures)
         self._ik = ArmIK()
         self._planner = BasePlanner(workspace)
 
@@ -403,11 +404,20 @@ class SkillController(LeafSystem):
         return joint_segment(t, q, q1, 0.2, 0.3)
 
     def _phase_weld(self, st, t, q, poses):
-        key = (st.cmd.name, tuple(st.cmd.args))
-        lost = st.attempts.get(key, 0) in self._failures.get(key, ())
+        lost = self._scripted_failure(st)
         if not lost:
             st.grasp = GraspRequest(st.cmd.args[0], st.memo["variant"], st.grasp.holding)
         return Segment(t, 0.1, q.copy(), st.segment.q1.copy())
+
+    def _scripted_failure(self, st: ControllerState) -> bool:
+        """Whether this attempt is one of the first ``times`` attempts a `Fail` names."""
+        name = st.cmd.name
+        for f in self._failures:
+            if f.matches(name, tuple(st.cmd.args)):
+                tried = sum(n for (a, args), n in st.attempts.items() if f.matches(a, args))
+                if tried <= f.times:
+                    return True
+        return False
 
     def _phase_lift(self, st, t, q, poses):
         q1 = st.segment.q1.copy()

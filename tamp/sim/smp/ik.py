@@ -18,8 +18,8 @@ from pydrake.multibody.inverse_kinematics import InverseKinematics
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.solvers import Solve
 
-from tamp.sim.core.models import ROBOT, ObjectKind
 from tamp.sim.core.parsing import make_parser
+from tamp.sim.smp.robot import ROBOT, ObjectKind
 
 
 def grasp_rotation(variant: int) -> RotationMatrix:

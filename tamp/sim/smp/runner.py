@@ -1,17 +1,20 @@
-"""SimRunner: advances the simulator and does what must happen *between* steps.
+"""SimRunner: runs the SMP-MRO diagram and does what must happen *between* steps.
 
-Weld toggling. A weld constraint's active status lives in the plant's context and is not
-an output of any system, so no LeafSystem event can switch it. The runner therefore
-advances the simulator in chunks of one controller period (`Simulator.AdvanceTo`) and,
-between chunks, reads the SkillController's ``grasp`` output and switches the matching
-weld on (or every weld off) with `MultibodyPlant.SetConstraintActiveStatus`. The controller
-asks for a weld only once the fingers have closed at the grasp pose, and waits a dwell
-longer than one chunk before it lifts, so the weld is always on when the lift starts
-(FIELD_NOTES: a weld switched on with the bodies apart snaps them together).
+It advances the simulator in chunks of one controller period (`tamp.sim.core.runner`).
+
+Weld toggling. A weld constraint's active status lives in the plant's context and is not an
+output of any system, so no LeafSystem event can switch it. Between chunks the runner reads
+the SkillController's ``grasp`` output and switches the matching weld on (or every weld
+off) with `MultibodyPlant.SetConstraintActiveStatus`. The controller asks for a weld only
+once the fingers have closed at the grasp pose, and waits a dwell longer than one chunk
+before it lifts, so the weld is always on when the lift starts (FIELD_NOTES: a weld
+switched on with the bodies apart snaps them together).
 
 Appearances. An object that "appears" (Case 3's O_a) waits outside the workspace; at its
-time, or when the named skill succeeds, the runner puts it down at its area centre and
-zeroes its velocity. This is a person putting an object down (scripted), not the robot.
+WHEN (`tamp.world.events`: a tick, a time, right after a named skill succeeds, or, without
+one, when the robot first comes within reach of the place) the runner puts it down at the
+place (an area's centre or a point) and zeroes its velocity. This is a person putting an
+object down (scripted), not the robot.
 
 The run ends when the BtExecutor's tree returns SUCCESS or FAILURE, or at
 ``max_sim_time``. `SimResult` has the executed actions with sim start/end times, final
@@ -21,19 +24,19 @@ plant poses of the objects, sim time, wall time and the real-time factor.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
-from pydrake.systems.analysis import ApplySimulatorConfig, Simulator, SimulatorConfig
 
 from tamp.sim.core.executor import ActionLog
-from tamp.sim.core.models import ROBOT
+from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.smp.builder import SimSystem
 from tamp.sim.smp.ik import grasp_transform
+from tamp.sim.smp.robot import ROBOT
+from tamp.world.events import AfterAction, Appear, AtTick, AtTime, format_call
 from tamp.world.interface import Status
 
 
@@ -101,11 +104,7 @@ class SimRunner:
     def __init__(self, system: SimSystem, *, realtime_rate: float = 0.0):
         """``realtime_rate``: 0 runs as fast as possible; 1.0 paces a live Meshcat view."""
         self.system = system
-        self.simulator = Simulator(system.diagram)
-        ApplySimulatorConfig(
-            SimulatorConfig(target_realtime_rate=realtime_rate, publish_every_time_step=False),
-            self.simulator,
-        )
+        self.simulator = make_simulator(system.diagram, realtime_rate=realtime_rate)
         root = self.simulator.get_mutable_context()
         self.root = root
         self.plant_context = system.plant.GetMyMutableContextFromRoot(root)
@@ -115,6 +114,7 @@ class SimRunner:
         #: (time, object, variant, gap m, gap rad) each time a weld was switched on
         self.weld_log: list[tuple[float, str, int, float, float]] = []
         self.appeared: dict[str, float] = {}
+        self.reach = system.scenario.demo.domain().reach  # IsRobotCloseTo's d (§V-A2)
         self.base_path: list[tuple[float, float, float]] = []
 
     # -- between-step work -------------------------------------------------------------------
@@ -147,22 +147,29 @@ class SimRunner:
         s = self.system
         done = {a.action for a in log if a.status == "SUCCESS"}
         for obj in s.scenario.objects:
-            ap = obj.appear
-            if ap is None or obj.id in self.appeared:
+            if obj.appear is None or obj.id in self.appeared:
                 continue
-            if ap.time is not None:
-                due = t >= ap.time
-            else:
-                name, args = ap.after
-                due = f"{name}({', '.join(args)})" in done
-            if not due:
+            if not self._due(obj.appear, t, done):
                 continue
-            area = s.areas[ap.area]
-            X = RigidTransform([area.pos.x, area.pos.y, obj.kind.half_height + 0.003])
+            p = s.scenario.place_of(obj.appear)
+            X = RigidTransform([p.x, p.y, obj.kind.half_height + 0.003])
             body = s.bodies[obj.id]
             s.plant.SetFreeBodyPose(self.plant_context, body, X)
             s.plant.SetFreeBodySpatialVelocity(self.plant_context, body, SpatialVelocity.Zero())
             self.appeared[obj.id] = t
+
+    def _due(self, appear: Appear, t: float, done: set[str]) -> bool:
+        """Whether ``appear``'s WHEN has come (`tamp.world.events`: tick, time, after, reach)."""
+        when = appear.when
+        if isinstance(when, AtTime):
+            return t >= when.seconds
+        if isinstance(when, AtTick):
+            return t >= when.tick * self.system.scenario.bt_period - 1e-9
+        if isinstance(when, AfterAction):
+            return format_call(when.name, when.args) in done
+        x, y, _ = self.robot_pose()  # no WHEN: when the robot first comes within reach
+        p = self.system.scenario.place_of(appear)
+        return math.hypot(p.x - x, p.y - y) <= self.reach
 
     def object_poses(self) -> dict[str, ObjectPose]:
         s = self.system
@@ -188,19 +195,12 @@ class SimRunner:
     ) -> SimResult:
         s = self.system
         limit = s.scenario.max_sim_time if max_sim_time is None else max_sim_time
-        chunk = s.scenario.controller_period
         ex_context = s.executor.GetMyContextFromRoot(self.root)
-        self.simulator.Initialize()
-        wall0 = time.perf_counter()
-        cpu0 = time.process_time()
-        t = self.root.get_time()
-        next_path = t
-        status, reason = "TIMEOUT", f"no result within {limit:g} s of sim time"
-        n = 0
-        while t < limit - 1e-9:
-            n += 1
-            t = min(chunk * n, limit)
-            self.simulator.AdvanceTo(t)
+        self._appearances(self.root.get_time(), [])  # what is there from the start (tick 0)
+        next_path = self.root.get_time()
+
+        def between(t: float) -> bool:
+            nonlocal next_path
             self._sync_grasp()
             ex = s.executor.state(ex_context)
             self._appearances(t, ex.log)
@@ -209,16 +209,19 @@ class SimRunner:
                 next_path += path_every
             if on_chunk is not None:
                 on_chunk(t)
-            if ex.result is not None:
-                status = ex.result.value
-                policy = s.executor.policy(ex_context)
-                reason = getattr(policy, "reason", "") or (
-                    "every goal reached" if ex.result is Status.SUCCESS else "tree failed"
-                )
-                break
-        wall = time.perf_counter() - wall0
-        cpu = time.process_time() - cpu0
+            return ex.result is not None
+
+        run = run_in_chunks(
+            self.simulator, chunk=s.scenario.controller_period, limit=limit, between=between
+        )
         ex = s.executor.state(ex_context)
+        status, reason = "TIMEOUT", f"no result within {limit:g} s of sim time"
+        if ex.result is not None:
+            status = ex.result.value
+            policy = s.executor.policy(ex_context)
+            reason = getattr(policy, "reason", "") or (
+                "every goal reached" if ex.result is Status.SUCCESS else "tree failed"
+            )
         poses = self.object_poses()
         return SimResult(
             scenario=s.scenario.name,
@@ -226,9 +229,9 @@ class SimRunner:
             reason=reason,
             actions=[a for a in ex.log],
             final_poses=poses,
-            sim_time=t,
-            wall_time=wall,
-            cpu_time=cpu,
+            sim_time=run.sim_time,
+            wall_time=run.wall_time,
+            cpu_time=run.cpu_time,
             base_path=list(self.base_path),
             appeared=dict(self.appeared),
             goals=self.goals_on_plant(poses),

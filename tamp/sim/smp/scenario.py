@@ -3,7 +3,13 @@ initial poses, plant and executor settings, objects that appear during execution
 scripted skill failures. Loaded strictly (`tamp.fileio`): every error names the file and
 the field and the CLI exits with status 2. No Drake import here.
 
-Example (``tamp/scenarios/sim/case3.yaml``)::
+Appearances and failures are written as the command-line flags write them
+(`tamp.world.events`, ARCHITECTURE "CLI"): ``appear`` lists ``OBJ@PLACE[@WHEN]`` strings
+(PLACE an area name or ``x,y``; WHEN a tick, ``t=SECONDS`` or ``after:Action(args)``;
+without WHEN the object appears when the robot first comes within reach of the place), and
+``fail`` lists ``ACTION[(ARGS)][xTIMES]`` strings (the first TIMES attempts of the action
+fail; only ``Pick`` is simulated, as a lost grasp). `SimScenario.with_events` adds the
+same entries from flags. Example (``tamp/scenarios/sim/case3.yaml``)::
 
     version: 1
     name: case3
@@ -14,14 +20,16 @@ Example (``tamp/scenarios/sim/case3.yaml``)::
     base: {max_speed: 0.5, max_accel: 0.6, max_yaw_rate: 1.2, max_yaw_accel: 2.0}
     workspace: {x: [-1.0, 4.0], y: [-2.0, 2.5]}
     objects:                           # demonstration objects are bottles unless listed
-      - {id: Oa, model: obstacle, appear: {area: L1, after: "Pick(O1)"}}
-    failures: []                       # e.g. {action: "Pick(O0)", attempts: [1]}
+      - {id: Oa, model: obstacle}      # no pose: it appears (below)
+    appear: ["Oa@L1@after:Pick(O1)"]   # as --appear; an object not listed is a bottle
+    fail: []                           # as --fail, e.g. "Pick(O2)" or "Pick(O2)x2"
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,52 +37,30 @@ from tamp import scenarios
 from tamp.demo import Demonstration, load_demonstration
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
-from tamp.sim.core.models import OBJECT_KINDS, ROBOT, ObjectKind
+from tamp.sim.smp.robot import OBJECT_KINDS, ROBOT, ObjectKind
+from tamp.world.events import AfterAction, Appear, Fail, parse_appear, parse_fail
+from tamp.world.geometry import Area, Point
 
 COSTS = ("distance", "time", "success")
 CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
 SIM_DIR = scenarios.ROOT / "sim"
-_ACTION = re.compile(r"^\s*(MoveTo|Pick|Place)\s*\(\s*([^()]*)\)\s*$")
-
-
-def parse_action(text: str) -> tuple[str, tuple[str, ...]] | None:
-    """``"Pick(O1)"`` -> ``("Pick", ("O1",))``; None when it is not an action of the domain."""
-    m = _ACTION.match(str(text))
-    if not m:
-        return None
-    return m.group(1), tuple(a.strip() for a in m.group(2).split(",") if a.strip())
-
-
-@dataclass(frozen=True)
-class Appearance:
-    """An object a person puts down during execution (Case 3's O_a at l_1).
-
-    It appears at sim ``time``, or when the skill ``after`` (e.g. ``Pick(O1)``) succeeds,
-    centred on area ``area``. Until then it rests outside the workspace, unseen.
-    """
-
-    area: str
-    time: float | None = None
-    after: tuple[str, tuple[str, ...]] | None = None
+#: The skills whose failure the simulation can script: a Pick whose weld is not switched on.
+SIMULATED_FAILURES = ("Pick",)
 
 
 @dataclass(frozen=True)
 class SimObject:
-    """One object of the scene: id, model kind, initial planar pose, optional appearance."""
+    """One object of the scene: id, model kind, initial planar pose, optional appearance.
+
+    An object with ``appear`` waits, unseen, outside the workspace until its WHEN (a person
+    puts it down at the place: Case 3's O_a at l_1); its ``xy`` is then NaN.
+    """
 
     id: str
     kind: ObjectKind
     xy: tuple[float, float]
     yaw: float = 0.0
-    appear: Appearance | None = None
-
-
-@dataclass(frozen=True)
-class InjectedFailure:
-    """Scripted skill failure: the listed attempts (1-based) of ``action`` lose their grasp."""
-
-    action: tuple[str, tuple[str, ...]]
-    attempts: tuple[int, ...]
+    appear: Appear | None = None
 
 
 @dataclass(frozen=True)
@@ -104,13 +90,24 @@ class SimScenario:
     workspace: tuple[float, float, float, float]  # xmin, xmax, ymin, ymax
     robot_start: tuple[float, float, float]
     objects: tuple[SimObject, ...]
-    failures: tuple[InjectedFailure, ...] = ()
+    failures: tuple[Fail, ...] = ()
 
     def object(self, uid: str) -> SimObject:
         for o in self.objects:
             if o.id == uid:
                 return o
         raise KeyError(uid)
+
+    @property
+    def areas(self) -> dict[str, Area]:
+        """Goal areas L_k and free areas of the demonstration, by name."""
+        areas = {g.area.name: g.area for g in self.demo.goals}
+        areas.update({a.name: a for a in self.demo.free_areas})
+        return areas
+
+    def place_of(self, appear: Appear) -> Point:
+        """Where an appearing object is put: its area's centre, or the point itself."""
+        return self.areas[appear.place].pos if isinstance(appear.place, str) else appear.place
 
     def in_workspace(self, x: float, y: float, margin: float = 0.0) -> bool:
         xmin, xmax, ymin, ymax = self.workspace
@@ -120,6 +117,32 @@ class SimScenario:
         """Where an object waits, unseen, before it appears (outside the workspace)."""
         xmin, xmax, ymin, _ = self.workspace
         return (xmax + 1.0 + 0.3 * index, ymin)
+
+    def with_events(self, appear: Sequence[Appear] = (), fail: Sequence[Fail] = ()) -> SimScenario:
+        """This scenario with ``--appear`` / ``--fail`` entries added (`tamp.world.events`).
+
+        An ``--appear`` for an object replaces the file's pose or appearance of that object
+        (an object the scenario does not know is a bottle); a ``--fail`` for an action
+        replaces the file's entry for the same action. Errors name the flag.
+        """
+        objects = list(self.objects)
+        index = {o.id: i for i, o in enumerate(objects)}
+        for a in appear:
+            _check_appear(self, a, field="--appear", file=None)
+            if a.obj in index:
+                old = objects[index[a.obj]]
+                objects[index[a.obj]] = SimObject(a.obj, old.kind, (math.nan, math.nan), 0.0, a)
+            else:
+                index[a.obj] = len(objects)
+                objects.append(
+                    SimObject(a.obj, OBJECT_KINDS["bottle"], (math.nan, math.nan), 0.0, a)
+                )
+        out = dataclasses.replace(self, objects=tuple(objects))
+        flagged = {(f.action, f.args) for f in fail}
+        kept = [f for f in self.failures if (f.action, f.args) not in flagged]
+        for f in fail:
+            _check_fail(out, f, field="--fail", file=None)
+        return dataclasses.replace(out, failures=tuple(kept) + tuple(fail))
 
 
 def scenario_path(name: str | Path) -> Path:
@@ -143,7 +166,8 @@ def load_scenario(path: str | Path) -> SimScenario:
             "workspace",
             "robot",
             "objects",
-            "failures",
+            "appear",
+            "fail",
         }
     )
     name = f.str("name")
@@ -198,8 +222,9 @@ def load_scenario(path: str | Path) -> SimScenario:
         workspace=workspace,
         robot_start=robot_start,
         objects=objects,
-        failures=_failures(f),
     )
+    scenario = _appearances(scenario, f)
+    scenario = dataclasses.replace(scenario, failures=_failures(scenario, f))
     _check_geometry(scenario, f)
     return scenario
 
@@ -229,43 +254,34 @@ def _workspace(f: Fields, demo: Demonstration) -> tuple[float, float, float, flo
 def _objects(
     f: Fields, demo: Demonstration, workspace: tuple[float, float, float, float]
 ) -> tuple[SimObject, ...]:
-    listed: dict[str, tuple[Fields, int]] = {}
+    """Demonstration objects (bottles at P unless listed) and listed ones; an object with
+    no pose gets one from ``appear`` (`_appearances`), until then its ``xy`` is NaN."""
+    listed: dict[str, Fields] = {}
     for i, item in enumerate(f.items("objects", [])):
         if not isinstance(item, Fields):
             raise InputError("each object must be a mapping", file=f.file, field=f"objects[{i}]")
-        item.check_keys({"id", "model", "pose", "appear"})
+        item.check_keys({"id", "model", "pose"})
         uid = item.str("id")
         if uid in listed:
             raise item.error("id", f"duplicate object {uid!r}")
-        listed[uid] = (item, i)
+        listed[uid] = item
 
-    areas = {g.area.name for g in demo.goals} | {a.name for a in demo.free_areas}
     out: list[SimObject] = []
     for uid, p in demo.objects.items():
         kind, xy, yaw = OBJECT_KINDS["bottle"], (p.x, p.y), 0.0
         if uid in listed:
-            item, _ = listed.pop(uid)
+            item = listed.pop(uid)
             kind = _kind(item)
             if item.has("pose"):
                 x, y, yaw = item.vector("pose", 3)
                 xy = (x, y)
-            if item.has("appear"):
-                raise item.error("appear", "a demonstration object is there from the start")
         out.append(SimObject(uid, kind, xy, yaw))
-    for uid, (item, _) in listed.items():
-        kind = _kind(item)
-        appear = None
-        if item.has("appear"):
-            appear = _appearance(item.sub("appear"), areas)
+    for uid, item in listed.items():
+        xy, yaw = (math.nan, math.nan), 0.0
         if item.has("pose"):
-            if appear is not None:
-                raise item.error("pose", "give either pose or appear, not both")
             x, y, yaw = item.vector("pose", 3)
-            out.append(SimObject(uid, kind, (x, y), yaw))
-        elif appear is not None:
-            out.append(SimObject(uid, kind, (math.nan, math.nan), 0.0, appear))
-        else:
-            raise item.error("pose", "an object not in the demonstration needs pose or appear")
+            xy = (x, y)
+        out.append(SimObject(uid, _kind(item), xy, yaw))
     return tuple(out)
 
 
@@ -276,38 +292,99 @@ def _kind(item: Fields) -> ObjectKind:
     return OBJECT_KINDS[model]
 
 
-def _appearance(a: Fields, areas: set[str]) -> Appearance:
-    a.check_keys({"area", "time", "after"})
-    area = a.str("area")
-    if area not in areas:
-        raise a.error("area", f"unknown area {area!r} (known: {', '.join(sorted(areas))})")
-    has_time, has_after = a.has("time"), a.has("after")
-    if has_time == has_after:
-        raise a.error("time", "give exactly one of time and after")
-    if has_time:
-        return Appearance(area, time=a.float("time", min=0.0))
-    after = parse_action(a.str("after"))
-    if after is None:
-        raise a.error("after", "expected an action such as Pick(O1), Place(O1, L1), MoveTo(L1)")
-    return Appearance(area, after=after)
+def _appearances(s: SimScenario, f: Fields) -> SimScenario:
+    """The file's ``appear`` entries on the objects; every object without a pose needs one."""
+    objects = {o.id: o for o in s.objects}
+    for i, text in enumerate(f.items("appear", [])):
+        field = f"appear[{i}]"
+        if not isinstance(text, str):
+            raise InputError("expected OBJ@PLACE[@WHEN] as a string", file=f.file, field=field)
+        a = parse_appear(text, field=field, file=f.file)
+        _check_appear(s, a, field=field, file=f.file)
+        old = objects.get(a.obj)
+        if old is not None and old.appear is not None:
+            raise InputError(f"{a.obj} already appears", file=f.file, field=field)
+        if old is not None and not math.isnan(old.xy[0]):
+            raise InputError(
+                f"{a.obj} has a pose (objects); give either pose or appear",
+                file=f.file,
+                field=field,
+            )
+        kind = old.kind if old is not None else OBJECT_KINDS["bottle"]
+        objects[a.obj] = SimObject(a.obj, kind, (math.nan, math.nan), 0.0, a)
+    for j, item in enumerate(f.raw("objects", []) or []):
+        uid = item.get("id")
+        if objects[uid].appear is None and math.isnan(objects[uid].xy[0]):
+            raise InputError(
+                f"object {uid} is not in the demonstration: it needs a pose or an appear entry",
+                file=f.file,
+                field=f"objects[{j}].pose",
+            )
+    return dataclasses.replace(s, objects=tuple(objects.values()))
 
 
-def _failures(f: Fields) -> tuple[InjectedFailure, ...]:
-    out = []
-    for i, item in enumerate(f.items("failures", [])):
-        if not isinstance(item, Fields):
-            raise InputError("each failure must be a mapping", file=f.file, field=f"failures[{i}]")
-        item.check_keys({"action", "attempts"})
-        action = parse_action(item.str("action"))
-        if action is None or action[0] != "Pick":
-            raise item.error("action", "only Pick(<object>) failures (lost grasps) are scripted")
-        attempts = []
-        for j, a in enumerate(item.items("attempts", [1])):
-            if isinstance(a, bool) or not isinstance(a, int) or a < 1:
-                raise item.error(f"attempts[{j}]", f"expected an attempt number >= 1, got {a!r}")
-            attempts.append(a)
-        out.append(InjectedFailure(action, tuple(sorted(set(attempts)))))
+def _check_appear(s: SimScenario, a: Appear, *, field: str, file: str | None) -> None:
+    """An appearance the simulation can stage: a new object, a known place, a known skill."""
+    if a.obj in s.demo.objects:
+        raise InputError(
+            f"{a.obj} is a demonstration object, there from the start (moving it is not simulated)",
+            file=file,
+            field=field,
+        )
+    areas = s.areas
+    if isinstance(a.place, str):
+        if a.place not in areas:
+            raise InputError(
+                f"unknown area {a.place!r} (known: {', '.join(sorted(areas))})",
+                file=file,
+                field=field,
+            )
+    elif not s.in_workspace(a.place.x, a.place.y):
+        raise InputError(
+            f"({a.place.x:g}, {a.place.y:g}) lies outside the workspace", file=file, field=field
+        )
+    if isinstance(a.when, AfterAction):
+        known = set(s.demo.domain().templates)
+        if a.when.name not in known:
+            raise InputError(
+                f"after: unknown action {a.when.name!r} (known: {', '.join(sorted(known))})",
+                file=file,
+                field=field,
+            )
+
+
+def _failures(s: SimScenario, f: Fields) -> tuple[Fail, ...]:
+    out: list[Fail] = []
+    for i, text in enumerate(f.items("fail", [])):
+        field = f"fail[{i}]"
+        if not isinstance(text, str):
+            raise InputError(
+                "expected ACTION[(ARGS)][xTIMES] as a string", file=f.file, field=field
+            )
+        fail = parse_fail(text, field=field, file=f.file)
+        _check_fail(s, fail, field=field, file=f.file)
+        if any((g.action, g.args) == (fail.action, fail.args) for g in out):
+            raise InputError(f"{fail.action} is listed twice", file=f.file, field=field)
+        out.append(fail)
     return tuple(out)
+
+
+def _check_fail(s: SimScenario, fail: Fail, *, field: str, file: str | None) -> None:
+    """A failure the simulation can script: a lost grasp, ``Pick`` or ``Pick(<object>)``."""
+    if fail.action not in SIMULATED_FAILURES:
+        raise InputError(
+            f"only Pick failures (lost grasps) are simulated, got {fail.action}",
+            file=file,
+            field=field,
+        )
+    if fail.args is not None:
+        ids = {o.id for o in s.objects}
+        if len(fail.args) != 1 or fail.args[0] not in ids:
+            raise InputError(
+                f"Pick takes one object of the scene ({', '.join(sorted(ids))}), got {fail}",
+                file=file,
+                field=field,
+            )
 
 
 def _check_geometry(s: SimScenario, f: Fields) -> None:

@@ -42,10 +42,8 @@ def verification_events(scenario: SimScenario) -> list:
     """The scenario's appearances as symbolic events, for the tree's verification."""
     from tamp.bt import Appear
 
-    areas = {g.area.name: g.area for g in scenario.demo.goals}
-    areas.update({a.name: a for a in scenario.demo.free_areas})
     return [
-        Appear(o.id, areas[o.appear.area].pos) for o in scenario.objects if o.appear is not None
+        Appear(o.id, scenario.place_of(o.appear)) for o in scenario.objects if o.appear is not None
     ]
 
 
@@ -83,24 +81,18 @@ def simulate_smp_mro(
     ``record``: write a self-contained Meshcat animation (HTML) of the run there
     (a local Meshcat server is started when ``meshcat`` is None).
     """
+    from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
     from tamp.sim.smp.builder import build_diagram
     from tamp.sim.smp.runner import SimRunner
 
     prepared = prepare(scenario, verify=verify)
     if record is not None and meshcat is None:
-        from pydrake.geometry import Meshcat
-
-        meshcat = Meshcat(0)
+        meshcat = new_meshcat()
     system = build_diagram(scenario, prepared.policy, meshcat=meshcat)
     runner = SimRunner(system, realtime_rate=realtime_rate)
     if record is not None:
-        system.visualizer.StartRecording(set_transforms_while_recording=False)
+        start_recording(system.visualizer)
     result = runner.run(max_sim_time=max_sim_time)
     if record is not None:
-        system.visualizer.StopRecording()
-        system.visualizer.PublishRecording()
-        path = Path(record)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(meshcat.StaticHtml())
-        result.recording = str(path)
+        result.recording = save_recording(system.visualizer, meshcat, record)
     return result, prepared, system

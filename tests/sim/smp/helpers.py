@@ -66,3 +66,15 @@ class Track:
                 if d > worst[0]:
                     worst = (d, uid, self.times[k])
         return worst
+
+
+def verified_runner(path: Path):
+    """(scenario, system, runner) for a scenario file: planned, verified, built, not run."""
+    from tamp.sim.smp.builder import build_diagram
+    from tamp.sim.smp.runner import SimRunner
+    from tamp.sim.smp.scenario import load_scenario
+    from tamp.sim.smp.simulate import prepare
+
+    scenario = load_scenario(path)
+    system = build_diagram(scenario, prepare(scenario).policy)
+    return scenario, system, SimRunner(system)

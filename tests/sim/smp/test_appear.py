@@ -5,22 +5,18 @@ from __future__ import annotations
 
 import math
 
-from tamp.sim.smp.builder import build_diagram
-from tamp.sim.smp.runner import SimRunner
-from tamp.sim.smp.scenario import load_scenario
-from tamp.sim.smp.simulate import prepare
+import pytest
 
-from .helpers import write_one_bottle
+from .helpers import verified_runner, write_one_bottle
+
+pytestmark = pytest.mark.slow  # Drake simulation runs
 
 
 def test_obstacle_appearing_at_a_time_is_cleared_from_the_goal(tmp_path):
     path = write_one_bottle(
-        tmp_path, "objects:\n  - {id: Oa, model: obstacle, appear: {area: L0, time: 3.0}}\n"
+        tmp_path, "objects:\n  - {id: Oa, model: obstacle}\nappear: ['Oa@L0@t=3']\n"
     )
-    scenario = load_scenario(path)
-    prepared = prepare(scenario)
-    system = build_diagram(scenario, prepared.policy)
-    runner = SimRunner(system)
+    scenario, system, runner = verified_runner(path)
     seen: list[tuple[float, bool]] = []
     est_ctx = system.estimator.GetMyContextFromRoot(runner.root)
 
@@ -42,3 +38,24 @@ def test_obstacle_appearing_at_a_time_is_cleared_from_the_goal(tmp_path):
     placed = [a.action for a in result.actions if a.status == "SUCCESS"]
     assert any(a.startswith("Place(Oa, free_auto") for a in placed)
     assert placed[-1] == "Place(O0, L0)"
+
+
+def test_object_without_when_appears_once_the_robot_is_within_reach(tmp_path):
+    """``--appear Y@L0`` (no WHEN): a person puts Y on l_0 when the robot gets there (§V-D2)."""
+    path = write_one_bottle(tmp_path, "objects:\n  - {id: Y, model: obstacle}\nappear: ['Y@L0']\n")
+    scenario, system, runner = verified_runner(path)
+    reach = scenario.demo.domain().reach
+    l0 = system.areas["L0"].pos
+    distance: list[tuple[float, float]] = []
+
+    def record(t: float) -> None:
+        x, y, _ = runner.robot_pose()
+        distance.append((t, math.hypot(l0.x - x, l0.y - y)))
+
+    result = runner.run(on_chunk=record)
+    assert result.status == "SUCCESS", result.reason
+    t_appear = result.appeared["Y"]
+    first_close = next(t for t, d in distance if d <= reach)
+    assert t_appear == first_close > 0  # not before: the robot starts 1.2 m away
+    placed = [a.action for a in result.actions if a.status == "SUCCESS"]
+    assert any(a.startswith("Place(Y, ") for a in placed) and placed[-1] == "Place(O0, L0)"

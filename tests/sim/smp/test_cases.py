@@ -13,6 +13,8 @@ import pytest
 
 from tamp.world.interface import Status
 
+pytestmark = pytest.mark.slow  # each case runs in Drake (seconds)
+
 JUMP = 0.04  # m per 20 ms chunk: 2 m/s, far above any skill speed (no teleporting)
 
 

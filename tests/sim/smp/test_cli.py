@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from tamp.commands.main import main
 
 from .helpers import write_one_bottle
 
 
+@pytest.mark.slow
 def test_json_output_and_recording(tmp_path, capsys):
     path = write_one_bottle(tmp_path)
     html = tmp_path / "out" / "run.html"
@@ -35,6 +38,7 @@ def test_json_output_and_recording(tmp_path, capsys):
     assert len(text) > 100_000  # the animation is embedded, not linked
 
 
+@pytest.mark.slow
 def test_human_readable_output(tmp_path, capsys):
     path = write_one_bottle(tmp_path)
     code = main(["simulate", "smp-mro", "--scenario", str(path), "--no-verify"])

@@ -4,20 +4,16 @@ from __future__ import annotations
 
 import math
 
-from tamp.sim.smp.builder import build_diagram
-from tamp.sim.smp.runner import SimRunner
-from tamp.sim.smp.scenario import load_scenario
-from tamp.sim.smp.simulate import prepare
+import pytest
 
-from .helpers import Track, write_one_bottle
+from .helpers import Track, verified_runner, write_one_bottle
+
+pytestmark = pytest.mark.slow  # a Drake simulation run
 
 
 def test_failed_grasp_is_retried(tmp_path):
-    path = write_one_bottle(tmp_path, "failures:\n  - {action: 'Pick(O0)', attempts: [1]}\n")
-    scenario = load_scenario(path)
-    prepared = prepare(scenario)
-    system = build_diagram(scenario, prepared.policy)
-    runner = SimRunner(system)
+    path = write_one_bottle(tmp_path, "fail: ['Pick(O0)']\n")
+    scenario, system, runner = verified_runner(path)
     track = Track()
     welds: list[tuple[float, object]] = []
 

@@ -8,8 +8,10 @@ import pytest
 
 from tamp.commands.main import main
 from tamp.errors import InputError
-from tamp.sim.core.models import OBJECT_KINDS
-from tamp.sim.smp.scenario import load_scenario, parse_action
+from tamp.sim.smp.robot import OBJECT_KINDS
+from tamp.sim.smp.scenario import load_scenario
+from tamp.world.events import AfterAction, Appear, AtTime, Fail, parse_appear, parse_fail
+from tamp.world.geometry import Point
 
 from .helpers import packaged, write_one_bottle
 
@@ -31,14 +33,15 @@ def test_case3_obstacle_appears_at_l1_after_the_pick_of_o1():
     s = load_scenario(packaged("case3.yaml"))
     oa = s.object("Oa")
     assert oa.kind is OBJECT_KINDS["obstacle"]
-    assert oa.appear.area == "L1" and oa.appear.after == ("Pick", ("O1",))
+    assert oa.appear == Appear("Oa", "L1", AfterAction("Pick", ("O1",)))
+    assert str(oa.appear) == "Oa@L1@after:Pick(O1)"  # the --appear flag's own text
     assert math.isnan(oa.xy[0])
     assert not s.in_workspace(*s.parking(0))
 
 
-def test_parse_action():
-    assert parse_action("Place(O1, L1)") == ("Place", ("O1", "L1"))
-    assert parse_action("Fly(O1)") is None
+def test_failed_grasp_case_uses_the_fail_vocabulary():
+    s = load_scenario(packaged("case1_failed_grasp.yaml"))
+    assert s.failures == (Fail("Pick", ("O2",), 1),)
 
 
 def _bad(tmp_path, extra: str) -> InputError:
@@ -78,13 +81,21 @@ def test_goal_outside_the_workspace_is_unreachable(tmp_path):
     ("extra", "field"),
     [
         ("colour: red\n", "colour"),
+        ("objects:\n  - {id: Y, model: obstacle}\nappear: ['Y@L9@t=1']\n", "appear[0]"),
+        ("objects:\n  - {id: Y, model: obstacle}\n", "objects[0].pose"),
+        ("appear: ['Y@L0@when:1']\n", "appear[0]"),
+        ("appear: ['O0@L0@t=1']\n", "appear[0]"),  # a demonstration object
+        ("appear: ['Y@L0@after:Fly(O0)']\n", "appear[0]"),
+        ("appear: ['Y@20,0@t=1']\n", "appear[0]"),  # outside the workspace
         (
-            "objects:\n  - {id: Y, model: obstacle, appear: {area: L9, time: 1.0}}\n",
-            "objects[0].appear.area",
+            "objects:\n  - {id: Y, model: obstacle, pose: [1.0, -0.7, 0]}\nappear: ['Y@L0']\n",
+            "appear[0]",
         ),
-        ("objects:\n  - {id: Y, model: obstacle, appear: {area: L0}}\n", "objects[0].appear.time"),
-        ("failures:\n  - {action: 'Place(O0, L0)'}\n", "failures[0].action"),
-        ("failures:\n  - {action: 'Pick(O0)', attempts: [0]}\n", "failures[0].attempts[0]"),
+        ("appear: [{area: L0}]\n", "appear[0]"),
+        ("fail: ['Place(O0, L0)']\n", "fail[0]"),
+        ("fail: ['Pick(O9)']\n", "fail[0]"),
+        ("fail: ['Pick(O0)x0']\n", "fail[0]"),
+        ("fail: ['Pick(O0)', 'Pick(O0)x2']\n", "fail[1]"),
         ("plant: {time_step: 0.5}\n", "plant.time_step"),
         ("robot: {start: [1.0, 0.1, 0.0]}\n", "robot.start"),
     ],
@@ -99,3 +110,58 @@ def test_cli_exits_2_naming_the_field(tmp_path, capsys):
     assert code == 2
     err = capsys.readouterr().err
     assert "objects[0].model" in err and str(path) in err
+
+
+def test_appear_and_fail_entries_read_as_the_flags_do(tmp_path):
+    path = write_one_bottle(
+        tmp_path,
+        "objects:\n  - {id: Y, model: obstacle}\n"
+        "appear: ['Y@L0@t=2.5', 'Z@1.5,-0.5', 'W@L0@4']\nfail: ['Pick x2']\n",
+    )
+    s = load_scenario(path)
+    assert s.object("Y").appear == Appear("Y", "L0", AtTime(2.5))
+    assert s.object("Y").kind is OBJECT_KINDS["obstacle"]
+    z = s.object("Z")
+    assert z.kind is OBJECT_KINDS["bottle"] and z.appear.when is None  # when within reach
+    assert s.place_of(z.appear) == Point(1.5, -0.5, 0.0)
+    assert str(s.object("W").appear) == "W@L0@4"
+    assert s.failures == (Fail("Pick", None, 2),)
+
+
+def test_with_events_adds_and_overrides_per_object(tmp_path):
+    path = write_one_bottle(
+        tmp_path,
+        "objects:\n  - {id: Y, model: obstacle, pose: [1.0, -0.7, 0]}\nfail: ['Pick(O0)']\n",
+    )
+    s = load_scenario(path)
+    t = s.with_events(
+        [parse_appear("Y@L0@after:Pick(O0)"), parse_appear("Q@L0@t=5")],
+        [parse_fail("Pick(O0)x3")],
+    )
+    y = t.object("Y")
+    assert y.kind is OBJECT_KINDS["obstacle"] and math.isnan(y.xy[0])  # the flag wins
+    assert y.appear == Appear("Y", "L0", AfterAction("Pick", ("O0",)))
+    assert t.object("Q").kind is OBJECT_KINDS["bottle"]
+    assert t.failures == (Fail("Pick", ("O0",), 3),)  # replaces the file's Pick(O0)
+    assert s.object("Y").appear is None and s.failures == (Fail("Pick", ("O0",), 1),)
+    assert s.with_events([], [parse_fail("Pick")]).failures == (
+        Fail("Pick", ("O0",), 1),
+        Fail("Pick", None, 1),
+    )
+
+
+@pytest.mark.parametrize(
+    ("appear", "fail", "flag", "words"),
+    [
+        (["Y@L9"], [], "--appear", "unknown area"),
+        (["O0@L0"], [], "--appear", "demonstration object"),
+        (["Y@L0@after:Fly(O0)"], [], "--appear", "unknown action"),
+        ([], ["MoveTo(L0)"], "--fail", "only Pick"),
+        ([], ["Pick(Nope)"], "--fail", "Pick takes one object"),
+    ],
+)
+def test_with_events_errors_name_the_flag(tmp_path, appear, fail, flag, words):
+    s = load_scenario(write_one_bottle(tmp_path))
+    with pytest.raises(InputError) as info:
+        s.with_events([parse_appear(a) for a in appear], [parse_fail(f) for f in fail])
+    assert info.value.field == flag and words in info.value.reason

@@ -1,0 +1,38 @@
+"""`tamp simulate smp-mro --json` gives the recorded outputs (golden/*.json), timing aside.
+
+The files were written by the simulation before the scenario files moved to the shared
+event vocabulary (`tamp.world.events`) and the Drake code to ``tamp/sim/{core,smp}``: the
+refactoring changed nothing a run does. Wall and CPU times (and their real-time factors)
+are left out; everything else, sim times and final plant poses included, must match.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from tamp.commands.main import main
+
+pytestmark = pytest.mark.slow
+
+GOLDEN = Path(__file__).resolve().parent / "golden"
+TIMING = ("wall_time", "realtime_factor", "cpu_time", "cpu_realtime_factor")
+RUNS = {
+    "case1": ["--case", "1"],
+    "case2": ["--case", "2"],
+    "case3": ["--case", "3"],
+    "case1_failed_grasp": ["--scenario", "case1_failed_grasp"],
+}
+
+
+@pytest.mark.parametrize("name", sorted(RUNS))
+def test_simulated_output_is_unchanged(name, capsys):
+    code = main(["simulate", "smp-mro", *RUNS[name], "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0
+    for key in TIMING:
+        assert out.pop(key) > 0
+    expected = json.loads((GOLDEN / f"{name}.json").read_text())
+    assert out == expected
