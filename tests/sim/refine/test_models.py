@@ -10,7 +10,7 @@ from pydrake.math import RigidTransform
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import DiagramBuilder
 
-from tamp.sim.core.models import MODELS_DIR, model_url
+from tamp.sim.core.models import model_url, sdf_path
 from tamp.sim.core.parsing import make_parser
 
 ROBOTS = ("pioneer_lift", "pioneer_parallel")
@@ -57,7 +57,7 @@ def test_pioneer_dimensions_and_joints(name):
 
 
 def test_wheels_are_pioneer_sized():
-    text = (MODELS_DIR / "sdf" / "pioneer_lift.sdf").read_text()
+    text = sdf_path("pioneer_lift").read_text()
     assert "<radius>0.0975</radius>" in text  # 0.195 m wheels
     assert "0.455 0.381 0.197" in text  # body, 0.04 .. 0.237 m above the floor
 
