@@ -82,7 +82,9 @@ def build_workcell(
     period = TIME_STEP
     builder = DiagramBuilder()
     config = MultibodyPlantConfig(
-        time_step=TIME_STEP, discrete_contact_approximation="sap", contact_model="point"
+        time_step=TIME_STEP,
+        discrete_contact_approximation="sap",
+        contact_model="hydroelastic_with_fallback",
     )
     plant, scene_graph = AddMultibodyPlant(config, builder)
     parser = make_parser(plant)

@@ -15,6 +15,8 @@
    its section by one step (speed / the behavior's rate, so the speed scales with P) up to
    its motion's amount, and one command with the absolute setpoints of every joint is
    published. Commands leave also while every section holds (the main CPU's cycle).
+   When an event fires, its section holds where its delivered sensor says it is (base:
+   odometry, arm: IMU), so the motion between the true crossing and the late event stays.
 """
 
 from __future__ import annotations
@@ -112,6 +114,15 @@ class Machine:
         v = float(d.message.value)
         return v > t.value if t.op == "above" else v < t.value
 
+    @staticmethod
+    def _hold(b: Behavior, sp: list[float], samples: Mapping[str, Delivery]) -> None:
+        """A section whose behavior ended holds where its sensor says it is (the driver's
+        stop), not where the setpoints ran ahead while the event was on its way."""
+        if b.section == "base" and "odometry" in samples:
+            sp[X], sp[Y], sp[YAW] = samples["odometry"].message.value
+        elif b.section == "arm" and "imu" in samples:
+            sp[ARM] = float(samples["imu"].message.value)
+
     def step(
         self,
         s: MachineState,
@@ -124,10 +135,13 @@ class Machine:
         name = self.robot.name
         fired_ids = set(others) | {event_id(name, n) for n in s.fired}
         new_fired = dict(s.fired)
+        sp = list(s.setpoints)
         for b in self.running(s):
             if self._triggered(b, s, samples, fired_ids):
                 new_fired[b.name] = t
                 fired_ids.add(event_id(name, b.name))
+                self._hold(b, sp, samples)
+        s = replace(s, setpoints=tuple(sp))
         started, refs = dict(s.started), dict(s.refs)
         odo = samples.get("odometry")
         for b in self.robot.behaviors:

@@ -89,11 +89,26 @@ def simulate(
     collisions: dict[tuple[str, str], float] = {}
     contacts = cell.plant.get_contact_results_output_port()
 
+    inspector = None
+
+    def body_of(geometry) -> int:
+        return int(cell.plant.GetBodyFromFrameId(inspector.GetFrameId(geometry)).index())
+
     def between(t: float) -> bool:
+        nonlocal inspector
         results = contacts.Eval(plant_ctx)
+        pairs = []
         for i in range(results.num_point_pair_contacts()):
             info = results.point_pair_contact_info(i)
-            a, b = int(info.bodyA_index()), int(info.bodyB_index())
+            pairs.append((int(info.bodyA_index()), int(info.bodyB_index())))
+        if results.num_hydroelastic_contacts():
+            if inspector is None:
+                query = cell.plant.get_geometry_query_input_port().Eval(plant_ctx)
+                inspector = query.inspector()
+            for i in range(results.num_hydroelastic_contacts()):
+                surface = results.hydroelastic_contact_info(i).contact_surface()
+                pairs.append((body_of(surface.id_M()), body_of(surface.id_N())))
+        for a, b in pairs:
             for mine, other in ((a, b), (b, a)):
                 if mine in cell.chassis:
                     key = (cell.chassis[mine], cell.names.get(other, str(other)))
