@@ -39,8 +39,6 @@ def check_program(program: Program, *, subject: str | None = None) -> Verdict:
     )
 
 
-
-
 def check_run(program: Program, order: Sequence[str]) -> Verdict:
     """The measured event order of one run against the ordering property (finite trace)."""
     fired: set[str] = set()

@@ -41,8 +41,9 @@ def draw_gantt(phases: Sequence[tuple[str, Timeline]], path: str | Path, title: 
                 edgecolor="black",
                 hatch=None if r.gating else "//",
             )
-            ax.text(r.start + (stop - r.start) / 2, y, r.behavior, ha="center", va="center",
-                    fontsize=7)
+            ax.text(
+                r.start + (stop - r.start) / 2, y, r.behavior, ha="center", va="center", fontsize=7
+            )
         ax.set_yticks(range(len(rows)), rows, fontsize=8)
         ax.invert_yaxis()
         ax.set_xlim(0, end)

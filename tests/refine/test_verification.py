@@ -7,9 +7,9 @@ from dataclasses import replace
 import pytest
 
 from tamp.refine.steps import parallelize
+from tests.refine.helpers import task
 from verification.gate import gate, gate_program
 from verification.refine import check_program, check_run, executions
-from tests.refine.helpers import task
 from verification.verdict import VerificationError
 
 T4 = {"R1.lower_arm": 57.0, "R1.approach": 68.0}

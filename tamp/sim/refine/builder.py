@@ -11,8 +11,10 @@
 The plant steps every `TIME_STEP`; the Channels, executors and the supervisor update on the
 same tick (the Channels take every sensor sample in between at its own time, so sensors
 may be faster than the tick). A command leaves on an executor tick, so P is at most
-1 / `TIME_STEP` (100 Hz) here: the rate search stops there too. Gravity is off for the robots (their drivers hold the lever), so the force
-sensor reads only what the gripper touches.
+1 / `TIME_STEP` (100 Hz) here: the rate search stops there too. Gravity is off for the
+robots (their drivers hold the lever), so the force sensor reads only what the gripper
+touches. Contact is hydroelastic where the models say so (the chair's frames, the
+objects), point contact otherwise.
 """
 
 from __future__ import annotations
@@ -129,7 +131,9 @@ def build_workcell(
         scene_graph.collision_filter_manager().Apply(
             CollisionFilterDeclaration().ExcludeWithin(GeometrySet(geoms))
         )
-        order = [plant.get_joint_actuator(i).joint().name() for i in plant.GetJointActuatorIndices(m)]
+        order = [
+            plant.get_joint_actuator(i).joint().name() for i in plant.GetJointActuatorIndices(m)
+        ]
         assert tuple(order) == JOINTS, order  # the Channel's actuation is in JOINTS order
 
     qi = plant.GetPositionsFromArray
@@ -205,8 +209,18 @@ def build_workcell(
     diagram = builder.Build()
     diagram.set_name(f"refine_{program.name}")
     return Workcell(
-        diagram, plant, program, robots, executors, channels, supervisor, objects,
-        chassis, names, visualizer, meshcat,
+        diagram,
+        plant,
+        program,
+        robots,
+        executors,
+        channels,
+        supervisor,
+        objects,
+        chassis,
+        names,
+        visualizer,
+        meshcat,
     )
 
 

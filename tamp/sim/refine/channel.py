@@ -78,7 +78,10 @@ class Channel(LeafSystem):
             prerequisites_of_calc=ticket,
         )
         self.actuation_port = self.DeclareVectorOutputPort(
-            "actuation", BasicVector(len(self._actuation_start)), self._calc_actuation, prerequisites_of_calc=ticket
+            "actuation",
+            BasicVector(len(self._actuation_start)),
+            self._calc_actuation,
+            prerequisites_of_calc=ticket,
         )
 
     def state(self, context) -> ChannelState:

@@ -26,9 +26,7 @@ class StateMachineExecutor(LeafSystem):
         self.set_name(f"executor_{robot}")
         self.robot = robot
         self.machine = Machine(program, robot)
-        self.delivered_port = self.DeclareAbstractInputPort(
-            "delivered", AbstractValue.Make(empty)
-        )
+        self.delivered_port = self.DeclareAbstractInputPort("delivered", AbstractValue.Make(empty))
         self.others_port = self.DeclareAbstractInputPort("others", AbstractValue.Make(Progress()))
         self.rates_port = self.DeclareAbstractInputPort("rates", AbstractValue.Make(RateOverride()))
         self._state = self.DeclareAbstractState(AbstractValue.Make(self.machine.initial()))

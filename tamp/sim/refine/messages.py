@@ -1,9 +1,9 @@
 """Values on the refinement workcell's abstract ports (no Drake import).
 
-    SensorReadings --Readings--> Channel --ChannelState (delivered samples)--> executor
-    StateMachineExecutor --Command--> Channel --actuation (setpoints)--> plant
-    StateMachineExecutor --Progress--> other executor, RateTuningSupervisor
-    RateTuningSupervisor --RateOverride--> executors
+SensorReadings --Readings--> Channel --ChannelState (delivered samples)--> executor
+StateMachineExecutor --Command--> Channel --actuation (setpoints)--> plant
+StateMachineExecutor --Progress--> other executor, RateTuningSupervisor
+RateTuningSupervisor --RateOverride--> executors
 """
 
 from __future__ import annotations

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from tamp.refine.architecture import Architecture, load_architecture
 from tamp.refine.loader import load_program
 from tamp.refine.program import Program
+from tamp.scenarios import path
 
-DATA = Path(__file__).parent / "data"
-SHORT = DATA / "short.yaml"
+SHORT = path("refine/task4_short.yaml")
 
 
 def short() -> Program:
@@ -18,4 +16,4 @@ def short() -> Program:
 
 def fast_architecture() -> Architecture:
     """The packaged service times with 3 Hz steps and 1.5 s probes."""
-    return load_architecture(DATA / "fast_probe_architecture.yaml")
+    return load_architecture(path("refine/fast_probe_architecture.yaml"))

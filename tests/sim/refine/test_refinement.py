@@ -84,7 +84,7 @@ def test_a_colliding_parallelization_is_reverted(simulated):
     simulated.collide = True
     out = refinement.refine(task(4), default_architecture())
     assert out.parallelized == []
-    (bad, collisions), = out.reverted
+    ((bad, collisions),) = out.reverted
     assert bad.absorbed == "lower_arm"
     assert collisions == [("R1.arm_link", "folding_chair.frame_b")]
     assert out.phases[1].program == task(4)  # run again without it
