@@ -85,3 +85,11 @@ def test_categories_are_ordered():
         found[cat] = min(tuned.found_rates().values())
     assert found["I"] >= found["II"] >= found["III"]
     assert found["I"] > found["III"]
+
+
+def test_record_writes_a_meshcat_animation(tmp_path):
+    out = tmp_path / "rec" / "run.html"
+    run = simulate(short(), default_architecture(), max_sim_time=0.5, record=out)
+    assert run.recording == str(out)
+    text = out.read_text()
+    assert "<html" in text.lower() and len(text) > 100_000
