@@ -27,6 +27,7 @@ def test_refine_short_program_end_to_end(tmp_path, capsys):
     assert doc["reduction"] == pytest.approx(1 - times[3] / times[0], abs=1e-3)
     assert doc["parallelized"] == ["R1: lower_arm runs in parallel with approach"]
     assert doc["verified"] is True
+    assert all(p["run_satisfies_ordering"] for p in doc["phases"])  # measured orders too
     assert gantt.read_text().lstrip().startswith("<?xml") and "rate-refined" in gantt.read_text()
     refined = load_program(out)
     assert all(b.rate_hz == doc["rate_hz"] for _, _, b in refined.behaviors())

@@ -15,7 +15,7 @@ Phases (Fig. 3, Fig. 12):
    ratio, the base's included), as in the paper, and the program runs again.
 
 Every program passes the ordering gate (`verification.gate.gate_program`) before it is
-simulated; a refinement that lets some execution break the task's ordering property is
+simulated, and each measured run's event order is checked too (`Phase.run_holds`); a refinement that lets some execution break the task's ordering property is
 refused with the counterexample (`VerificationError`, exit 1). A program that cannot finish
 (`check_can_finish`, or an event that did not fire in the original run) is `InfeasibleError`.
 """
@@ -50,6 +50,13 @@ class Phase:
     name: str
     program: Program
     run: Run
+    run_holds: bool | None = None  # the measured event order against the property
+
+    def __post_init__(self) -> None:
+        if self.run_holds is None and self.run.finished:
+            from verification.refine import check_run
+
+            self.run_holds = check_run(self.program, self.run.timeline.order()).holds
 
     @property
     def task_time(self) -> float:
@@ -99,6 +106,7 @@ class Refinement:
                     "task_time": round(p.task_time, 3),
                     "timeline": p.run.timeline.to_json()["behaviors"],
                     "max_wait": {k: round(v, 5) for k, v in p.run.max_wait.items()},
+                    "run_satisfies_ordering": p.run_holds,
                 }
                 for p in self.phases
             ],

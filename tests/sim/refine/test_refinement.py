@@ -78,6 +78,9 @@ def test_phases_and_rate(simulated):
     doc = out.to_json()
     assert doc["rate_hz"] == 23.0 and doc["category"] == "II"
     assert [p["name"] for p in doc["phases"]] == list(refinement.PHASES)
+    # the stand-in's robots ignore each other (R2 releases at 80 s, before R1 pulls out):
+    # the check of the measured order notices
+    assert [p["run_satisfies_ordering"] for p in doc["phases"]] == [False] * 4
 
 
 def test_a_colliding_parallelization_is_reverted(simulated):
