@@ -15,8 +15,9 @@ Phases (Fig. 3, Fig. 12):
    ratio, the base's included), as in the paper, and the program runs again.
 
 Every program passes the ordering gate (`verification.gate.gate_program`) before it is
-simulated, and each measured run's event order is checked too (`Phase.run_holds`); a refinement that lets some execution break the task's ordering property is
-refused with the counterexample (`VerificationError`, exit 1). A program that cannot finish
+simulated, and each measured run's event order is checked too (`Phase.run_holds`); a
+refinement that lets some execution break the task's ordering property is refused with
+the counterexample (`VerificationError`, exit 1). A program that cannot finish
 (`check_can_finish`, or an event that did not fire in the original run) is `InfeasibleError`.
 """
 
