@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
 from pydrake.math import RigidTransform, RotationMatrix
-from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant, MultibodyPlantConfig
+from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import PdControllerGains
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
@@ -33,7 +33,7 @@ from tamp.refine.architecture import Architecture
 from tamp.refine.program import Program
 from tamp.refine.steps import RateSearch
 from tamp.sim.core.models import model_url, sdf_path
-from tamp.sim.core.parsing import make_parser
+from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.refine.channel import Channel, ChannelState
 from tamp.sim.refine.executor import StateMachineExecutor
 from tamp.sim.refine.machine import Machine
@@ -83,13 +83,9 @@ def build_workcell(
     comm = program.communication
     period = TIME_STEP
     builder = DiagramBuilder()
-    config = MultibodyPlantConfig(
-        time_step=TIME_STEP,
-        discrete_contact_approximation="sap",
-        contact_model="hydroelastic_with_fallback",
+    plant, scene_graph, parser = add_sap_plant(
+        builder, time_step=TIME_STEP, contact_model="hydroelastic_with_fallback"
     )
-    plant, scene_graph = AddMultibodyPlant(config, builder)
-    parser = make_parser(plant)
     (floor,) = parser.AddModelsFromUrl(model_url("floor"))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("floor", floor))
 
