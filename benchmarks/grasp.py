@@ -1,16 +1,20 @@
 """HRG-Net against the GR-ConvNet- and GG-CNN-style baselines and its layer-fusion ablations.
 
 One table (and one JSON line): parameters, object-wise accuracy on the synthetic test split
-(rectangle metric) for every seed and their mean, CPU time per 224x224 RGB-D image (batch 1;
-median and minimum), and GPU time where a GPU exists. Every model is trained by the same
-code with the same budget (one cosine-annealed run); accuracy is that of the final weights
-(``final.pt``), never of an epoch picked by its test score. A seed fixes both the
-object-wise split and the initialisation, so two seeds are two different test sets.
+(rectangle metric) for every seed and their mean, the opening-width error against the
+synthetic ground truth (mean absolute, in % and cm, and the signed bias), CPU time per
+224x224 RGB-D image (batch 1; median and minimum), and GPU time where a GPU exists. Every
+model is trained by the same code with the same budget (one cosine-annealed run); accuracy is
+that of the final weights (``final.pt``) on the test part of the split recorded in them,
+never of an epoch picked by its test score. A seed fixes both the object-wise split and the
+initialisation, so two seeds are two different test sets.
 
     python benchmarks/grasp.py --runs DIR      # evaluate runs made by `tamp grasp train`
                                                # (DIR/MODEL/seedS, MODEL one of RUNS)
     python benchmarks/grasp.py --quick         # render a small set and train everything here
     python benchmarks/grasp.py --train DIR --data SYNTH --jobs 2   # the full documented budget
+    python benchmarks/grasp.py --weights W.pt --data SYNTH   # one weights file: accuracy and
+                                               # width error on its recorded test split
 
 HRG-Net runs in its three fusion modes (:data:`tamp.grasp.models.FUSION_MODES`): ``hrgnet``
 (full), ``hrgnet_final`` (HRNet's "final fusion only" ablation) and ``hrgnet_nofusion`` (no
@@ -39,9 +43,11 @@ RUNS = {
     "grconvnet": dict(model="grconvnet", model_kwargs={"channels": 16}),
     "ggcnn": dict(model="ggcnn"),
 }
+# val_fraction 0: the shipped weights' run, which trains on every non-test scene and reports
+# its final weights (no epoch is chosen, so no validation part is needed)
 FULL_BUDGET = dict(
     size=128, epochs=12, batches_per_epoch=150, batch_size=8, lr=1e-3, schedule="cosine",
-    split="object",
+    split="object", val_fraction=0.0,
 )  # fmt: skip
 QUICK_BUDGET = dict(FULL_BUDGET, size=64, epochs=3, batches_per_epoch=15)
 SEEDS = (0, 1, 2)
@@ -107,8 +113,7 @@ def measure(
 ) -> list[dict]:
     import torch
 
-    from tamp.grasp.datasets import GraspDataset, make_split
-    from tamp.grasp.evaluate import evaluate, time_inference
+    from tamp.grasp.evaluate import time_inference
     from tamp.grasp.models import parameter_count
     from tamp.grasp.train import load_model
 
@@ -124,17 +129,14 @@ def measure(
         for weights in seeds:
             summary = json.loads((weights.parent / "summary.json").read_text())
             cfg = summary["config"]
-            model, meta = load_model(weights)
-            ds = GraspDataset(cfg["dataset"], data or Path(cfg["path"]), cfg["size"], cfg["input"])
-            _, test = make_split(ds.groups(), cfg["split"], cfg["test_fraction"], cfg["seed"])
-            acc = evaluate(model, ds, test, progress=False)
-            per_seed.append({"seed": cfg["seed"], "accuracy": acc.accuracy, "images": acc.images,
-                             "correct": acc.correct})  # fmt: skip
+            model, _ = load_model(weights)
+            per_seed.append(score(weights, data or Path(cfg["path"])))
         images = sum(r["images"] for r in per_seed)
         row = {
             "model": name,
             "parameters": parameter_count(model),
             "accuracy": sum(r["correct"] for r in per_seed) / images,
+            "width": pooled_width([r["width"] for r in per_seed]),
             "seeds": per_seed,
             "test_images": images,
             "budget": {k: cfg[k] for k in ("size", "epochs", "batches_per_epoch", "batch_size",
@@ -146,6 +148,61 @@ def measure(
             row["gpu"] = time_inference(model.cuda(), 4, 224, device="cuda", repeats=50)
         rows.append(row)
     return rows
+
+
+def score(weights: Path, data: Path) -> dict:
+    """Accuracy and width error of ``weights`` on the test part of the split recorded in
+    them (refused when ``data`` is not the set they were trained on)."""
+    from tamp.grasp.datasets import GraspDataset
+    from tamp.grasp.evaluate import calibration_of, evaluate
+    from tamp.grasp.splits import SplitSpec, fingerprint
+    from tamp.grasp.train import load_model
+
+    model, meta = load_model(weights)
+    record = meta.get("split")
+    if record is None:
+        raise SystemExit(f"{weights}: the weights record no split; retrain or re-save them")
+    ds = GraspDataset(record["dataset"], data, meta["size"], meta["input"])
+    if fingerprint(ds.ids()) != record["fingerprint"]:
+        raise SystemExit(f"{weights}: {data} is not the dataset these weights were trained on")
+    test = ds.split(SplitSpec.from_dict(record)).test
+    result = evaluate(model, ds, test, progress=False, width_calibration=calibration_of(meta))
+    return {"seed": record["seed"]} | result.as_dict()
+
+
+def pooled_width(widths: list[dict]) -> dict:
+    """Width errors of several test sets pooled (weighted by their counts)."""
+    n = sum(w["count"] for w in widths)
+    nm = sum(w["metric_count"] for w in widths)
+    out = {"count": n, "metric_count": nm}
+    for key in ("mean_abs_px", "mean_abs_rel", "mean_rel"):
+        out[key] = sum(w[key] * w["count"] for w in widths if w["count"]) / n if n else None
+    out["mean_abs_m"] = (
+        sum(w["mean_abs_m"] * w["metric_count"] for w in widths if w["metric_count"]) / nm
+        if nm
+        else None
+    )
+    return out
+
+
+def width_columns(w: dict) -> str:
+    """Mean absolute relative width error, signed bias and mean absolute error in cm."""
+    if not w["count"]:
+        return f"{'-':>11}{'-':>8}{'-':>7}"
+    text = f"{100 * w['mean_abs_rel']:>10.1f}%{100 * w['mean_rel']:>+7.1f}%"
+    return text + (f"{100 * w['mean_abs_m']:>7.2f}" if w["mean_abs_m"] is not None else f"{'-':>7}")
+
+
+def report_weights(files: list[Path], data: Path) -> dict:
+    """Accuracy and width error of single weights files on their recorded test splits."""
+    rows = []
+    print(f"{'weights':<40}{'split':>26}{'accuracy':>10}{'width err':>11}{'bias':>8}{'(cm)':>7}")
+    for f in files:
+        r = score(f, data)
+        rows.append({"weights": str(f)} | r)
+        split = f"{r['images']} test images, seed {r['seed']}"
+        print(f"{str(f):<40}{split:>26}{100 * r['accuracy']:>9.1f}%" + width_columns(r["width"]))
+    return {"rows": rows}
 
 
 def _pooled(row: dict, seeds: set[int]) -> float:
@@ -166,7 +223,8 @@ def report(rows: list[dict], threads: list[int]) -> dict:
             )
     seeds = sorted(set().union(*seed_sets.values()))
     head = f"{'model':<16}{'params':>10}" + "".join(f"{f'seed {k}':>9}" for k in seeds)
-    head += f"{'mean':>8}" + "".join(f"{f'CPU {t}t ms':>22}" for t in threads)
+    head += f"{'mean':>8}{'width err':>11}{'bias':>8}{'(cm)':>7}"
+    head += "".join(f"{f'CPU {t}t ms':>22}" for t in threads)
     head += f"{'GPU ms':>10}" if any("gpu" in r for r in rows) else ""
     n = sum(s["images"] for s in by["hrgnet"]["seeds"])
     print(f"object-wise accuracy (final weights) on {n} test images over seeds {sorted(common)}")
@@ -176,6 +234,7 @@ def report(rows: list[dict], threads: list[int]) -> dict:
         line = f"{r['model']:<16}{r['parameters']:>10,}"
         line += "".join(f"{100 * acc[k]:>8.1f}%" if k in acc else f"{'-':>9}" for k in seeds)
         line += f"{100 * r['accuracy']:>7.1f}%"
+        line += width_columns(r["width"])
         for t in threads:
             c = r[f"cpu_{t}t"]
             line += f"{c['median_ms']:>12.1f} (min {c['min_ms']:>4.1f})"
@@ -225,7 +284,21 @@ def main(argv=None) -> int:
         "the same seeds; the others are shown for the seeds they have)",
     )
     ap.add_argument("--save", type=Path, help="also write the JSON result to this file")
+    ap.add_argument(
+        "--weights",
+        type=Path,
+        nargs="+",
+        help="only score these weights files on their recorded test split of --data",
+    )
     args = ap.parse_args(argv)
+    if args.weights:
+        if not args.data:
+            ap.error("--weights needs --data (the set the weights were trained on)")
+        line = json.dumps({"benchmark": "grasp"} | report_weights(args.weights, args.data))
+        print(line)
+        if args.save:
+            args.save.write_text(line + "\n")
+        return 0
     if args.quick:
         from tamp.grasp.synthetic import SynthConfig, generate
 

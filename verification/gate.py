@@ -10,7 +10,10 @@ ARCHITECTURE "Verification gate". One typed entry point per kind of plan; each r
   from ``state`` (appearances, bounded skill failures) against the safety properties and
   ``F goal`` (`verification.bt`); the executor itself is not ticked;
 - `gate_table` — a `tamp.lots.controller.LotsController`: the planned run and every entry
-  of its current table T, from where that table was built (`verification.lots`).
+  of its current table T, from where that table was built (`verification.lots`);
+- `gate_program` — a refinement `tamp.refine.Program`: every execution of its state
+  machines (the downsets of its event order) against its LTL ordering property
+  (`verification.refine`), before the (refined) program is simulated.
 
 `gate(plan, ...)` dispatches on the plan's type to the same three functions.
 """
@@ -26,6 +29,7 @@ from verification.verdict import Report, VerificationError
 if TYPE_CHECKING:
     from tamp.bt.executor import PaBtExecutor
     from tamp.lots.controller import LotsController
+    from tamp.refine.program import Program
     from tamp.rg.plan import PlanResult
     from tamp.world.events import Appear, Fail
     from tamp.world.state import WorldState
@@ -81,12 +85,20 @@ def gate_table(controller: LotsController) -> Report:
     return _passed(check_controller(controller))
 
 
+def gate_program(program: Program, *, subject: str | None = None) -> Report:
+    """Every execution of ``program`` against its ordering property (seed 002, Step 2's
+    safety): a refinement that lets some execution break it is refused."""
+    from verification.refine import check_program
+
+    return _passed(Report([check_program(program, subject=subject)]))
+
+
 @singledispatch
 def gate(plan: object, **options) -> Report:
     """Verify ``plan`` with the entry point for its type (see the module docstring)."""
     raise TypeError(
         f"gate() does not know how to verify a {type(plan).__name__} "
-        "(expected an RG PlanResult, a PaBtExecutor or a LotsController)"
+        "(expected an RG PlanResult, a PaBtExecutor, a LotsController or a refinement Program)"
     )
 
 
@@ -94,9 +106,11 @@ def _register() -> None:
     """Bind the dispatcher to the layers' types (imported here: they import no Drake)."""
     from tamp.bt.executor import PaBtExecutor
     from tamp.lots.controller import LotsController
+    from tamp.refine.program import Program
     from tamp.rg.plan import PlanResult
 
     gate.register(PlanResult, lambda plan, **kw: gate_order(plan, **kw))
+    gate.register(Program, lambda plan, **kw: gate_program(plan, **kw))
     gate.register(LotsController, lambda plan, **kw: gate_table(plan, **kw))
 
     def _tree(plan, *, state=None, **kw):

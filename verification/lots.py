@@ -28,6 +28,7 @@ controller run over the symbolic world with an interference script, every table 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from tamp.ltl.automata import accepts_lasso, started_at
@@ -213,7 +214,27 @@ def check_task_file(path, interference=None) -> Report:
     return check_run_of(task, events)
 
 
-def check_run_of(task, events: Sequence[Event] = ()) -> Report:
+@dataclass
+class LotsReport(Report):
+    """The verdicts of a run's tables, and the scripted events the run ended before.
+
+    An event that never happened did not disturb the run: the verdicts hold for what ran,
+    and the report says which interference was not exercised (text and JSON).
+    """
+
+    unfired_events: list[Event] = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        data = super().to_json()
+        data["unfired_events"] = [e.to_json() for e in self.unfired_events]
+        return data
+
+    def text(self) -> str:
+        lines = [super().text()] + [e.never_happened() for e in self.unfired_events]
+        return "\n".join(lines)
+
+
+def check_run_of(task, events: Sequence[Event] = ()) -> LotsReport:
     """Every table the controller builds while running ``task`` against ``events``."""
     from tamp.lots.run import run_task
 
@@ -228,14 +249,16 @@ def check_run_of(task, events: Sequence[Event] = ()) -> Report:
         if not report.holds:
             raise _Stop
 
+    unfired: list[Event] = []  # a run stopped at a failing table: the violation is the news
     try:
-        run_task(task, events, check=check)
+        unfired = run_task(task, events, check=check).unfired_events
     except _Stop:
         pass
-    return Report(verdicts)
+    return LotsReport(verdicts, unfired_events=unfired)
 
 
 __all__ = [
+    "LotsReport",
     "check_build",
     "check_controller",
     "check_run",

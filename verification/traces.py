@@ -15,8 +15,10 @@ which no live state remains ends the shortest bad prefix. An accepted word that 
 with the trace before that position is built from one live state reached there, for
 comparison. For formulas with many top-level conjuncts the whole-formula automaton can be
 exponential, so the verdict is computed conjunct by conjunct (sound: a word satisfies a
-conjunction iff it satisfies every conjunct) and the explanation comes from the violated
-conjunct whose bad prefix is shortest.
+conjunction iff it satisfies every conjunct); the explanation comes from the whole formula
+when its automaton translates within `EXPLAIN_LIMITS` (an unsatisfiable conjunction is
+explained as unsatisfiable, however many conjuncts it has), else from the violated conjunct
+whose bad prefix is shortest, named as such.
 """
 
 from __future__ import annotations
@@ -33,7 +35,19 @@ from verification.words import Word
 #: then computed conjunct by conjunct, which is sound for a conjunction.
 MAX_CONJUNCTS_FOR_WHOLE = 8
 
-__all__ = ["MAX_CONJUNCTS_FOR_WHOLE", "as_formula", "check_trace", "explain", "explain_on"]
+#: The guard for the whole-formula automaton of a violated large conjunction (explanation
+#: only: the verdict never waits for it).
+EXPLAIN_LIMITS = ltl.Limits(seconds=1.0)
+_TOO_LARGE: set[tuple[str, bool]] = set()  # (formula, finite) that exceeded EXPLAIN_LIMITS
+
+__all__ = [
+    "EXPLAIN_LIMITS",
+    "MAX_CONJUNCTS_FOR_WHOLE",
+    "as_formula",
+    "check_trace",
+    "explain",
+    "explain_on",
+]
 
 
 def check_trace(
@@ -87,18 +101,46 @@ def check_trace(
         violated = [f]
     if not violated:
         return Verdict(subject, str(f), semantics, True, explored)
-    if whole:
-        ce = explain(f, word, finite=finite)
-    else:
-        candidates = [explain(c, word, finite=finite) for c in violated]
-        ce = min(candidates, key=lambda x: (x.position is None, x.position or 0))
-        ce.accepting_word = None
+    ce = (
+        explain(f, word, finite=finite)
+        if whole
+        else _explain_conjunction(f, violated, word, finite)
+    )
     if accepting_word is not None:
         ce.accepting_word = accepting_word
     ce.violated = [str(c) for c in violated] if len(parts) > 1 else []
     ce.aps = ltl.ap_names(f)
     ce.steps = steps
     return Verdict(subject, str(f), semantics, False, explored, ce)
+
+
+def _explain_conjunction(f: Formula, violated: list[Formula], word: Word, finite: bool):
+    """Explanation of a violated conjunction with more than `MAX_CONJUNCTS_FOR_WHOLE` parts.
+
+    A conjunct alone can misexplain the whole (``G !a & F a & …`` is unsatisfiable, while
+    ``F a`` alone only "never happens"; the whole can have a shorter bad prefix than every
+    conjunct). So the whole-formula automaton is tried first, under `EXPLAIN_LIMITS`: when
+    it translates in time the explanation is exact. Otherwise the explanation is that of the
+    violated conjunct with the shortest bad prefix, and says it is about that conjunct alone.
+    """
+    options = ltl.FINITE if finite else ltl.BUCHI
+    key = (str(f), finite)
+    aut = None
+    if key not in _TOO_LARGE:
+        try:
+            aut = ltl.translate(f, options, limits=EXPLAIN_LIMITS)
+        except InputError:
+            _TOO_LARGE.add(key)  # do not wait for it again
+    if aut is not None:
+        return explain_on(aut, word, finite=finite)
+    candidates = [(explain(c, word, finite=finite), c) for c in violated]
+    ce, c = min(candidates, key=lambda x: (x[0].position is None, x[0].position or 0))
+    ce.accepting_word = None
+    ce.reason = (
+        f"conjunct {c} alone (the whole formula is too large to explain exactly; a shorter "
+        f"bad prefix of the whole is possible): {ce.reason.replace('the formula', 'it')}"
+    )
+    return ce
 
 
 def _holds_finite(f: Formula, word: Word) -> tuple[bool, int]:

@@ -86,21 +86,42 @@ def register(subparsers) -> None:
     )
     p.add_argument("--device", default="auto", help="auto, cpu, cuda, cuda:1 ...")
     p.add_argument("--threads", type=int, default=0, help="torch CPU threads (0: default)")
-    p.add_argument("--eval-limit", type=int, default=0, help="evaluate on at most N test images")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--eval-limit", type=int, default=0, help="evaluate on at most N val/test images"
+    )
+    p.add_argument("--seed", type=int, default=0, help="split and initialisation seed")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print the training summary as JSON")
     p.set_defaults(func=run_train)
 
-    p = sub.add_parser("eval", help="rectangle-metric accuracy and inference time")
-    p.add_argument("weights", help="weights file (best.pt or models/weights/*.pt)")
-    _dataset_args(p, split_choices=("image", "object", "both"), size=None)
+    p = sub.add_parser(
+        "eval",
+        help="rectangle-metric accuracy, width error and inference time",
+        description="Evaluates on the test part of the split recorded in the weights unless "
+        "--split/--seed/--test-fraction/--fold say otherwise (then with a warning).",
+    )
+    p.add_argument("weights", help="weights file (final.pt, best.pt or models/weights/*.pt)")
+    _dataset_args(p, split_choices=("image", "object", "both"), size=None, recorded=True)
     p.add_argument("--device", default="cpu")
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--time-size", type=int, default=224, help="image side for the timing")
     p.add_argument("--quiet", action="store_true")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=run_eval)
+
+    p = sub.add_parser(
+        "calibrate",
+        help="record the training split in a weights file and fit its width calibration",
+        description="For weights trained before files recorded their split: say which split "
+        "they were trained with; the file is rewritten with that split, a width calibration "
+        "fitted on its validation part (else on training images) and the test accuracy.",
+    )
+    p.add_argument("weights", help="weights file")
+    _dataset_args(p, size=None)
+    p.add_argument("--seed", type=int, default=0, help="split seed of the training run")
+    p.add_argument("--out", help="output file (default: overwrite WEIGHTS)")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=run_calibrate)
 
     p = sub.add_parser("predict", help="grasps in an image (pixels; world frame with a camera)")
     p.add_argument("image", help="RGB image (.png/.jpg) or depth image (.tiff, metres)")
@@ -115,8 +136,13 @@ def register(subparsers) -> None:
 
 
 def _dataset_args(
-    p: argparse.ArgumentParser, split_choices=("image", "object"), size: int | None = 224
+    p: argparse.ArgumentParser,
+    split_choices=("image", "object"),
+    size: int | None = 224,
+    recorded: bool = False,
 ) -> None:
+    """Dataset and split flags; with ``recorded`` (eval) every split flag defaults to the
+    split recorded in the weights (None here)."""
     p.add_argument(
         "--dataset",
         nargs=2,
@@ -124,10 +150,23 @@ def _dataset_args(
         required=True,
         help="dataset kind and folder",
     )
-    p.add_argument("--split", choices=split_choices, default="image")
-    p.add_argument("--test-fraction", type=float, default=0.1)
-    p.add_argument("--fold", type=int, help="test fold for k-fold cross-validation")
-    p.add_argument("--folds", type=int, default=5)
+    rec = " (default: as recorded in the weights)" if recorded else ""
+    p.add_argument(
+        "--split", choices=split_choices, default=None if recorded else "image", help=rec
+    )
+    p.add_argument("--test-fraction", type=float, default=None if recorded else 0.1, help=rec)
+    p.add_argument("--fold", type=int, help="test fold for k-fold cross-validation" + rec)
+    p.add_argument("--folds", type=int, default=None if recorded else 5, help=rec)
+    if recorded:
+        p.add_argument("--seed", type=int, default=None, help="split seed" + rec)
+    else:
+        p.add_argument(
+            "--val-fraction",
+            type=float,
+            default=0.1,
+            help="validation part (of all images/objects) that picks best.pt (default 0.1; "
+            "0: none, no per-epoch evaluation)",
+        )
     p.add_argument(
         "--size",
         type=int,
@@ -195,6 +234,7 @@ def run_train(args) -> int:
         schedule=args.schedule,
         split=args.split,
         test_fraction=args.test_fraction,
+        val_fraction=args.val_fraction,
         fold=args.fold,
         folds=args.folds,
         seed=args.seed,
@@ -224,20 +264,53 @@ def run_train(args) -> int:
     if args.json:
         print_json(summary)
     else:
-        print(
-            f"{args.model} ({summary['parameters']} parameters): best accuracy "
-            f"{100 * summary['best_accuracy']:.1f}% on {summary['test_images']} test images; "
-            f"weights in {Path(args.out) / 'best.pt'}"
+        line = (
+            f"{args.model} ({summary['parameters']} parameters): final accuracy "
+            f"{100 * summary['final_accuracy']:.1f}% on {summary['test_images']} test images; "
+            f"weights in {Path(args.out) / 'final.pt'}"
         )
+        if summary["best_epoch"] is not None:
+            line += (
+                f" (best validation epoch {summary['best_epoch']}: "
+                f"{100 * summary['best_val_accuracy']:.1f}% on {summary['val_images']} images, "
+                f"{Path(args.out) / 'best.pt'})"
+            )
+        print(line)
     return 0
 
 
+def eval_spec(args, record: dict | None):
+    """The split to evaluate: the weights' recorded split, changed by the flags given."""
+    from tamp.grasp.splits import SplitSpec
+
+    base = SplitSpec.from_dict(record) if record else SplitSpec()
+    flags = {
+        "kind": None if args.split == "both" else args.split,
+        "seed": args.seed,
+        "test_fraction": args.test_fraction,
+        "fold": args.fold,
+        "folds": args.folds,
+    }
+    changes = {k: v for k, v in flags.items() if v is not None}
+    if args.test_fraction is not None and args.fold is None:
+        changes["fold"] = None  # a test fraction replaces a recorded fold
+    return SplitSpec.from_dict(base.as_dict() | changes)
+
+
 def run_eval(args) -> int:
+    import dataclasses
+
     import torch
 
-    from tamp.grasp.datasets import GraspDataset, make_split
-    from tamp.grasp.evaluate import evaluate, optimize_for_cpu, time_inference
+    from tamp.grasp.datasets import GraspDataset
+    from tamp.grasp.evaluate import (
+        calibration_of,
+        evaluate,
+        optimize_for_cpu,
+        time_inference,
+    )
     from tamp.grasp.models import INPUT_CHANNELS
+    from tamp.grasp.splits import split_warnings
     from tamp.grasp.train import load_model
 
     if args.threads:
@@ -246,13 +319,30 @@ def run_eval(args) -> int:
     model, meta = load_model(args.weights, args.device)
     size = args.size or int(meta["size"])
     dataset = GraspDataset(kind, path, size, meta["input"])
-    splits = ("image", "object") if args.split == "both" else (args.split,)
+    record = meta.get("split")
+    spec = eval_spec(args, record)
+    kinds = ("image", "object") if args.split == "both" else (spec.kind,)
     result = {"weights": args.weights, "model": meta["model"], "input": meta["input"]}
     result["size"] = size
-    for split in splits:
-        _, test = make_split(dataset.groups(), split, args.test_fraction, 0, args.fold, args.folds)
-        r = evaluate(model, dataset, test, device=args.device, progress=not args.quiet)
-        result[f"{split}_wise"] = r.as_dict()
+    result["trained_split"] = record
+    result["width_calibration"] = meta.get("width_calibration")
+    warnings: list[str] = []
+    for split_kind in kinds:
+        one = dataclasses.replace(spec, kind=split_kind)
+        split = dataset.split(one)
+        warnings += [f"{split_kind}-wise: {w}" for w in split_warnings(record, dataset, one, split)]
+        r = evaluate(
+            model,
+            dataset,
+            split.test,
+            device=args.device,
+            progress=not args.quiet,
+            width_calibration=calibration_of(meta),
+        )
+        result[f"{split_kind}_wise"] = r.as_dict() | {"split": one.as_dict()}
+    for w in warnings:
+        print(f"tamp grasp eval: warning: {w}", file=sys.stderr)
+    result["warnings"] = warnings
     timed = optimize_for_cpu(model) if args.device == "cpu" else model
     result["time"] = time_inference(
         timed, INPUT_CHANNELS[meta["input"]], args.time_size, device=args.device
@@ -260,15 +350,50 @@ def run_eval(args) -> int:
     if args.json:
         print_json(result)
     else:
-        for split in splits:
-            r = result[f"{split}_wise"]
-            print(f"{split}-wise: {100 * r['accuracy']:.2f}% ({r['correct']}/{r['images']})")
+        for split_kind in kinds:
+            r = result[f"{split_kind}_wise"]
+            one = dataclasses.replace(spec, kind=split_kind)
+            print(
+                f"{split_kind}-wise ({one.describe()}): {100 * r['accuracy']:.2f}% "
+                f"({r['correct']}/{r['images']}); " + width_text(r["width"])
+            )
         t = result["time"]
         print(
             f"inference at {args.time_size}x{args.time_size}: {t['median_ms']:.1f} ms "
             f"(median, min {t['min_ms']:.1f} ms, {t['threads']} threads, {args.device})"
         )
     return 0
+
+
+def run_calibrate(args) -> int:
+    from tamp.grasp.datasets import GraspDataset
+    from tamp.grasp.splits import SplitSpec
+    from tamp.grasp.train import read_weights, record_split_and_calibrate
+
+    kind, path = _kind(args)
+    meta = read_weights(args.weights)["meta"]
+    dataset = GraspDataset(kind, path, args.size or int(meta["size"]), meta["input"])
+    spec = SplitSpec(
+        args.split, args.seed, args.test_fraction, args.val_fraction, args.fold, args.folds
+    )
+    meta = record_split_and_calibrate(args.weights, args.out or args.weights, dataset, spec)
+    if args.json:
+        print_json(meta)
+    else:
+        c, t = meta["width_calibration"], meta["test"]
+        print(
+            f"{args.out or args.weights}: split {spec.describe()} recorded; width calibration "
+            f"{c['scale']:.3f} (median of {c['grasps']} grasps, {c['part']} images); test "
+            f"accuracy {100 * t['accuracy']:.2f}% ({t['correct']}/{t['images']}), "
+            + width_text(t["width"])
+        )
+    return 0
+
+
+def width_text(width: dict) -> str:
+    from tamp.grasp.evaluate import WidthError
+
+    return WidthError(**width).describe()
 
 
 def _camera(args):

@@ -87,9 +87,14 @@ def run(args: argparse.Namespace) -> int:
                 a = report.actions[i]
                 print(f"  {a.index:2d}. {a.text()}")
         counts = report.counts()
+        for e in report.unfired_events:
+            print(f"      {e.never_happened()}")
         print(f"replans: {report.replans}")
         print(f"final: W^A {counts['A']}  W^B {counts['B']}  waste {counts['waste']}")
-        print("task satisfied" if report.satisfied else f"task infeasible: {report.reason}")
+        verdict = "task satisfied" if report.satisfied else f"task infeasible: {report.reason}"
+        if report.unfired_events:
+            verdict += f" ({len(report.unfired_events)} scripted event(s) never happened)"
+        print(verdict)
     if not report.satisfied:
         if args.json:  # the JSON document above already says why; no second document
             print(f"tamp lots: error: {report.reason or 'task not satisfied'}", file=sys.stderr)

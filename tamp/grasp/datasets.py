@@ -10,14 +10,17 @@ raw crops, the transformed rectangles and the target maps.
 Crops: Jacquard images (objects centred) use the whole square image; Cornell images use a
 300 px square around the mean of the ground-truth centres, as GG-CNN does.
 
-Splits: ``image`` shuffles images; ``object`` keeps all images of an object on one side
-(Jacquard: the object folder; Cornell: runs of consecutive files, which are images of the
-same object, as in GG-CNN's object-wise protocol). Either takes a test fraction, or
-``fold`` of ``folds`` for k-fold cross-validation (the paper's five folds on Cornell).
+Objects (for object-wise splits, :mod:`tamp.grasp.splits`): Jacquard names the object by the
+folder of its images. Cornell's file names (``pcdNNNNr.png``) carry the image number only, and
+an object has a varying number of images (885 images of 244 objects), so the object of every
+image number is read from the object list :data:`CORNELL_OBJECTS` in the dataset folder
+(one ``NNNN OBJECT`` line per image, ``#`` comments); without it a Cornell set has no object
+ids and only an image-wise split is possible.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from dataclasses import dataclass
@@ -31,7 +34,8 @@ from tamp.grasp.maps import draw_targets, fill_missing_depth, stack_input
 from tamp.grasp.rect import GraspRect
 
 DATASETS = ("cornell", "jacquard")
-SPLITS = ("image", "object")
+#: Cornell object list: image number and object id per line
+CORNELL_OBJECTS = "objects.txt"
 
 
 @dataclass(frozen=True, slots=True)
@@ -39,7 +43,7 @@ class SampleFiles:
     rgb: Path
     depth: Path
     grasps: Path
-    object_id: str
+    object_id: str | None  # None: unknown (a Cornell set without its object list)
 
 
 @dataclass(frozen=True, slots=True)
@@ -59,6 +63,8 @@ class Sample:
     rects: list[GraspRect]
     x: np.ndarray  # (C, size, size) network input
     y: np.ndarray  # (4, size, size) targets
+    scale: float = 1.0  # source-image pixels per output pixel
+    focal: float | None = None  # camera focal length in source pixels, when the set has it
 
 
 def _discover_jacquard(root: Path) -> list[SampleFiles]:
@@ -76,14 +82,45 @@ def _discover_jacquard(root: Path) -> list[SampleFiles]:
     return out
 
 
+def read_cornell_objects(path: Path) -> dict[int, str]:
+    """Image number -> object id from a Cornell object list (``NNNN OBJECT`` per line)."""
+    out: dict[int, str] = {}
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        fields = text.split()
+        if len(fields) < 2 or not fields[0].isdigit():
+            raise InputError(
+                f"line {number}: expected 'IMAGE_NUMBER OBJECT_ID', got {text[:60]!r}",
+                file=str(path),
+            )
+        image = int(fields[0])
+        if image in out:
+            raise InputError(f"line {number}: image {image} listed twice", file=str(path))
+        out[image] = fields[1]
+    return out
+
+
 def _discover_cornell(root: Path) -> list[SampleFiles]:
+    objects_file = root / CORNELL_OBJECTS
+    objects = read_cornell_objects(objects_file) if objects_file.is_file() else None
     out = []
     for g in sorted(root.rglob("pcd*cpos.txt")):
         prefix = str(g)[: -len("cpos.txt")]
         tiff = Path(prefix + "d.tiff")
         depth = tiff if tiff.is_file() else Path(prefix + ".txt")
-        number = re.sub(r"\D", "", Path(prefix).name)
-        out.append(SampleFiles(Path(prefix + "r.png"), depth, g, number))
+        digits = re.sub(r"\D", "", Path(prefix).name)
+        if not digits:
+            raise InputError("no image number in the file name", file=str(g))
+        obj = None
+        if objects is not None:
+            obj = objects.get(int(digits))
+            if obj is None:
+                raise InputError(
+                    f"image {digits} ({g.name}) is not in the object list", file=str(objects_file)
+                )
+        out.append(SampleFiles(Path(prefix + "r.png"), depth, g, obj))
     return out
 
 
@@ -114,11 +151,28 @@ class GraspDataset:
     def __len__(self) -> int:
         return len(self.samples)
 
+    def ids(self) -> list[str]:
+        """Sample id of every sample: its grasp file's path under the root, without the
+        suffix (what the split fingerprint hashes)."""
+        suffix = "_grasps.txt" if self.kind == "jacquard" else "cpos.txt"
+        return [s.grasps.relative_to(self.root).as_posix()[: -len(suffix)] for s in self.samples]
+
     def groups(self) -> list[str]:
         """Object id of every sample (for object-wise splits)."""
-        if self.kind == "cornell":  # consecutive images show the same object
-            return [str(i // 5) for i in range(len(self.samples))]
+        if any(s.object_id is None for s in self.samples):
+            raise InputError(
+                "an object-wise split of a Cornell set needs the object of every image: "
+                f"write {CORNELL_OBJECTS} (one 'IMAGE_NUMBER OBJECT_ID' line per image)",
+                file=str(self.root / CORNELL_OBJECTS),
+            )
         return [s.object_id for s in self.samples]
+
+    def split(self, spec):
+        """The :class:`~tamp.grasp.splits.Split` of this dataset under ``spec`` (a
+        :class:`~tamp.grasp.splits.SplitSpec`); an image-wise split needs no object ids."""
+        from tamp.grasp.splits import make_split
+
+        return make_split(self.ids() if spec.kind == "image" else self.groups(), spec)
 
     def read(self, i: int) -> tuple[np.ndarray, np.ndarray, list[GraspRect]]:
         """Raw RGB, depth (metres, holes filled) and rectangles of sample ``i``."""
@@ -178,7 +232,20 @@ class GraspDataset:
             if rgb_c is not None
             else np.zeros((self.size, self.size, 3), np.uint8)
         )
-        return Sample(rgb_out, depth_c, out_rects, x, y)
+        return Sample(rgb_out, depth_c, out_rects, x, y, side * zoom / self.size, self.focal(i))
+
+    def focal(self, i: int) -> float | None:
+        """Focal length (pixels) of sample ``i`` from the synthetic set's ``camera.json``."""
+        s = self.samples[i]
+        if self.kind != "jacquard":
+            return None
+        cam = Path(str(s.grasps)[: -len("_grasps.txt")] + "_camera.json")
+        if not cam.is_file():
+            return None
+        try:
+            return float(json.loads(cam.read_text())["K"][0][0])
+        except (ValueError, KeyError, IndexError, TypeError):
+            raise InputError("expected JSON with K (3x3)", file=str(cam)) from None
 
 
 def similarity(cx: float, cy: float, side: float, size: int, angle: float) -> np.ndarray:
@@ -218,41 +285,3 @@ def warp(img: np.ndarray, matrix: np.ndarray, size: int) -> np.ndarray:
         + src[y1, x1] * fx * fy
     )
     return out.reshape((size, size) + img.shape[2:]).astype(np.float32)
-
-
-def make_split(
-    groups: list[str],
-    split: str = "image",
-    test_fraction: float = 0.1,
-    seed: int = 0,
-    fold: int | None = None,
-    folds: int = 5,
-) -> tuple[list[int], list[int]]:
-    """(train indices, test indices) for an image-wise or object-wise split."""
-    if split not in SPLITS:
-        raise InputError(f"unknown split {split!r}; expected one of {list(SPLITS)}")
-    rng = np.random.default_rng(seed)
-    n = len(groups)
-    if split == "image":
-        units = [[i] for i in rng.permutation(n)]
-    else:
-        by_group: dict[str, list[int]] = {}
-        for i, g in enumerate(groups):
-            by_group.setdefault(g, []).append(i)
-        keys = sorted(by_group)
-        units = [by_group[keys[k]] for k in rng.permutation(len(keys))]
-    if len(units) < 2:
-        raise InputError(f"a {split}-wise split needs at least 2 {split}s, got {len(units)}")
-    if fold is not None:
-        if not 0 <= fold < folds:
-            raise InputError(f"fold must be in 0..{folds - 1}, got {fold}")
-        test_units = [u for k, u in enumerate(units) if k % folds == fold]
-        train_units = [u for k, u in enumerate(units) if k % folds != fold]
-    else:
-        if not 0 < test_fraction < 1:
-            raise InputError(f"test fraction must be in (0, 1), got {test_fraction}")
-        n_test = min(max(1, int(round(len(units) * test_fraction))), len(units) - 1)
-        test_units, train_units = units[:n_test], units[n_test:]
-    train = sorted(i for u in train_units for i in u)
-    test = sorted(i for u in test_units for i in u)
-    return train, test

@@ -7,8 +7,14 @@ the top of the paper's W range [0, 150] px; with 128 px images whose openings ar
 that leaves the width targets near 0.1 and the width loss ten times weaker than the
 quality loss, and after a CPU-sized budget every network underestimated widths by half.
 Dividing by 40 px puts the width targets in the same range as Q, cos and sin.)
-A grasp is read at the peak of Q after Gaussian smoothing (σ = 2 px for Q and
-the angle, 1 px for the width) and its rectangle takes jaw size = opening / 2.
+A grasp is read at the peak of Q after Gaussian smoothing (σ = 2 px for Q and the angle) and
+its rectangle takes jaw size = opening / 2. The width is the Q-weighted Gaussian mean of W
+(σ = 2 px): W is only defined inside grasp regions (0 elsewhere), and a plain blur of W mixed
+that 0 into narrow regions (the exact target maps of a 9 px opening read 14 % too narrow).
+A trained network's W still reads wide at its own Q peak (about +19 % on the shipped weights:
+it is low at a region's edges and overshoots in the middle, where Q peaks), so a weights file
+carries a width calibration factor, fitted on its training or validation images
+(:func:`tamp.grasp.evaluate.fit_width_calibration`), which :func:`post_process` applies.
 """
 
 from __future__ import annotations
@@ -97,12 +103,17 @@ def smooth(img: np.ndarray, sigma: float) -> np.ndarray:
     return sum(k[i] * tmp[i : i + img.shape[0], :] for i in range(len(k)))
 
 
-def post_process(maps: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(quality, angle, width px) images from the raw (4, h, w) network output, smoothed."""
+def post_process(
+    maps: np.ndarray, width_calibration: float = 1.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(quality, angle, width px) images from the raw (4, h, w) network output, smoothed;
+    widths are multiplied by the weights' ``width_calibration`` (see the module docstring)."""
     q = smooth(maps[0], 2.0)
     angle = 0.5 * np.arctan2(smooth(maps[2], 2.0), smooth(maps[1], 2.0))
-    width = smooth(maps[3], 1.0) * WIDTH_SCALE
-    return q, angle, width
+    weight = np.clip(maps[0], 0.0, None)
+    num, den = smooth(weight * maps[3], 2.0), smooth(weight, 2.0)
+    mean_w = np.where(den > 1e-6, num / np.maximum(den, 1e-6), maps[3])
+    return q, angle, mean_w * (WIDTH_SCALE * width_calibration)
 
 
 def detect_grasps(

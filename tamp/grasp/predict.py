@@ -94,6 +94,9 @@ class GraspPredictor:
         self.device = device
         self.mode = meta["input"]
         self.size = int(meta["size"])
+        from tamp.grasp.evaluate import calibration_of
+
+        self.width_calibration = calibration_of(meta)
 
     @classmethod
     def load(cls, path: str | Path, device: str = "cpu") -> GraspPredictor:
@@ -128,7 +131,7 @@ class GraspPredictor:
     def predict(self, rgb=None, depth=None, intrinsics=None, X_WC=None, n: int = 1):
         """The ``n`` best grasps, best first (see the module docstring)."""
         raw, matrix = self.maps(rgb, depth)
-        q, angle, width = post_process(raw)
+        q, angle, width = post_process(raw, self.width_calibration)
         back = np.linalg.inv(np.vstack([matrix, [0, 0, 1]]))[:2]
         out = []
         for rect_net, quality in detect_grasps(q, angle, width, n=n):

@@ -4,12 +4,17 @@ Loss: smooth L1 on the four maps (GR-ConvNet [57]), Adam. The learning rate foll
 cosine from ``lr`` down to zero over all the steps of the run (``schedule="cosine"``, the
 default) or stays at ``lr`` (``"constant"``). One epoch is ``batches_per_epoch`` batches
 drawn from the training split (all of it when 0), so every model gets exactly the same
-training budget. After each epoch the model is evaluated on the test split (rectangle
-metric) and a checkpoint is written: ``last.pt`` (model, optimizer, epoch, RNG states:
-enough to resume bit-for-bit on the CPU), ``best.pt`` (weights of the most accurate epoch)
-and, when the run ends, ``final.pt`` (the weights after the last step). ``final.pt`` is
-the one to report and ship: choosing ``best.pt`` by test accuracy is a selection on the
-test split and flatters the noisiest model.
+training budget. The dataset is split into train / validation / test parts
+(:mod:`tamp.grasp.splits`). After each epoch the model is evaluated on the validation part
+(rectangle metric) and a checkpoint is written: ``last.pt`` (model, optimizer, epoch, RNG
+states: enough to resume bit-for-bit on the CPU) and ``best.pt`` (the weights of the epoch
+most accurate on the validation part). When the run ends the final weights are evaluated once
+on the test part and written to ``final.pt``. Nothing is ever chosen by its test score. With
+``val_fraction = 0`` there is no validation part, no per-epoch evaluation and no ``best.pt``.
+
+Every weights file records its split (:func:`tamp.grasp.splits.split_record`), so that
+``tamp grasp eval`` tests on the same unseen part, and holds only tensors and plain Python
+values, so that it loads with ``torch.load(weights_only=True)``.
 
 Under ``torchrun`` (or any launcher that sets ``WORLD_SIZE``/``RANK``) the model is wrapped
 in DistributedDataParallel (``gloo`` on CPU, ``nccl`` on GPUs); each rank takes its own
@@ -31,9 +36,10 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from tamp.grasp.datasets import Augment, GraspDataset, make_split
-from tamp.grasp.evaluate import evaluate
+from tamp.grasp.datasets import Augment, GraspDataset
+from tamp.grasp.evaluate import evaluate, fit_width_calibration
 from tamp.grasp.models import build_model, full_kwargs, parameter_count
+from tamp.grasp.splits import SplitSpec, split_record
 
 
 @dataclass
@@ -51,6 +57,7 @@ class TrainConfig:
     schedule: str = "cosine"
     split: str = "image"
     test_fraction: float = 0.1
+    val_fraction: float = 0.1
     fold: int | None = None
     folds: int = 5
     seed: int = 0
@@ -60,6 +67,10 @@ class TrainConfig:
     threads: int = 0
     eval_limit: int = 0
     model_kwargs: dict = field(default_factory=dict)
+
+
+def split_spec(cfg: TrainConfig) -> SplitSpec:
+    return SplitSpec(cfg.split, cfg.seed, cfg.test_fraction, cfg.val_fraction, cfg.fold, cfg.folds)
 
 
 def model_kwargs(cfg: TrainConfig) -> dict:
@@ -85,16 +96,19 @@ def learning_rate(cfg: TrainConfig, step: int, total: int) -> float:
 
 
 def _rng_state() -> dict:
+    """The RNG states as tensors and plain values (``weights_only`` loads them)."""
+    name, keys, pos, has_gauss, cached = np.random.get_state()
     return {
         "torch": torch.get_rng_state(),
-        "numpy": np.random.get_state(),
+        "numpy": [name, torch.from_numpy(keys.astype(np.int64)), pos, has_gauss, cached],
         "python": random.getstate(),
     }
 
 
 def _set_rng_state(state: dict) -> None:
     torch.set_rng_state(state["torch"])
-    np.random.set_state(state["numpy"])
+    name, keys, pos, has_gauss, cached = state["numpy"]
+    np.random.set_state((name, keys.numpy().astype(np.uint32), pos, has_gauss, cached))
     random.setstate(state["python"])
 
 
@@ -105,11 +119,35 @@ def _device(name: str) -> torch.device:
 
 
 def save_weights(path: Path, model: torch.nn.Module, cfg: TrainConfig, extra: dict) -> None:
-    """The deployable file: weights plus what is needed to rebuild the model."""
+    """The deployable file: weights plus what is needed to rebuild the model and the split
+    it was trained with (``extra`` holds the split record and the scores)."""
     kwargs = full_kwargs(cfg.model, **model_kwargs(cfg))
     meta = {"model": cfg.model, "input": cfg.input, "size": cfg.size, "kwargs": kwargs}
-    state = {k: v.detach().cpu().contiguous() for k, v in model.state_dict().items()}
-    torch.save({"meta": meta | extra, "state_dict": state}, path)
+    write_weights(path, meta | extra, model.state_dict())
+
+
+def write_weights(path: Path, meta: dict, state_dict: dict) -> None:
+    """A weights file: ``{"meta": plain values, "state_dict": tensors}``."""
+    state = {k: v.detach().cpu().contiguous() for k, v in state_dict.items()}
+    torch.save({"meta": meta, "state_dict": state}, path)
+
+
+def read_weights(path: str | Path, device: str = "cpu") -> dict:
+    """The ``{"meta", "state_dict"}`` of a weights file, loaded with ``weights_only=True``
+    (tensors and plain values only: no code in a weights file runs)."""
+    from tamp.errors import InputError
+
+    p = Path(path)
+    if not p.is_file():
+        raise InputError("weights file not found", file=str(p))
+    try:
+        blob = torch.load(p, map_location=device, weights_only=True)
+        blob["meta"], blob["state_dict"]
+    except Exception as exc:  # torch.load raises pickle, zip and key errors
+        raise InputError(
+            f"not a grasp weights file ({type(exc).__name__}: {str(exc)[:200]})", file=str(p)
+        ) from None
+    return blob
 
 
 def load_model(path: str | Path, device: str = "cpu") -> tuple[torch.nn.Module, dict]:
@@ -117,21 +155,20 @@ def load_model(path: str | Path, device: str = "cpu") -> tuple[torch.nn.Module, 
     from tamp.errors import InputError
 
     p = Path(path)
-    if not p.is_file():
-        raise InputError("weights file not found", file=str(p))
+    blob = read_weights(p, device)
     try:
-        blob = torch.load(p, map_location=device, weights_only=False)
         meta = blob["meta"]
         model = build_model(meta["model"], meta["input"], **meta["kwargs"])
         model.load_state_dict(blob["state_dict"])
-    except Exception as exc:  # torch.load raises pickle, zip, key and shape errors
+    except Exception as exc:  # key and shape errors
         raise InputError(
-            f"not a grasp weights file ({type(exc).__name__}: {exc})", file=str(p)
+            f"not a grasp weights file ({type(exc).__name__}: {str(exc)[:200]})", file=str(p)
         ) from None
     return model.to(device).eval(), meta
 
 
 NETWORK_FIELDS = ("model", "input", "size", "fusion", "model_kwargs")
+SPLIT_FIELDS = ("dataset", "split", "test_fraction", "val_fraction", "fold", "folds", "seed")
 
 
 def _check_same_network(saved: dict, cfg: TrainConfig, path: Path) -> None:
@@ -139,10 +176,11 @@ def _check_same_network(saved: dict, cfg: TrainConfig, path: Path) -> None:
     from tamp.errors import InputError
 
     now = asdict(cfg)
-    changed = [k for k in NETWORK_FIELDS if saved.get(k) != now[k]]
-    if changed:
-        diff = ", ".join(f"{k} {saved.get(k)!r} -> {now[k]!r}" for k in changed)
-        raise InputError(f"cannot resume a different network ({diff})", file=str(path))
+    for fields, what in ((NETWORK_FIELDS, "network"), (SPLIT_FIELDS, "split")):
+        changed = [k for k in fields if saved.get(k) != now[k]]
+        if changed:
+            diff = ", ".join(f"{k} {saved.get(k)!r} -> {now[k]!r}" for k in changed)
+            raise InputError(f"cannot resume a different {what} ({diff})", file=str(path))
 
 
 def train(
@@ -179,11 +217,12 @@ def train(
     if rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     dataset = GraspDataset(cfg.dataset, cfg.path, cfg.size, cfg.input)
-    train_idx, test_idx = make_split(
-        dataset.groups(), cfg.split, cfg.test_fraction, cfg.seed, cfg.fold, cfg.folds
-    )
+    spec = split_spec(cfg)
+    split = dataset.split(spec)
+    record = {"split": split_record(dataset, spec, split)}
+    train_idx, val_idx, test_idx = split.train, split.val, split.test
     if cfg.eval_limit:
-        test_idx = test_idx[: cfg.eval_limit]
+        val_idx, test_idx = val_idx[: cfg.eval_limit], test_idx[: cfg.eval_limit]
 
     torch.manual_seed(cfg.seed)
     np.random.seed(cfg.seed)
@@ -198,7 +237,7 @@ def train(
     best = -1.0
     last = out / "last.pt"
     if resume and last.is_file():
-        ckpt = torch.load(last, map_location=device, weights_only=False)
+        ckpt = torch.load(last, map_location=device, weights_only=True)
         _check_same_network(ckpt["config"], cfg, last)
         model.load_state_dict(ckpt["model"])
         optimizer.load_state_dict(ckpt["optimizer"])
@@ -241,14 +280,16 @@ def train(
             total += float(loss.detach())
             bar.set_postfix(loss=f"{float(loss.detach()):.4f}")
         train_s = time.perf_counter() - t0
-        record = {"epoch": epoch + 1, "lr": lr, "loss": total / len(mine), "train_s": train_s}
+        entry = {"epoch": epoch + 1, "lr": lr, "loss": total / len(mine), "train_s": train_s}
         if rank == 0:
-            result = evaluate(model, dataset, test_idx, device=device, progress=False)
-            record |= {"accuracy": result.accuracy, "eval_images": result.images}
-            if result.accuracy > best:
-                best = result.accuracy
-                save_weights(out / "best.pt", model, cfg, {"accuracy": best, "epoch": epoch + 1})
-            history.append(record)
+            if val_idx:  # the epoch is chosen on the validation part, never on the test part
+                result = evaluate(model, dataset, val_idx, device=device, progress=False)
+                entry |= {"val_accuracy": result.accuracy, "val_images": result.images}
+                if result.accuracy > best:
+                    best = result.accuracy
+                    save_weights(out / "best.pt", model, cfg,
+                                 record | {"val_accuracy": best, "epoch": epoch + 1})  # fmt: skip
+            history.append(entry)
             torch.save(
                 {
                     "model": model.state_dict(),
@@ -261,24 +302,51 @@ def train(
                 },
                 last,
             )
-            log(json.dumps(record))
+            log(json.dumps(entry))
         if distributed:
             torch.distributed.barrier()
+    final = None
     if rank == 0 and history:
+        part, calib_idx = calibration_images(train_idx, val_idx)
+        if (out / "best.pt").is_file():  # the best epoch gets its own calibration
+            best_model, best_meta = load_model(out / "best.pt", str(device))
+            calib = fit_width_calibration(best_model, dataset, calib_idx, part=part, device=device)
+            write_weights(
+                out / "best.pt",
+                best_meta | {"width_calibration": calib},
+                best_model.state_dict(),
+            )
+        calib = fit_width_calibration(model, dataset, calib_idx, part=part, device=device)
+        result = evaluate(
+            model, dataset, test_idx, device=device, progress=False,
+            width_calibration=calib["scale"],
+        )  # fmt: skip
+        final = result.as_dict()
         save_weights(
             out / "final.pt",
             model,
             cfg,
-            {"accuracy": history[-1]["accuracy"], "epoch": history[-1]["epoch"]},
+            record
+            | {
+                "accuracy": result.accuracy,
+                "epoch": history[-1]["epoch"],
+                "width_calibration": calib,
+                "test": final,
+            },
         )
     summary = {
         "config": asdict(cfg),
         "parameters": parameter_count(model),
         "train_images": len(train_idx),
+        "val_images": len(val_idx),
         "test_images": len(test_idx),
+        "split": record["split"],
         "history": history,
-        "best_accuracy": best if rank == 0 else None,  # only rank 0 evaluates
-        "final_accuracy": history[-1]["accuracy"] if rank == 0 and history else None,
+        # only rank 0 evaluates; the best epoch is the best on the validation part
+        "best_val_accuracy": best if rank == 0 and val_idx else None,
+        "best_epoch": next((h["epoch"] for h in history if h.get("val_accuracy") == best), None),
+        "final_accuracy": final["accuracy"] if final else None,  # of final.pt, on the test part
+        "final_test": final,
         "world_size": world,
         # sum of all weights: equal on every rank after DistributedDataParallel training
         "checksum": float(sum(p.detach().double().sum() for p in model.parameters())),
@@ -286,6 +354,41 @@ def train(
     if rank == 0:
         (out / "summary.json").write_text(json.dumps(summary, indent=2))
     return summary
+
+
+def record_split_and_calibrate(
+    weights: str | Path, out: str | Path, dataset: GraspDataset, spec: SplitSpec
+) -> dict:
+    """Write ``weights`` to ``out`` with the split ``spec`` of ``dataset`` they were trained
+    with recorded, a width calibration fitted on that split (validation part, else training
+    images) and the accuracy re-measured on its test part; returns the new meta. For weights
+    made before files recorded their split: the caller vouches for ``spec``."""
+    model, meta = load_model(weights)
+    split = dataset.split(spec)
+    part, calib_idx = calibration_images(split.train, split.val)
+    calib = fit_width_calibration(model, dataset, calib_idx, part=part)
+    result = evaluate(model, dataset, split.test, progress=False, width_calibration=calib["scale"])
+    meta = meta | {
+        "split": split_record(dataset, spec, split),
+        "width_calibration": calib,
+        "accuracy": result.accuracy,
+        "test": result.as_dict(),
+    }
+    write_weights(Path(out), meta, model.state_dict())
+    return meta
+
+
+#: at most this many training images fit the width calibration when there is no validation part
+CALIBRATION_IMAGES = 1000
+
+
+def calibration_images(train_idx: list[int], val_idx: list[int]) -> tuple[str, list[int]]:
+    """Where the width calibration is fitted: the validation part, or else every k-th
+    training image (at most :data:`CALIBRATION_IMAGES`, unaugmented); never the test part."""
+    if val_idx:
+        return "validation", list(val_idx)
+    step = max(1, math.ceil(len(train_idx) / CALIBRATION_IMAGES))
+    return f"training (every {step})", list(train_idx[::step])
 
 
 def _free_port() -> int:

@@ -42,7 +42,7 @@ from typing import Any
 from tamp.lots.automaton import Automaton, Letter
 from tamp.lots.cell import WASTE, skill, visible_counts
 from tamp.lots.lots import Counts, Lots
-from tamp.lots.planner import Entry, Plan, Planner, Table, Tree, initial_lasso
+from tamp.lots.planner import Entry, Plan, Planner, Table, Tree, initial_lasso, round_goals
 from tamp.lots.task import Task
 from tamp.world.actions import Action
 from tamp.world.interface import Status, World
@@ -208,7 +208,8 @@ class LotsController:
         self.aut = automaton or Automaton(task.formula, task.props, file=task.file)
         steps, cycle, final = initial_lasso(self.aut, task)
         idx = {c: i for i, c in enumerate(task.classes)}
-        self.lots = Lots(task.classes, {p.name: idx[p.cls] for p in task.propositions}, final)
+        prop_class = {p.name: idx[p.cls] for p in task.propositions}
+        self.lots = Lots(task.classes, prop_class, final, round_goals(self.aut, task, final))
         self.planner = Planner(self.aut, self.lots, task)
         b0 = self.lots.vector(task.initial_b)
         root = (self.aut.initial, b0)
@@ -263,7 +264,15 @@ class LotsController:
         e = self.table.get(b)
         if e is not None:
             return e
-        found = self.tree.update(b)
+        return self._replan(b)
+
+    def _replan(self, b: Counts, cap: Counts | None = None) -> Entry | None:
+        """Alg. 1 lines 15-21: tree update (Alg. 3) for W^B ``b`` and a new table ``T``.
+
+        ``cap`` (objects per class that exist) is given when the table's way needs a class
+        W^A has run out of: the replan then considers only the ways still possible.
+        """
+        found = self.tree.update(b, cap)
         if found is None:
             return None
         _, plan = found
@@ -283,8 +292,8 @@ class LotsController:
         return self.plan.prefix, self.plan.cycle
 
     def _still_needed(self, i: int, b: Counts) -> bool:
-        """Does the rest of the task (from W^B state ``b``) deliver class ``i`` again?"""
-        return self.lots.final[i] > b[i]
+        """Could the rest of the task (from W^B state ``b``) deliver class ``i`` again?"""
+        return self.lots.needs(i, b)
 
     def _needs_later(self, entry: Entry) -> bool:
         """Keep a removed object (back to W^A) when the rest of the plan delivers its class."""
@@ -438,6 +447,10 @@ class LotsController:
             return
         entry = self.decide(b)
         missing = entry is not None and entry.kind == "move" and a_obs[entry.cls] == 0
+        if missing:  # this way needs a class W^A lacks: replan over the ways still possible
+            other = self._replan(b, cap=tuple(self.belief.total))
+            if other is not None and not (other.kind == "move" and a_obs[other.cls] == 0):
+                entry, missing = other, False
         if entry is None or missing:
             if entry is None:
                 reason = (

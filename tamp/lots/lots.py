@@ -14,7 +14,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from tamp.lots.automaton import Letter
 
@@ -23,11 +23,27 @@ Counts = tuple[int, ...]
 
 @dataclass(frozen=True)
 class Lots:
-    """The W^B side of the LOTS: classes, proposition → class, and the final W^B counts."""
+    """The W^B side of the LOTS: classes, proposition → class, and the final W^B counts.
+
+    ``final`` is ``s^B_final`` of the planned round; ``goals`` every W^B state that ends a
+    round of *some* accepting way of the task (a task with alternatives, ``F p | F q``, has
+    one per alternative; ``final`` is always among them). Lemma 1's box is bounded by
+    ``bound``, their componentwise maximum (``final`` itself when there are no alternatives).
+    """
 
     classes: tuple[str, ...]
     prop_class: Mapping[str, int]  # proposition -> class index
-    final: Counts  # s^B_final: n'_i per class (one round of the task)
+    final: Counts  # s^B_final: n'_i per class (one round of the planned way)
+    goals: tuple[Counts, ...] = ()  # every round's end, final first (default: final only)
+    bound: Counts = field(init=False)  # componentwise max of goals: Lemma 1's n'
+    goal_set: frozenset[Counts] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        goals = (self.final,) + tuple(g for g in self.goals if g != self.final)
+        object.__setattr__(self, "goals", goals)
+        object.__setattr__(self, "goal_set", frozenset(goals))
+        bound = tuple(max(g[i] for g in goals) for i in range(len(self.final)))
+        object.__setattr__(self, "bound", bound)
 
     def vector(self, counts: Mapping[str, int]) -> Counts:
         """Counts of the task classes only (other objects are not task-related: ignored)."""
@@ -37,19 +53,27 @@ class Lots:
         return dict(zip(self.classes, b, strict=True))
 
     def num_wb_states(self) -> int:
-        """Lemma 1: ``|S^B| = ∏_i (n'_i + 1)`` (12 for Zhou et al.'s Example 1)."""
-        return math.prod(n + 1 for n in self.final)
+        """Lemma 1: ``|S^B| = ∏_i (n'_i + 1)`` (12 for Zhou et al.'s Example 1), n' = bound."""
+        return math.prod(n + 1 for n in self.bound)
 
     def wb_states(self) -> Iterator[Counts]:
         """Every W^B state of Lemma 1's set, in lexicographic order."""
-        return itertools.product(*(range(n + 1) for n in self.final))
+        return itertools.product(*(range(n + 1) for n in self.bound))
 
     def in_box(self, b: Counts) -> bool:
-        return all(x <= n for x, n in zip(b, self.final, strict=True))
+        return all(x <= n for x, n in zip(b, self.bound, strict=True))
+
+    def is_goal(self, b: Counts) -> bool:
+        """Does W^B state ``b`` end a round of some accepting way?"""
+        return b in self.goal_set
+
+    def needs(self, i: int, b: Counts) -> bool:
+        """Could the rest of some round (from W^B state ``b``) deliver class ``i`` again?"""
+        return any(g[i] > b[i] for g in self.goals)
 
     def surplus(self, b: Counts) -> int | None:
         """Index of a class with more objects in W^B than one round needs, if any."""
-        for i, (x, n) in enumerate(zip(b, self.final, strict=True)):
+        for i, (x, n) in enumerate(zip(b, self.bound, strict=True)):
             if x > n:
                 return i
         return None
@@ -60,7 +84,7 @@ class Lots:
             return b
         (p,) = letter
         i = self.prop_class[p]
-        if b[i] >= self.final[i]:
+        if b[i] >= self.bound[i]:
             return None
         return b[:i] + (b[i] + 1,) + b[i + 1 :]
 

@@ -110,6 +110,15 @@ class ScriptedPerson:
         """Scripted events that have not happened (yet)."""
         return len(self.events) - len(self._fired)
 
+    def unfired(self) -> list[Event]:
+        """Scripted events that have not happened (at the end of a run: never will).
+
+        An event timed after more actions than the run took (``after: 99`` in a six-action
+        run) is not an error of the script — the run could have been longer — but a run that
+        ignored it must say so (`tamp lots`, ``tamp-verify lots``: ``never happened: …``).
+        """
+        return [e for i, e in enumerate(self.events) if i not in self._fired]
+
     def _impossible(self, e: Event, why: str) -> bool:
         if self.strict:
             where = e.where or "interference"

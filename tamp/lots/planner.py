@@ -84,9 +84,12 @@ def initial_lasso(aut: Automaton, task: Task) -> tuple[list[Step], list[Letter],
     """Cheapest executable accepting lasso from ``q_0`` (Alg. 1 line 3 / Alg. 2 line 1).
 
     Dijkstra on ``(phase, q, b, q_F)``: phase 0 walks to an accepting state ``q_F``; a free
-    switch starts phase 1, which must return to ``q_F`` with at least one letter. ``b`` counts
-    deliveries, bounded by the objects that exist. Ties: fewer steps, then letter order.
-    Returns (round steps = prefix then one cycle, the cycle letters, s^B_final).
+    switch starts phase 1, which must return to ``q_F`` with at least one letter. ``b`` is
+    W^B, from ``s^B_0`` (objects already there at the start), bounded by the objects that
+    exist; a step delivers, reads ∅, or takes one object out of W^B back to W^A (∅, at
+    ``remove_cost``) — so an object of a needed class that starts in W^B is removed and
+    delivered again when the formula needs its delivery event. Ties: fewer steps, then
+    letter order. Returns (round steps = prefix then one cycle, the cycle letters, s^B_final).
     """
     classes = task.classes
     idx = {c: i for i, c in enumerate(classes)}
@@ -117,6 +120,12 @@ def initial_lasso(aut: Automaton, task: Task) -> tuple[list[Step], list[Letter],
             c = cost_of[next(iter(letter))] if letter else 0.0
             for nq in aut.successors(q, letter):
                 succ.append(((phase, nq, nb, qf, moved or phase == 1), c, letter))
+        for i in range(len(b)):  # take one object out of W^B (letter ∅; the int marks it)
+            nb = box.remove(b, i)
+            if nb is not None:
+                for nq in aut.successors(q, EMPTY):
+                    nxt = (phase, nq, nb, qf, moved or phase == 1)
+                    succ.append((nxt, task.remove_cost, i))
         for nxt, c, letter in succ:
             nkey = (key[0] + c, key[1] + (letter is not None))
             if nxt not in best or nkey < best[nxt]:
@@ -128,6 +137,115 @@ def initial_lasso(aut: Automaton, task: Task) -> tuple[list[Step], list[Letter],
         f"with the objects available ({dict(zip(classes, avail, strict=True))})"
     )
     raise AssertionError  # unreachable
+
+
+def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]:
+    """Every W^B state that ends one round of some accepting way of the task, ``final`` first.
+
+    A round of a way: deliveries (and ∅) from an empty W^B to a live accepting state ``q_F``,
+    then the cheapest accepting cycle of ``q_F`` (`cheapest_cycle`); its end is the W^B
+    counts after both, within the objects that exist. ``F p | F q`` (classes x, y) has two,
+    ``x^1 y^0`` and ``x^0 y^1``. Only the minimal ends are kept (a round that delivers more
+    than another of the same way is not another way), plus ``final`` (the planned round).
+    Breadth-first by number of deliveries; a W^B state above a known end is not expanded.
+    """
+    classes = task.classes
+    idx = {c: i for i, c in enumerate(classes)}
+    prop_class = {p.name: idx[p.cls] for p in task.propositions}
+    cost_of = {p.name: p.cost for p in task.propositions}
+    avail = tuple(task.initial_a.get(c, 0) + task.initial_b.get(c, 0) for c in classes)
+    found: list[Counts] = [final]
+    deltas: dict[int, Counts | None] = {}
+
+    def above(b: Counts, strict: bool) -> bool:
+        return any(
+            all(x >= y for x, y in zip(b, g, strict=True)) and (b != g or not strict) for g in found
+        )
+
+    start = (aut.initial, (0,) * len(classes))
+    seen = {start}
+    level = [start]
+    while level:
+        nxt_level: list[Pair] = []
+        stack = list(level)
+        while stack:
+            q, b = stack.pop()
+            if above(b, strict=True):
+                continue
+            if q in aut.live_accepting:
+                if q not in deltas:
+                    deltas[q] = _deliveries(cheapest_cycle(aut, cost_of, q), prop_class, classes)
+                end = tuple(x + d for x, d in zip(b, deltas[q], strict=True))
+                if all(x <= n for x, n in zip(end, avail, strict=True)) and not above(end, False):
+                    found.append(end)
+            for nq in aut.successors(q, EMPTY):
+                if (nq, b) not in seen:
+                    seen.add((nq, b))
+                    stack.append((nq, b))
+            for p, i in prop_class.items():
+                if b[i] < avail[i]:
+                    nb = b[:i] + (b[i] + 1,) + b[i + 1 :]
+                    for nq in aut.successors(q, frozenset({p})):
+                        if (nq, nb) not in seen:
+                            seen.add((nq, nb))
+                            nxt_level.append((nq, nb))
+        level = nxt_level
+    rest = [
+        g
+        for g in found[1:]
+        if not any(h != g and all(x >= y for x, y in zip(g, h, strict=True)) for h in found)
+    ]
+    return (final, *sorted(set(rest) - {final}))
+
+
+def _deliveries(letters: list[Letter], prop_class: dict[str, int], classes) -> Counts:
+    out = [0] * len(classes)
+    for letter in letters:
+        for p in letter:
+            out[prop_class[p]] += 1
+    return tuple(out)
+
+
+def cheapest_cycle(aut: Automaton, cost_of: dict[str, float], qf: int) -> list[Letter]:
+    """Cheapest non-empty accepting cycle ``q_F → q_F`` (letters only; the ω-continuation)."""
+    tie = itertools.count()
+    heap: list = []
+    best: dict[int, tuple[float, int]] = {}
+    parent: dict[int, tuple[int, Letter] | None] = {}
+    for letter in aut.letters:
+        c = cost_of[next(iter(letter))] if letter else 0.0
+        for nq in aut.successors(qf, letter):
+            key = (c, 1)
+            if nq not in best or key < best[nq]:
+                best[nq], parent[nq] = key, (-1, letter)
+                heapq.heappush(heap, (key, next(tie), nq))
+    done: set[int] = set()
+    while heap:
+        key, _, q = heapq.heappop(heap)
+        if q in done or best[q] != key:
+            continue
+        done.add(q)
+        if q == qf:
+            letters: list[Letter] = []
+            node = q
+            while True:
+                prev, letter = parent[node]
+                letters.append(letter)
+                if prev == -1:
+                    break
+                node = prev
+            letters.reverse()
+            return letters
+        for letter in aut.letters:
+            c = cost_of[next(iter(letter))] if letter else 0.0
+            for nq in aut.successors(q, letter):
+                nk = (key[0] + c, key[1] + 1)
+                if nq != qf and nq in done:
+                    continue
+                if nq not in best or nk < best[nq]:
+                    best[nq], parent[nq] = nk, (q, letter)
+                    heapq.heappush(heap, (nk, next(tie), nq))
+    raise ValueError(f"automaton state {qf} is not on an accepting cycle")
 
 
 def raise_infeasible(reason: str) -> None:
@@ -148,7 +266,11 @@ def _lasso_from(parent: dict, node: tuple, box: Lots) -> tuple[list[Step], list[
     for prev, letter, nxt in chain:
         if letter is None:  # the phase switch
             continue
-        steps.append(_step(prev[1], prev[2], letter, nxt[1], nxt[2], box))
+        if isinstance(letter, int):  # a removal from W^B
+            steps.append(Step("remove", prev[1], prev[2], nxt[1], nxt[2], cls=letter))
+            letter = EMPTY
+        else:
+            steps.append(_step(prev[1], prev[2], letter, nxt[1], nxt[2], box))
         if prev[0] == 1:
             cycle.append(letter)
     final = steps[-1].b_next if steps else chain[-1][2][2]
@@ -175,7 +297,8 @@ class Planner:
             min((p.cost for p in task.propositions if lots.prop_class[p.name] == i), default=0.0)
             for i in range(len(lots.classes))
         ]
-        self.dead: set[Pair] = set()
+        self.dead: set[Pair] = set()  # pairs proven dead with every object available
+        self._dead_capped: dict[Counts, set[Pair]] = {}  # ... with fewer (per W^B bound)
         self._cycles: dict[int, list[Letter]] = {}
         self.expanded = 0  # pairs expanded by plan_from (for the benchmark)
         # per automaton state: (cost, proposition or None, class index or -1, successor)
@@ -188,10 +311,12 @@ class Planner:
             self._trans.append(out)
         self._empty = [aut.successors(q, EMPTY) for q in range(aut.num_states)]
 
-    def heuristic(self, b: Counts) -> float:
-        """Admissible: every missing object needs one delivery of at least its cheapest cost."""
-        return sum(
-            (n - x) * c for x, n, c in zip(b, self.lots.final, self._min_cost, strict=True) if n > x
+    def heuristic(self, b: Counts, goals: tuple[Counts, ...] | None = None) -> float:
+        """Admissible: every object missing for the nearest goal (default: every round end)
+        needs one delivery of at least its cheapest cost."""
+        return min(
+            sum((n - x) * c for x, n, c in zip(b, gl, self._min_cost, strict=True) if n > x)
+            for gl in (self.lots.goals if goals is None else goals)
         )
 
     def moves(self, q: int, b: Counts) -> Iterator[Step]:
@@ -217,11 +342,12 @@ class Planner:
         return self.remove_cost if s.kind == "remove" else 0.0
 
     def is_goal(self, q: int, b: Counts) -> bool:
-        return q in self.aut.live_accepting and b == self.lots.final
+        """A live accepting state with W^B at the end of a round of some way."""
+        return q in self.aut.live_accepting and self.lots.is_goal(b)
 
     def successor_pairs(self, q: int, b: Counts) -> Iterator[Pair]:
         """The pairs one step away (what the tree update adds, Alg. 3 lines 3-6)."""
-        final = self.lots.final
+        final = self.lots.bound
         for _, p, ci, nq in self._trans[q]:
             if p is None:
                 yield (nq, b)
@@ -245,22 +371,34 @@ class Planner:
             return EMPTY
         raise ValueError(f"no executable step from {a} to {b}")
 
-    def plan_from(self, q: int, b: Counts) -> Plan | None:
-        """Cheapest run from ``(q, b)`` to an accepting ``q_F`` with ``b = s^B_final``, or None.
+    def plan_from(self, q: int, b: Counts, cap: Counts | None = None) -> Plan | None:
+        """Cheapest run from ``(q, b)`` to a live accepting ``q_F`` with W^B at the end of a
+        round of some accepting way (``s^B_final`` or another way's, `Lots.goals`), or None.
 
-        A* on pairs (key: cost + h, then the deeper node, then fewer steps); an exhausted
-        search marks every pair it closed as dead (none of them can complete the task), so
-        later calls prune them.
+        ``cap``: the objects of each class that exist (W^A, W^B and the hand): W^B never
+        holds more, so a way whose class was taken away is not planned. A* on pairs (key:
+        cost + h, then the deeper node, then fewer steps); an exhausted search marks every
+        pair it closed as dead for that ``cap`` (none of them can complete the task), so later
+        calls prune them.
         """
-        if not self.lots.in_box(b) or (q, b) in self.dead:
+        lots = self.lots
+        bound = lots.bound if cap is None else tuple(map(min, lots.bound, cap))
+        goals = tuple(gl for gl in lots.goals if all(map(int.__le__, gl, bound)))
+        dead = self.dead if cap is None else self._dead_capped.setdefault(bound, set())
+        if not goals or not lots.in_box(b) or (q, b) in dead:
             return None
-        final, live, dead = self.lots.final, self.aut.live_accepting, self.dead
+        goal_set = frozenset(goals)
+        # one goal: the heuristic changes by one class's cheapest cost per step (exact sums)
+        single = goals == (bound,)
+        hfun = self.heuristic
+        final, live = bound, self.aut.live_accepting
         trans, empty, min_cost, rc = self._trans, self._empty, self._min_cost, self.remove_cost
         start = (q, b)
         tie = itertools.count()
         g: dict[Pair, tuple[float, int]] = {start: (0.0, 0)}
         parent: dict[Pair, tuple[Pair, str | None, int]] = {}
-        heap = [(self.heuristic(b), 0.0, 0, next(tie), start, self.heuristic(b))]
+        h0 = hfun(b, goals)
+        heap = [(h0, 0.0, 0, next(tie), start, h0)]
         closed: set[Pair] = set()
         push = heapq.heappush
         while heap:
@@ -271,7 +409,7 @@ class Planner:
             closed.add(node)
             self.expanded += 1
             nq_, nb_ = node
-            if nq_ in live and nb_ == final:
+            if nq_ in live and nb_ in goal_set:
                 return self._plan(start, node, parent, cost)
             ns = nsteps + 1
             succ = []
@@ -280,12 +418,14 @@ class Planner:
                     succ.append(((nq, nb_), c, h, None, -1))
                 elif nb_[ci] < final[ci]:
                     nb = nb_[:ci] + (nb_[ci] + 1,) + nb_[ci + 1 :]
-                    succ.append(((nq, nb), c, h - min_cost[ci], p, ci))
+                    nh = h - min_cost[ci] if single else hfun(nb, goals)
+                    succ.append(((nq, nb), c, nh, p, ci))
             for ci, x in enumerate(nb_):
                 if x:
                     nb = nb_[:ci] + (x - 1,) + nb_[ci + 1 :]
+                    nh = h + min_cost[ci] if single else hfun(nb, goals)
                     for nq in empty[nq_]:
-                        succ.append(((nq, nb), rc, h + min_cost[ci], None, ci))
+                        succ.append(((nq, nb), rc, nh, None, ci))
             for nxt, c, nh, p, ci in succ:
                 if nxt in dead or nxt in closed:
                     continue
@@ -314,49 +454,10 @@ class Planner:
         return Plan(start, steps, self.cycle_from(end_q), cost)
 
     def cycle_from(self, qf: int) -> list[Letter]:
-        """Cheapest non-empty accepting cycle ``q_F → q_F`` (letters only; the ω-continuation)."""
-        if qf in self._cycles:
-            return self._cycles[qf]
-        aut = self.aut
-        tie = itertools.count()
-        heap: list = []
-        best: dict[int, tuple[float, int]] = {}
-        parent: dict[int, tuple[int, Letter] | None] = {}
-        for letter in aut.letters:
-            c = self.cost_of[next(iter(letter))] if letter else 0.0
-            for nq in aut.successors(qf, letter):
-                key = (c, 1)
-                if nq not in best or key < best[nq]:
-                    best[nq], parent[nq] = key, (-1, letter)
-                    heapq.heappush(heap, (key, next(tie), nq))
-        done: set[int] = set()
-        while heap:
-            key, _, q = heapq.heappop(heap)
-            if q in done or best[q] != key:
-                continue
-            done.add(q)
-            if q == qf:
-                letters: list[Letter] = []
-                node = q
-                while True:
-                    prev, letter = parent[node]
-                    letters.append(letter)
-                    if prev == -1:
-                        break
-                    node = prev
-                letters.reverse()
-                self._cycles[qf] = letters
-                return letters
-            for letter in aut.letters:
-                c = self.cost_of[next(iter(letter))] if letter else 0.0
-                for nq in aut.successors(q, letter):
-                    nk = (key[0] + c, key[1] + 1)
-                    if nq != qf and nq in done:
-                        continue
-                    if nq not in best or nk < best[nq]:
-                        best[nq], parent[nq] = nk, (q, letter)
-                        heapq.heappush(heap, (nk, next(tie), nq))
-        raise ValueError(f"automaton state {qf} is not on an accepting cycle")
+        """Cheapest non-empty accepting cycle ``q_F → q_F`` (`cheapest_cycle`, cached)."""
+        if qf not in self._cycles:
+            self._cycles[qf] = cheapest_cycle(self.aut, self.cost_of, qf)
+        return self._cycles[qf]
 
 
 # ---------------------------------------------------------------------------- table T
@@ -538,24 +639,25 @@ class Tree:
         f[i], f[-1] = f[-1], f[i]
         return f.pop()
 
-    def _best(self, b: Counts) -> tuple[int, Plan] | None:
+    def _best(self, b: Counts, cap: Counts | None = None) -> tuple[int, Plan] | None:
         best: tuple[int, Plan] | None = None
         for q in sorted(self.by_b.get(b, ())):
-            plan = self.planner.plan_from(q, b)
+            plan = self.planner.plan_from(q, b, cap)
             if plan is not None and (best is None or plan.cost < best[1].cost):
                 best = (q, plan)
         return best
 
-    def update(self, b: Counts) -> tuple[int, Plan] | None:
+    def update(self, b: Counts, cap: Counts | None = None) -> tuple[int, Plan] | None:
         """Alg. 3: grow TR until it holds a pair ``(q, b)`` that can complete the task.
 
         Returns that automaton state and its plan (the cheapest among the pairs with ``b``
-        found so far), or None once every reachable pair has been generated without one —
-        the W^B state cannot lead to completion (Alg. 1 line 23: wait).
+        found so far, to the end of a round of any accepting way, with at most ``cap``
+        objects per class), or None once every reachable pair has been generated without
+        one — the W^B state cannot lead to completion (Alg. 1 line 23: wait).
         """
         if not self.planner.lots.in_box(b):
             return None
-        found = self._best(b)
+        found = self._best(b, cap)
         while found is None and self._frontier:
             node = self._pop()
             self.expansions += 1
@@ -564,5 +666,5 @@ class Tree:
                 if self.add(child, node) and child[1] == b:
                     hit = True
             if hit:
-                found = self._best(b)
+                found = self._best(b, cap)
         return found

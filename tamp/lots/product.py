@@ -6,7 +6,8 @@ planner searches the explicit product ``TS × B``. This module builds that produ
 (every TS state × every automaton state, every executable letter: deliveries, ∅, and taking
 an object out of W^B back to W^A or into the waste basket) and runs Dijkstra in it from the
 observed product state to a goal (accepting automaton state, W^B = ``s^B_final``) — the same
-goal and costs as the LOTS planner, so both return runs of equal cost.
+goal (a live accepting state with W^B at the end of a round of some accepting way,
+`Lots.goals`) and costs as the LOTS planner, so both return runs of equal cost.
 
 A state that is not in the product (a person added or removed objects, dis_2, so the totals
 changed) is *unforeseen*: the product is rebuilt for the new totals before searching.
@@ -80,7 +81,7 @@ class ProductPlanner:
                     to_waste[c][i] = (index[c][(a, b - 1)] - i) * radix[c]
         succ_empty = [aut.successors(q, EMPTY) for q in range(nq)]
         succ_prop = [[aut.successors(q, frozenset({p})) for p in self.props] for q in range(nq)]
-        final = self.lots.final
+        goals = self.lots.goal_set
         goal_ts = bytearray(n_ts)
         digits_of = []
         for s in range(n_ts):
@@ -90,7 +91,7 @@ class ProductPlanner:
                 rest, d = divmod(rest, len(self._pairs[c]))
                 digits.append(d)
             digits_of.append(digits)
-            if all(self._pairs[c][d][1] == final[c] for c, d in enumerate(digits)):
+            if tuple(self._pairs[c][d][1] for c, d in enumerate(digits)) in goals:
                 goal_ts[s] = 1
         live = self.aut.live_accepting
         self.goal = [bool(goal_ts[s]) and q in live for s in range(n_ts) for q in range(nq)]

@@ -111,6 +111,26 @@ class Event:
             text = f"person removes {n}{self.cls} from W^{self.side}"
         return f"{text} ({self.disturbance})"
 
+    def when(self) -> str:
+        """When the script times it: ``after action N`` (``while carrying`` for holding)."""
+        slot = "while the robot carries action" if self.phase == "holding" else "after action"
+        n = self.after + 1 if self.phase == "holding" else self.after
+        return f"{slot} {n}"
+
+    def to_json(self) -> dict:
+        """JSON-ready: timing, the description, and where the script declares it."""
+        return {
+            "after": self.after,
+            "phase": self.phase,
+            "event": self.describe(),
+            "where": self.where,
+        }
+
+    def never_happened(self) -> str:
+        """The line a run prints for a scripted event it ended before."""
+        where = f" [{self.where}]" if self.where else ""
+        return f"never happened: {self.describe()} {self.when()}{where}"
+
 
 def load_task(path: str | Path) -> Task:
     """Read and validate a task file; any error is an `InputError` naming file and field."""

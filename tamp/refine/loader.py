@@ -85,8 +85,11 @@ _BEHAVIOR_KEYS = (
 
 
 def load_program(path: str | Path) -> Program:
-    """Read and validate a program file; any problem is an `InputError` (file, field)."""
-    data, file = load_yaml(path, kind="refinement program")
+    """Read and validate a program file (a path, or a packaged name such as ``task4``
+    resolved by `tamp.scenarios.resolve`); any problem is an `InputError` (file, field)."""
+    from tamp.scenarios import resolve
+
+    data, file = load_yaml(resolve(path, "refine"), kind="refinement program")
     f = Fields(data, file)
     f.check_keys(_KEYS)
     c = f.sub("communication")

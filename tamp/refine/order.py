@@ -9,7 +9,7 @@ linear extension of this order, so:
 - a cycle means some event can never fire (`check_can_finish` raises `InfeasibleError`);
 - the executions' event sequences are the paths through the *downsets* of the order
   (`downsets`): the states a model checker explores to prove an LTL ordering property of
-  every execution before any simulation (Step 2's safety, in `tamp.sim.refine`).
+  every execution before any simulation (Step 2's safety, in `verification.refine`).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from tamp.refine.program import Program, RobotProgram, event_id
 MAX_STATES = 200_000
 
 
-def _start_preds(r: RobotProgram, i: int) -> set[str]:
+def start_predecessors(r: RobotProgram, i: int) -> set[str]:
     """Events that must have fired before behavior ``i`` of ``r`` starts (direct)."""
     groups = r.groups()
     k = next(j for j, g in enumerate(groups) if i in g)
@@ -46,7 +46,7 @@ def direct_predecessors(program: Program) -> dict[str, set[str]]:
     out: dict[str, set[str]] = {}
     for r in program.robots:
         for i, b in enumerate(r.behaviors):
-            preds = _start_preds(r, i)
+            preds = start_predecessors(r, i)
             if b.event.after is not None:
                 preds.add(b.event.after)
             out[event_id(r.name, b.name)] = preds

@@ -8,13 +8,14 @@ from dataclasses import dataclass, field
 
 @dataclass(frozen=True)
 class BehaviorRecord:
-    """Behavior ``robot.behavior`` ran from ``start``; its event fired at ``end`` (None:
-    never, within the run). ``gating``: False for an absorbed behavior (a marker)."""
+    """Behavior ``robot.behavior`` ran from ``start`` (None: never started); its event fired
+    at ``end`` (None: never, within the run). ``gating``: False for an absorbed behavior (a
+    marker)."""
 
     robot: str
     behavior: str
     section: str
-    start: float
+    start: float | None
     end: float | None
     gating: bool = True
 
@@ -24,13 +25,13 @@ class BehaviorRecord:
 
     @property
     def duration(self) -> float | None:
-        return None if self.end is None else self.end - self.start
+        return None if self.end is None or self.start is None else self.end - self.start
 
     def to_json(self) -> dict:
         return {
             "event": self.event,
             "section": self.section,
-            "start": round(self.start, 3),
+            "start": None if self.start is None else round(self.start, 3),
             "end": None if self.end is None else round(self.end, 3),
             "gating": self.gating,
         }

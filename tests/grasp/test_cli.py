@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -46,6 +47,61 @@ def test_train_eval_predict_round_trip(jacquard_dir: Path, tmp_path: Path, capsy
         assert abs(g["position"][2] - np.median(d)) < 0.05
 
 
+@pytest.mark.slow
+def test_eval_uses_the_recorded_split_and_warns_otherwise(
+    jacquard_dir: Path, tmp_path: Path, capsys
+):
+    """Weights record their split; eval tests on it by default, and says so when asked for
+    another split (counting the test images the weights were trained on), another dataset,
+    or when the weights record no split."""
+    out = tmp_path / "run"
+    rc = main(["grasp", "train", "--dataset", "jacquard", str(jacquard_dir), "--model", "ggcnn",
+               "--input", "d", "--size", "32", "--epochs", "1", "--batches-per-epoch", "1",
+               "--batch-size", "2", "--split", "object", "--test-fraction", "0.25",
+               "--val-fraction", "0.25", "--seed", "2", "--out", str(out), "--quiet"])  # fmt: skip
+    assert rc == 0 and "best validation epoch 1" in capsys.readouterr().out
+    weights = str(out / "final.pt")
+    base = ["grasp", "eval", weights, "--dataset", "jacquard", str(jacquard_dir),
+            "--time-size", "32", "--quiet", "--json"]  # fmt: skip
+
+    def run(*flags):
+        assert main(base + list(flags)) == 0
+        captured = capsys.readouterr()
+        return json.loads(captured.out), captured.err
+
+    result, err = run()
+    assert result["warnings"] == [] and err == ""
+    recorded = result["trained_split"]
+    assert recorded["kind"] == "object" and recorded["seed"] == 2
+    assert result["object_wise"]["split"]["seed"] == 2 and result["object_wise"]["images"] == 2
+    assert result["width_calibration"]["part"] == "validation"
+    assert "mean_abs_rel" in result["object_wise"]["width"]
+
+    result, err = run("--split", "image")
+    assert "image-wise test set holds other views of the objects" in err
+    n = len([w for w in result["warnings"] if "are training images of these weights" in w])
+    assert n == 1 and err.count("tamp grasp eval: warning:") == len(result["warnings"])
+
+    result, err = run("--seed", "0")
+    assert "evaluating object-wise, seed 0" in err and "trained with object-wise, seed 2" in err
+
+    other = tmp_path / "other"
+    shutil.copytree(jacquard_dir, other)
+    shutil.rmtree(other / "obj0")
+    assert main(["grasp", "eval", weights, "--dataset", "jacquard", str(other), "--time-size",
+                 "32", "--quiet"]) == 0  # fmt: skip
+    err = capsys.readouterr().err
+    assert "the dataset differs from the one the weights were trained on (6 samples" in err
+
+    blob = torch.load(weights, weights_only=True)
+    del blob["meta"]["split"]
+    torch.save(blob, tmp_path / "old.pt")
+    base[2] = str(tmp_path / "old.pt")
+    result, err = run()
+    assert "the weights record no training split" in err
+    assert result["image_wise"]["split"]["seed"] == 0  # the old default: image-wise, seed 0
+
+
 def test_bad_input_exits_2_with_one_line(tmp_path: Path, capsys):
     rc = main(["grasp", "train", "--dataset", "jacquard", str(tmp_path / "missing")])
     err = capsys.readouterr().err
@@ -76,7 +132,7 @@ def test_fusion_modes(jacquard_dir: Path, tmp_path: Path, capsys):
         rc = main(base + flags + ["--out", str(tmp_path / mode)])
         assert rc == 0
         assert json.loads(capsys.readouterr().out)["config"]["fusion"] == mode
-        meta = torch.load(tmp_path / mode / "final.pt", weights_only=False)["meta"]
+        meta = torch.load(tmp_path / mode / "final.pt", weights_only=True)["meta"]
         assert meta["kwargs"]["fusion"] == mode
     for flags, message in (
         (["--no-fusion", "--fusion", "final"], "--no-fusion contradicts --fusion final"),

@@ -38,8 +38,8 @@ def test_task4_is_the_papers_setting():
     assert r1.behaviors[first].name == "pull_out" and first == 2  # two behaviors before it
     assert [i for i, b in enumerate(r2.behaviors) if b.manipulates][0] == 1  # one before
     approach = r1.behavior("approach")
-    assert approach.motion == Motion("distance", 0.75, 1.05e-2)  # base speed by default
-    assert approach.event == Trigger(sensor="odometry", op="reaches", value=0.71)
+    assert approach.motion == Motion("distance", 0.7, 1.05e-2)  # base speed by default
+    assert approach.event == Trigger(sensor="odometry", op="reaches", value=0.69)
     assert r1.behavior("pull_out").waits_for == ("R2.grip",)
 
 

@@ -145,6 +145,32 @@ def test_large_conjunction_is_checked_conjunct_by_conjunct() -> None:
     assert bad.counterexample.violated == [f"Fg{n - 1}"]
 
 
+@pytest.mark.parametrize("n", [8, 9, 12])
+@pytest.mark.parametrize("finite", [False, True])
+def test_unsatisfiable_conjunction_is_explained_at_any_size(n: int, finite: bool) -> None:
+    # issue 17: beyond 8 conjuncts `F a` alone was explained ("every finite prefix can still
+    # be extended"), but the conjunction is unsatisfiable
+    f = "G !a & F a & " + " & ".join(f"F g{i}" for i in range(n - 2))
+    assert len(ltl.conjuncts(ltl.parse(f))) == n
+    letter = frozenset(f"g{i}" for i in range(n - 2))
+    word = Word.finite([letter]) if finite else Word.lasso([], [letter])
+    v = check_trace(f, word, finite=finite)
+    assert not v.holds
+    assert "unsatisfiable" in v.counterexample.reason
+    assert "extended" not in v.counterexample.reason
+    assert v.counterexample.violated == ["Fa"]
+    assert v.counterexample.accepting_word is None
+
+
+def test_too_large_conjunction_explanation_names_its_conjunct() -> None:
+    n = 12  # 2^12 states: the whole automaton does not translate within EXPLAIN_LIMITS
+    f = " & ".join(f"F g{i}" for i in range(n))
+    letters = [frozenset(f"g{j}" for j in range(i)) for i in range(n)]
+    ce = check_trace(f, Word.lasso(letters, [letters[-1]])).counterexample
+    assert ce.reason.startswith(f"conjunct Fg{n - 1} alone (the whole formula is too large")
+    assert "repeating the cycle forever never satisfies it" in ce.reason
+
+
 def test_semantics_mismatch_is_bad_input() -> None:
     with pytest.raises(InputError):
         check_trace("F a", parse_word("a; cycle{a}"), finite=True)

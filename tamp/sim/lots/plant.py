@@ -20,11 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.geometry import Box
 from pydrake.math import RigidTransform, RotationMatrix
-from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlant, MultibodyPlantConfig
+from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import PdControllerGains
 
 from tamp.sim.core.models import sdf_path
-from tamp.sim.core.parsing import make_parser
+from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.lots.catalogue import ARM, CLASSES, READY, TABLE_URL, TRAY_URL, WASTE_BASKET_URL
 from tamp.sim.lots.scenario import CellScenario
 
@@ -56,13 +56,9 @@ def object_sdf(cls: str, uid: str, rgb: tuple[float, float, float]) -> str:
 
 def add_cell_plant(builder, scenario: CellScenario) -> CellPlant:
     """Adds the finalised plant + scene graph of ``scenario`` to ``builder``."""
-    config = MultibodyPlantConfig(
-        time_step=scenario.time_step,
-        discrete_contact_approximation="sap",
-        contact_model=scenario.contact_model,
+    plant, scene_graph, parser = add_sap_plant(
+        builder, time_step=scenario.time_step, contact_model=scenario.contact_model
     )
-    plant, scene_graph = AddMultibodyPlant(config, builder)
-    parser = make_parser(plant)
     (table,) = parser.AddModelsFromUrl(TABLE_URL)
     table_body = plant.GetBodyByName("lots_table", table)
     plant.WeldFrames(plant.world_frame(), table_body.body_frame())

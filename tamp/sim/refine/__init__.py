@@ -1,6 +1,7 @@
-"""The refinement workcell: two Pioneer-like robots and the task object (seed 002).
+"""The refinement workcell (seed 002): two Pioneer-like robots and the task object in Drake.
 
-Built so far: `ordering` (the LTL gate on a program before it is simulated). The diagram,
-the Channel, StateMachineExecutor and RateTuningSupervisor LeafSystems and the runner come
-next (docs/refinement.md).
+`builder` (the diagram), `sensors` (force, IMU, odometry), `channel` (the architecture's
+FIFO queues in a LeafSystem), `machine` + `executor` (the state machine on delivered data),
+`supervisor` (Fig. 5 online), `runner` (one measured run: a `Timeline`), `refinement` (the
+four phases). docs/refinement.md.
 """

@@ -27,16 +27,14 @@ import numpy as np
 from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import (
-    AddMultibodyPlant,
     MultibodyPlant,
-    MultibodyPlantConfig,
 )
 from pydrake.multibody.tree import PdControllerGains
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from tamp.sim.core.executor import BtExecutor, Policy
 from tamp.sim.core.models import model_url, sdf_path
-from tamp.sim.core.parsing import make_parser
+from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.smp.controller import SkillController
 from tamp.sim.smp.estimator import WorldStateEstimator
@@ -77,13 +75,9 @@ def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
 def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None) -> SimSystem:
     """The named Diagram of ``scenario`` with ``policy`` (the grown BT) in the BtExecutor."""
     builder = DiagramBuilder()
-    config = MultibodyPlantConfig(
-        time_step=scenario.time_step,
-        discrete_contact_approximation="sap",
-        contact_model=scenario.contact_model,
+    plant, scene_graph, parser = add_sap_plant(
+        builder, time_step=scenario.time_step, contact_model=scenario.contact_model
     )
-    plant, scene_graph = AddMultibodyPlant(config, builder)
-    parser = make_parser(plant)
 
     (floor,) = parser.AddModelsFromUrl(model_url("floor"))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("floor", floor))

@@ -7,8 +7,9 @@ from dataclasses import replace
 import pytest
 
 from tamp.refine.steps import parallelize
-from tamp.sim.refine.ordering import check_program, check_run, executions, gate_program
 from tests.refine.helpers import task
+from verification.gate import gate, gate_program
+from verification.refine import check_program, check_run, executions
 from verification.verdict import VerificationError
 
 T4 = {"R1.lower_arm": 57.0, "R1.approach": 68.0}
@@ -31,7 +32,7 @@ def test_refinement_that_breaks_the_property_is_refused():
     refined, _ = parallelize(p, T4)
     with pytest.raises(VerificationError) as exc:
         gate_program(refined)
-    verdict = exc.value.report.verdicts[0]
+    verdict = exc.value.report.failed[0]
     ce = verdict.counterexample
     assert ce is not None
     # the counterexample is an execution where the approach fired first
@@ -54,3 +55,10 @@ def test_measured_run_order():
     bad = ["R1.lower_arm", "R1.approach", "R1.pull_out", "R2.approach", "R2.grip"]
     v = check_run(p, bad)
     assert not v.holds and v.counterexample.position == 2
+
+
+def test_gate_dispatches_on_programs():
+    """`verification.gate` knows programs: the same Report as `gate_program`."""
+    report = gate(task(4))
+    assert report.holds and len(report.verdicts) == 1
+    assert report.verdicts[0].subject == "program task4"

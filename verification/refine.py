@@ -1,5 +1,5 @@
-"""The gate before a (refined) program is simulated: its ordering property holds on every
-execution, or the refinement is refused with the counterexample.
+"""Refined programs (seed 002): the ordering property holds on every execution of a program
+before it is simulated, or the refinement is refused with the counterexample.
 
 The executions of a program are the paths through the downsets of its event order
 (`tamp.refine.order.downsets`): each state is the set of events fired so far, which is
@@ -16,7 +16,7 @@ from tamp.refine.order import downsets
 from tamp.refine.program import Program
 from verification.kripke import TransitionSystem, model_check
 from verification.traces import check_trace
-from verification.verdict import Verdict, VerificationError
+from verification.verdict import Verdict
 from verification.words import Word
 
 
@@ -37,15 +37,6 @@ def check_program(program: Program, *, subject: str | None = None) -> Verdict:
     return model_check(
         executions(program), program.ordering, subject=subject or f"program {program.name}"
     )
-
-
-def gate_program(program: Program, *, subject: str | None = None) -> Verdict:
-    """`check_program`, raising `VerificationError` (exit 1, with the counterexample) when
-    some execution violates the property."""
-    verdict = check_program(program, subject=subject)
-    if not verdict.holds:
-        raise VerificationError(verdict)
-    return verdict
 
 
 def check_run(program: Program, order: Sequence[str]) -> Verdict:

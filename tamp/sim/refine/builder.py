@@ -1,0 +1,227 @@
+"""Builds the refinement workcell's diagram from a program (one function, one Diagram).
+
+    MultibodyPlant + SceneGraph (SAP; floor, two Pioneer-like robots, the scene's objects)
+    per robot:  plant state, reaction forces, contact forces -> SensorReadings -> readings
+                readings, command -> Channel -> delivered -> StateMachineExecutor -> command
+                Channel.actuation -> the robot's PD actuators (desired state)
+                the other executor's progress -> StateMachineExecutor.others
+    Channels' deliveries -> RateTuningSupervisor -> rates -> both executors
+    MeshcatVisualizer (optional, `tamp.sim.core.recording`)
+
+The plant steps every `TIME_STEP`; the Channels, executors and the supervisor update on the
+same tick (the Channels take every sensor sample in between at its own time, so sensors
+may be faster than the tick). A command leaves on an executor tick, so P is at most
+1 / `TIME_STEP` (100 Hz) here: the rate search stops there too. Gravity is off for the
+robots (their drivers hold the lever), so the force sensor reads only what the gripper
+touches. Contact is hydroelastic where the models say so (the chair's frames, the
+objects), point contact otherwise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import PdControllerGains
+from pydrake.systems.framework import Diagram, DiagramBuilder
+
+from tamp.refine.architecture import Architecture
+from tamp.refine.program import Program
+from tamp.refine.steps import RateSearch
+from tamp.sim.core.models import model_url, sdf_path
+from tamp.sim.core.plant import add_sap_plant
+from tamp.sim.refine.channel import Channel, ChannelState
+from tamp.sim.refine.executor import StateMachineExecutor
+from tamp.sim.refine.machine import Machine
+from tamp.sim.refine.scene import CHASSIS_BODIES, GAINS, GRIPPER_MOUNT, JOINTS, SCENES
+from tamp.sim.refine.sensors import SensorReadings
+from tamp.sim.refine.supervisor import RateTuningSupervisor
+
+TIME_STEP = 0.01  # s, the plant's discrete step and the systems' tick
+
+
+@dataclass
+class Workcell:
+    """The built diagram and the handles the runner needs."""
+
+    diagram: Diagram
+    plant: MultibodyPlant
+    program: Program
+    robots: dict[str, Any]  # robot name -> ModelInstanceIndex
+    executors: dict[str, StateMachineExecutor]
+    channels: dict[str, Channel]
+    supervisor: RateTuningSupervisor
+    objects: dict[str, Any]  # model name -> ModelInstanceIndex
+    chassis: dict[int, str] = field(default_factory=dict)  # body index -> "R1.base_link"
+    names: dict[int, str] = field(default_factory=dict)  # body index -> readable name
+    visualizer: Any = None
+    meshcat: Any = None
+
+
+def watched_sensors(program: Program, robot: str) -> tuple[str, ...]:
+    """The sensors that trigger robot ``robot``'s events (Fig. 5, Step 2)."""
+    r = program.robot(robot)
+    return tuple(sorted({b.event.sensor for b in r.behaviors if b.event.sensor}))
+
+
+def _model_text(model: str, name: str) -> str:
+    return sdf_path(model).read_text().replace(f'<model name="{model}">', f'<model name="{name}">')
+
+
+def build_workcell(
+    program: Program,
+    architecture: Architecture,
+    *,
+    tune: bool = False,
+    meshcat: Any = None,
+) -> Workcell:
+    """The diagram of ``program`` in its scene; ``tune`` runs Fig. 5 in the supervisor."""
+    comm = program.communication
+    period = TIME_STEP
+    builder = DiagramBuilder()
+    plant, scene_graph, parser = add_sap_plant(
+        builder, time_step=TIME_STEP, contact_model="hydroelastic_with_fallback"
+    )
+    (floor,) = parser.AddModelsFromUrl(model_url("floor"))
+    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("floor", floor))
+
+    robots = {}
+    for r in program.robots:
+        (m,) = parser.AddModelsFromString(_model_text(r.model, r.name), "sdf")
+        robots[r.name] = m
+        start = dict(zip(JOINTS, (*r.start, 0.0, 0.08, 0.08), strict=True))
+        for j in JOINTS:
+            plant.GetJointByName(j, m).set_default_positions([start[j]])
+            kp, kd = GAINS[j]
+            plant.GetJointActuatorByName(j, m).set_controller_gains(PdControllerGains(p=kp, d=kd))
+        plant.mutable_gravity_field().set_enabled(m, False)
+
+    objects = {}
+    for p in SCENES[program.scene]:
+        (m,) = parser.AddModelsFromString(_model_text(p.model, p.model), "sdf")
+        objects[p.model] = m
+        body = plant.get_body(plant.GetBodyIndices(m)[0])
+        X = RigidTransform(RotationMatrix.MakeZRotation(p.yaw), [p.x, p.y, p.z])
+        if p.fixed:
+            plant.WeldFrames(plant.world_frame(), body.body_frame(), X)
+        else:
+            plant.SetDefaultFloatingBaseBodyPose(body, X)
+    plant.Finalize()
+
+    chassis, names = {}, {}
+    for m in list(robots.values()) + list(objects.values()) + [floor]:
+        for index in plant.GetBodyIndices(m):
+            b = plant.get_body(index)
+            names[int(index)] = f"{plant.GetModelInstanceName(m)}.{b.name()}"
+    for name, m in robots.items():
+        geoms = []
+        for index in plant.GetBodyIndices(m):
+            b = plant.get_body(index)
+            geoms += plant.GetCollisionGeometriesForBody(b)
+            if b.name() in CHASSIS_BODIES:
+                chassis[int(index)] = f"{name}.{b.name()}"
+        scene_graph.collision_filter_manager().Apply(
+            CollisionFilterDeclaration().ExcludeWithin(GeometrySet(geoms))
+        )
+        order = [
+            plant.get_joint_actuator(i).joint().name() for i in plant.GetJointActuatorIndices(m)
+        ]
+        assert tuple(order) == JOINTS, order  # the Channel's actuation is in JOINTS order
+
+    qi = plant.GetPositionsFromArray
+    executors, channels = {}, {}
+    empty = None
+    reaction = plant.get_reaction_forces_output_port()
+    for r in program.robots:
+        m = robots[r.name]
+        nq, nv = plant.num_positions(m), plant.num_velocities(m)
+        gq = list(qi(m, np.arange(plant.num_positions(), dtype=float)).astype(int))
+        gv = list(plant.GetVelocitiesFromArray(m, np.arange(plant.num_velocities(), dtype=float)))
+        gv = [int(v) for v in gv]
+        jq = {j: gq.index(plant.GetJointByName(j, m).position_start()) for j in JOINTS}
+        jv = {j: gv.index(plant.GetJointByName(j, m).velocity_start()) for j in JOINTS}
+        sensors = builder.AddSystem(
+            SensorReadings(
+                r.name,
+                nq=nq,
+                nv=nv,
+                pose_index=(jq["base_x"], jq["base_y"], jq["base_yaw"]),
+                arm_index=jq["arm_pitch"],
+                finger_index=(jv["finger_left_joint"], jv["finger_right_joint"]),
+                mount_joint=int(plant.GetJointByName(GRIPPER_MOUNT, m).index()),
+                reaction_model=reaction.Allocate(),
+            )
+        )
+        machine = Machine(program, r.name)
+        network = architecture.network(comm.category)
+        channel = builder.AddSystem(
+            Channel(
+                r.name,
+                network,
+                comm.sensor_rate_hz,
+                np.array(machine.joint_setpoints(machine.initial().setpoints)),
+                period,
+            )
+        )
+        empty = ChannelState(network.initial())
+        executor = builder.AddSystem(StateMachineExecutor(program, r.name, period, empty))
+        builder.Connect(plant.get_state_output_port(m), sensors.state_port)
+        builder.Connect(reaction, sensors.reaction_port)
+        builder.Connect(plant.get_generalized_contact_forces_output_port(m), sensors.contact_port)
+        builder.Connect(sensors.readings_port, channel.readings_port)
+        builder.Connect(executor.command_port, channel.command_port)
+        builder.Connect(channel.delivered_port, executor.delivered_port)
+        builder.Connect(channel.actuation_port, plant.get_desired_state_input_port(m))
+        executors[r.name], channels[r.name] = executor, channel
+
+    watched = {r.name: watched_sensors(program, r.name) for r in program.robots}
+    searches = None
+    if tune:
+        searches = {}
+        for r in program.robots:
+            current = program.rate(r.behaviors[0])
+            limit = min(comm.sensor_rate_hz, 1.0 / TIME_STEP)
+            searches[r.name] = architecture.search(
+                comm.category, current, limit, watched=watched[r.name] or ("force",)
+            )
+    supervisor = builder.AddSystem(
+        RateTuningSupervisor(watched, period, architecture.probe_window, empty, searches)
+    )
+    a, b = (r.name for r in program.robots)
+    for name, other in ((a, b), (b, a)):
+        builder.Connect(executors[other].progress_port, executors[name].others_port)
+        builder.Connect(supervisor.rates_port, executors[name].rates_port)
+        builder.Connect(channels[name].delivered_port, supervisor.delivered_ports[name])
+
+    visualizer = None
+    if meshcat is not None:
+        from tamp.sim.core.recording import add_visualizer
+
+        visualizer = add_visualizer(builder, scene_graph, meshcat)
+    diagram = builder.Build()
+    diagram.set_name(f"refine_{program.name}")
+    return Workcell(
+        diagram,
+        plant,
+        program,
+        robots,
+        executors,
+        channels,
+        supervisor,
+        objects,
+        chassis,
+        names,
+        visualizer,
+        meshcat,
+    )
+
+
+def search_of(workcell: Workcell, context) -> dict[str, RateSearch | None]:
+    """The supervisor's searches in ``context`` (root context of the diagram)."""
+    sup = workcell.supervisor
+    s = sup.state(sup.GetMyContextFromRoot(context))
+    return {n: w.search for n, w in s.robots.items()}

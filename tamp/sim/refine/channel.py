@@ -1,0 +1,121 @@
+"""Channel: one robot's communication architecture inside the diagram (Table 1, Fig. 2, Fig. 8).
+
+The system holds the exact FIFO network of `tamp.refine.queues` in its abstract state and
+changes it only in its periodic update, once per plant step Δ (the workcell's tick):
+
+1. the sensors are sampled at their rate: every sample time k / rate in (t − Δ, t] gives
+   one message per sensor (force, IMU, odometry) created at that time, carrying the
+   reading of `SensorReadings` at that time (the plant's state is held between its steps,
+   so a sample between two steps carries the previous step's reading, kept in the state);
+2. the command the executor published at its last tick enters the network at its
+   creation time;
+3. the network advances to now; what it delivers becomes visible: the latest delivered
+   sample of each sensor (``delivered`` output, what the executor reads) and the latest
+   delivered command, whose setpoints the actuators' sub-CPU applies (``actuation``
+   output: the plant's desired state).
+
+So a sample that queued behind other messages arrives late, and the executor decides on
+stale data; a command that queued reaches the actuators late. Nothing here is a formula
+of the delay: the delay is what the queues did.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
+
+from tamp.refine.architecture import COMMAND
+from tamp.refine.program import SENSORS
+from tamp.refine.queues import Delivery, Network, QueueState
+from tamp.sim.refine.messages import Command, Readings
+
+
+@dataclass(frozen=True)
+class ChannelState:
+    """The queues, the latest delivered message of each stream and this period's sensor
+    deliveries (``recent``: what the supervisor judges)."""
+
+    queue: QueueState
+    latest: dict[str, Delivery] = field(default_factory=dict)
+    recent: tuple[Delivery, ...] = ()
+    injected: int = 0  # number of the last command put into the network
+    samples: int = 0  # sample times k / rate already taken (k < samples)
+    previous: Readings = Readings()  # the reading of the last tick
+
+    def __deepcopy__(self, memo: dict) -> ChannelState:
+        return self  # immutable: Drake's state copies cost nothing
+
+    def sample(self, sensor: str) -> Delivery | None:
+        return self.latest.get(sensor)
+
+
+class Channel(LeafSystem):
+    """Sensor samples and commands of one robot through its FIFO network."""
+
+    def __init__(
+        self, name: str, network: Network, sensor_rate: float, q_start: np.ndarray, tick: float
+    ):
+        super().__init__()
+        self.set_name(f"channel_{name}")
+        self._network = network
+        self._rate = sensor_rate
+        self._actuation_start = np.concatenate([q_start, np.zeros_like(q_start)])
+        self.period = tick
+        self.readings_port = self.DeclareAbstractInputPort(
+            "readings", AbstractValue.Make(Readings())
+        )
+        self.command_port = self.DeclareAbstractInputPort("command", AbstractValue.Make(Command()))
+        self._state = self.DeclareAbstractState(AbstractValue.Make(ChannelState(network.initial())))
+        self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update)
+        ticket = {self.abstract_state_ticket(self._state)}
+        self.delivered_port = self.DeclareAbstractOutputPort(
+            "delivered",
+            lambda: AbstractValue.Make(ChannelState(network.initial())),
+            lambda ctx, out: out.set_value(self.state(ctx)),
+            prerequisites_of_calc=ticket,
+        )
+        self.actuation_port = self.DeclareVectorOutputPort(
+            "actuation",
+            BasicVector(len(self._actuation_start)),
+            self._calc_actuation,
+            prerequisites_of_calc=ticket,
+        )
+
+    def state(self, context) -> ChannelState:
+        return context.get_abstract_state(self._state).get_value()
+
+    def _calc_actuation(self, context, output) -> None:
+        d = self.state(context).latest.get(COMMAND)
+        if d is None:
+            output.SetFromVector(self._actuation_start)
+        else:
+            output.SetFromVector(d.message.value.actuation)
+
+    def _update(self, context, state) -> EventStatus:
+        s = self.state(context)
+        t = context.get_time()
+        r: Readings = self.readings_port.Eval(context)
+        items = []
+        k = s.samples
+        while k / self._rate <= t + 1e-9:
+            created = k / self._rate
+            now = created >= t - 1e-9
+            items += [(x, created, (r if now else s.previous).value(x)) for x in SENSORS]
+            k += 1
+        cmd: Command = self.command_port.Eval(context)
+        injected = s.injected
+        if cmd.number > injected:
+            items.append((COMMAND, min(cmd.created, t), cmd))
+            injected = cmd.number
+        queue, _ = self._network.inject(s.queue, items)
+        queue, out = self._network.advance(queue, t)
+        latest = dict(s.latest)
+        for d in out:
+            latest[d.message.stream] = d
+        recent = tuple(d for d in out if d.message.stream != COMMAND)
+        new = ChannelState(queue, latest, recent, injected, k, r)
+        state.get_mutable_abstract_state(self._state).set_value(new)
+        return EventStatus.Succeeded()

@@ -1,0 +1,59 @@
+"""StateMachineExecutor: one robot's event-driven state machine as a LeafSystem (§2.2).
+
+Once per sensor period the system runs `tamp.sim.refine.machine.Machine.step` on what its
+`Channel` has *delivered* (not on the plant's state), the other robot's fired events and
+the supervisor's rate, and keeps the result in its abstract state. Outputs: the latest
+``command`` (to the Channel, which delivers it to the actuators) and its ``progress``
+(fired events, running behaviors; to the other executor and the supervisor).
+"""
+
+from __future__ import annotations
+
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import EventStatus, LeafSystem
+
+from tamp.refine.program import Program
+from tamp.sim.refine.channel import ChannelState
+from tamp.sim.refine.machine import Machine, MachineState
+from tamp.sim.refine.messages import Command, Progress, RateOverride
+
+
+class StateMachineExecutor(LeafSystem):
+    """Fires robot ``robot``'s events on delivered data and publishes its commands at P."""
+
+    def __init__(self, program: Program, robot: str, period: float, empty: ChannelState):
+        super().__init__()
+        self.set_name(f"executor_{robot}")
+        self.robot = robot
+        self.machine = Machine(program, robot)
+        self.delivered_port = self.DeclareAbstractInputPort("delivered", AbstractValue.Make(empty))
+        self.others_port = self.DeclareAbstractInputPort("others", AbstractValue.Make(Progress()))
+        self.rates_port = self.DeclareAbstractInputPort("rates", AbstractValue.Make(RateOverride()))
+        self._state = self.DeclareAbstractState(AbstractValue.Make(self.machine.initial()))
+        self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
+        ticket = {self.abstract_state_ticket(self._state)}
+        self.command_port = self.DeclareAbstractOutputPort(
+            "command",
+            lambda: AbstractValue.Make(Command()),
+            lambda ctx, out: out.set_value(self.state(ctx).command),
+            prerequisites_of_calc=ticket,
+        )
+        self.progress_port = self.DeclareAbstractOutputPort(
+            "progress",
+            lambda: AbstractValue.Make(Progress()),
+            lambda ctx, out: out.set_value(self.machine.progress_of(self.state(ctx))),
+            prerequisites_of_calc=ticket,
+        )
+
+    def state(self, context) -> MachineState:
+        return context.get_abstract_state(self._state).get_value()
+
+    def _update(self, context, state) -> EventStatus:
+        delivered: ChannelState = self.delivered_port.Eval(context)
+        others: Progress = self.others_port.Eval(context)
+        override = self.rates_port.Eval(context).rates.get(self.robot)
+        new = self.machine.step(
+            self.state(context), context.get_time(), delivered.latest, others.fired, override
+        )
+        state.get_mutable_abstract_state(self._state).set_value(new)
+        return EventStatus.Succeeded()

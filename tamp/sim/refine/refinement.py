@@ -1,0 +1,218 @@
+"""The refinement of a program, phase by phase, every task time measured in simulation.
+
+Phases (Fig. 3, Fig. 12):
+
+1. **original**: the program as given.
+2. **parallelized** (Step 1 + Step 2): `tamp.refine.steps.parallelize` on the durations
+   the original run measured. The result is executed once; a parallelization after which
+   a robot's chassis or lever touches something the original run's did not is reverted
+   (`revert`) and the program runs again without it.
+3. **speed-adjusted** (Fig. 6(c)): `adjust_base_speed` on the parallelized run's
+   durations.
+4. **rate-refined** (Fig. 5): a tuning run of the speed-adjusted program with the
+   `RateTuningSupervisor` searching each robot's rate online; the lower of the robots'
+   found rates is applied to both (`apply_rate`, Step 3: every speed scales by the same
+   ratio, the base's included), as in the paper, and the program runs again.
+
+Every program passes the ordering gate (`verification.gate.gate_program`) before it is
+simulated, and each measured run's event order is checked too (`Phase.run_holds`); a
+refinement that lets some execution break the task's ordering property is refused with
+the counterexample (`VerificationError`, exit 1). A program that cannot finish
+(`check_can_finish`, or an event that did not fire in the original run) is `InfeasibleError`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from tamp.errors import InfeasibleError
+from tamp.refine.architecture import Architecture
+from tamp.refine.order import check_can_finish
+from tamp.refine.program import Program
+from tamp.refine.steps import (
+    Parallelization,
+    SpeedChange,
+    adjust_base_speed,
+    apply_rate,
+    parallelize,
+    revert,
+)
+from tamp.sim.refine.runner import Run, simulate
+
+PHASES = ("original", "parallelized", "speed-adjusted", "rate-refined")
+
+
+@dataclass
+class Phase:
+    """One phase: its program and the run that measured it."""
+
+    name: str
+    program: Program
+    run: Run
+    run_holds: bool | None = None  # the measured event order against the property
+
+    def __post_init__(self) -> None:
+        if self.run_holds is None and self.run.finished:
+            from verification.refine import check_run
+
+            self.run_holds = check_run(self.program, self.run.timeline.order()).holds
+
+    @property
+    def task_time(self) -> float:
+        return self.run.task_time
+
+
+@dataclass
+class Refinement:
+    """All phases, what each step changed, the tuning run and the found rate."""
+
+    phases: list[Phase]
+    parallelized: list[Parallelization] = field(default_factory=list)
+    reverted: list[tuple[Parallelization, list[tuple[str, str]]]] = field(default_factory=list)
+    speed_changes: list[SpeedChange] = field(default_factory=list)
+    tuning: Run | None = None
+    rate_hz: float = 0.0
+    verified: bool = True
+
+    @property
+    def program(self) -> Program:
+        """The refined program (the last phase's)."""
+        return self.phases[-1].program
+
+    @property
+    def reduction(self) -> float:
+        """Fraction of the original task time saved by the refined program."""
+        first, last = self.phases[0].task_time, self.phases[-1].task_time
+        return 1.0 - last / first if first > 0 else 0.0
+
+    @property
+    def sim_time(self) -> float:
+        runs = [p.run for p in self.phases] + ([self.tuning] if self.tuning else [])
+        return sum(r.sim_time for r in runs)
+
+    @property
+    def wall_time(self) -> float:
+        runs = [p.run for p in self.phases] + ([self.tuning] if self.tuning else [])
+        return sum(r.wall_time for r in runs)
+
+    def to_json(self) -> dict:
+        return {
+            "program": self.phases[0].program.name,
+            "category": self.program.communication.category,
+            "phases": [
+                {
+                    "name": p.name,
+                    "task_time": round(p.task_time, 3),
+                    "timeline": p.run.timeline.to_json()["behaviors"],
+                    "max_wait": {k: round(v, 5) for k, v in p.run.max_wait.items()},
+                    "run_satisfies_ordering": p.run_holds,
+                }
+                for p in self.phases
+            ],
+            "rate_hz": self.rate_hz,
+            "rates_found": {k: v for k, v in self.tuning.found_rates().items()}
+            if self.tuning
+            else {},
+            "probes": {
+                n: [[r, round(w, 5)] for r, w in s.probes]
+                for n, s in (self.tuning.searches.items() if self.tuning else [])
+                if s is not None
+            },
+            "reduction": round(self.reduction, 4),
+            "parallelized": [p.describe() for p in self.parallelized],
+            "reverted": [
+                {"parallelization": p.describe(), "collisions": [list(c) for c in cs]}
+                for p, cs in self.reverted
+            ],
+            "speed_changes": [c.describe() for c in self.speed_changes],
+            "verified": self.verified,
+            "sim_time": round(self.sim_time, 3),
+            "wall_time": round(self.wall_time, 3),
+        }
+
+
+def _not_finished(run: Run, what: str) -> InfeasibleError:
+    stuck = [r.event for r in run.timeline.records if r.end is None]
+    return InfeasibleError(
+        f"the {what} program did not finish within {run.sim_time:.0f} s of sim time: "
+        f"{', '.join(stuck)} never fired"
+    )
+
+
+def refine(
+    program: Program,
+    architecture: Architecture,
+    *,
+    category: str | None = None,
+    verify: bool = True,
+    record: str | Path | None = None,
+    progress: Callable[[str], None] = lambda _: None,
+) -> Refinement:
+    """The four phases of ``program`` (module docstring); ``record`` writes a Meshcat
+    animation of the refined program's run."""
+    from verification.gate import gate_program
+
+    if category is not None:
+        program = program.with_category(category)
+    check_can_finish(program)
+
+    def gated(p: Program, phase: str) -> Program:
+        if verify:
+            gate_program(p, subject=f"{phase} program {p.name}")
+        return p
+
+    def run(p: Program, phase: str, **kw) -> Run:
+        progress(f"simulating the {phase} program ...")
+        r = simulate(p, architecture, **kw)
+        progress(f"  {phase}: {r.task_time:.1f} s (wall {r.wall_time:.1f} s)")
+        return r
+
+    original = run(gated(program, "original"), "original")
+    if not original.finished:
+        raise _not_finished(original, "original")
+    phases = [Phase("original", program, original)]
+    out = Refinement(phases, verified=verify)
+
+    p1, done = parallelize(program, original.timeline.durations())
+    out.parallelized = list(done)
+    r1 = run(gated(p1, "parallelized"), "parallelized")
+    while True:
+        new = sorted(set(r1.collisions) - set(original.collisions))
+        if not new or not out.parallelized:
+            break
+        bad = out.parallelized.pop()  # the latest parallelization first
+        out.reverted.append((bad, new))
+        progress(f"  collision {new[0]}: reverting '{bad.describe()}'")
+        p1 = revert(p1, bad)
+        r1 = run(gated(p1, "parallelized"), "parallelized")
+    if not r1.finished:
+        raise _not_finished(r1, "parallelized")
+    phases.append(Phase("parallelized", p1, r1))
+
+    p2, changes = adjust_base_speed(p1, r1.timeline.durations())
+    out.speed_changes = changes
+    r2 = run(gated(p2, "speed-adjusted"), "speed-adjusted")
+    if not r2.finished:
+        raise _not_finished(r2, "speed-adjusted")
+    phases.append(Phase("speed-adjusted", p2, r2))
+
+    progress("tuning the command rate (Fig. 5) ...")
+    tuning = simulate(p2, architecture, tune=True)
+    found = tuning.found_rates()
+    if len(found) != len(p2.robots):
+        raise InfeasibleError(
+            f"the rate search did not end within {tuning.sim_time:.0f} s of sim time"
+        )
+    out.tuning = tuning
+    out.rate_hz = min(found.values())
+    progress(f"  rates found {found}: applying {out.rate_hz:g} Hz to both robots")
+    p3 = p2
+    for r in p2.robots:
+        p3 = apply_rate(p3, r.name, out.rate_hz)
+    r3 = run(gated(p3, "rate-refined"), "rate-refined", record=record)
+    if not r3.finished:
+        raise _not_finished(r3, "rate-refined")
+    phases.append(Phase("rate-refined", p3, r3))
+    return out
