@@ -18,7 +18,7 @@ or flag (an appearance at time 0 onto an occupied place included). ``--json`` ha
                        [--seed N] [--record out.html] [--max-sim-time S] [--json]
 
 Runs a LOTS task by the LOTS controller inside the Drake workcell (`tamp.sim.lots.simulate`);
-exit 0 only when the task's final W^B holds on the plant. ``--interference`` is refused
+exit 0 only when the plant's W^B ends a round of the task. ``--interference`` is refused
 (exit 2): the person is not simulated in Drake yet.
 """
 
@@ -64,8 +64,8 @@ def register_lots(sub) -> None:
         help="LOTS task in the Drake workcell (arm with wrist camera, LOTS controller)",
         description=(
             "Run a LOTS task (tamp lots' TASK.yaml) by the LOTS controller inside the Drake "
-            "workcell; the verdict is measured on the plant. Exit 0 when the task's final W^B "
-            "holds on the plant, 1 otherwise, 2 on bad input."
+            "workcell; the verdict is measured on the plant. Exit 0 when the plant's W^B ends a "
+            "round of the task, 1 otherwise, 2 on bad input."
         ),
     )
     s.add_argument("--task", required=True, help="LTL task file or packaged task name")
