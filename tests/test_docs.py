@@ -8,7 +8,7 @@ that docs cannot drift silently:
   text; a blank line ends the example's output;
 - an annotation ``   <- text`` at the end of a shown line is a comment, not output;
 - timings are normalised on both sides (``7.1 s``, ``8.5x``, ``58.3 ms``), nothing else.
-Simulation examples are marked slow (they run a Drake diagram).
+The examples are marked slow (each is a subprocess run of the CLI; `make test` runs them).
 """
 
 from __future__ import annotations
@@ -113,8 +113,9 @@ def _compare(shown: list[str], actual: list[str]) -> str | None:
 def _params():
     out = []
     for ex in _examples():
-        marks = [pytest.mark.slow] if " simulate " in f" {ex.command} " else []
-        out.append(pytest.param(ex, id=ex.id, marks=marks))
+        # every example is a subprocess run of the CLI: slow for the quick loop (make test runs
+        # them all, as CI does)
+        out.append(pytest.param(ex, id=ex.id, marks=[pytest.mark.slow]))
     return out
 
 

@@ -12,6 +12,7 @@ from tests.refine.helpers import task_dict, write
 from tests.sim.refine.helpers import SHORT
 
 
+@pytest.mark.slow  # a Drake simulation of the short Task 4 program
 def test_refine_short_program_end_to_end(tmp_path, capsys):
     """The shortened Task 4: every phase simulated, the rate found online, files written."""
     gantt, out = tmp_path / "g" / "phases.svg", tmp_path / "refined.yaml"

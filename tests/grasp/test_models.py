@@ -10,6 +10,7 @@ from tamp.grasp.evaluate import optimize_for_cpu
 from tamp.grasp.models import INPUT_CHANNELS, MODELS, HRGNet, build_model, parameter_count
 
 
+@pytest.mark.slow  # heavy for the quick loop; make test runs it
 @pytest.mark.parametrize("name", MODELS)
 @pytest.mark.parametrize("mode", list(INPUT_CHANNELS))
 def test_four_maps_the_size_of_the_input(name, mode):
@@ -27,6 +28,7 @@ def _units(model: HRGNet) -> list:
     return [unit for stage in model.stages for unit in stage]
 
 
+@pytest.mark.slow  # heavy for the quick loop; make test runs it
 def test_full_resolution_branch_through_the_whole_network():
     model = HRGNet(4).eval()
     seen = []
@@ -37,6 +39,7 @@ def test_full_resolution_branch_through_the_whole_network():
     assert seen == [(48, 40)] * len(_units(model))
 
 
+@pytest.mark.slow  # heavy for the quick loop; make test runs it
 def test_branches_halve_the_resolution_stage_by_stage():
     model = HRGNet(1, widths=(4, 8, 12, 16)).eval()
     shapes = []
@@ -123,6 +126,7 @@ def _output_hears_lowest_branch(model: HRGNet) -> float:
     return float((a - b).abs().max())
 
 
+@pytest.mark.slow  # heavy for the quick loop; make test runs it
 def test_fusion_modes():
     torch.manual_seed(0)
     full, final, none = (
@@ -148,6 +152,7 @@ def test_fusion_modes():
         HRGNet(4, fusion="partial")
 
 
+@pytest.mark.slow  # heavy for the quick loop; make test runs it
 @pytest.mark.parametrize("name", MODELS)
 def test_cpu_inference_copy_gives_the_same_maps(name):
     """BatchNorm folded and channels-last: same outputs, ordinary layout out."""

@@ -48,6 +48,7 @@ def test_threshold_is_unloaded_worst_wait_plus_margin():
         assert ARCH.probe_wait("II", 200.0, p) <= ARCH.wait_threshold("II", "force")
 
 
+@pytest.mark.slow  # heavy for the quick loop; make test runs it
 def test_task4_setting_finds_23_hz_and_categories_are_ordered():
     found = {
         c: refine_rate(ARCH.search(c, 10.0, 200.0), lambda p, c=c: ARCH.probe_wait(c, 200.0, p))
@@ -63,6 +64,7 @@ def test_task4_setting_finds_23_hz_and_categories_are_ordered():
     assert max(net.utilisation(ARCH.rates(200.0, 23.0)).values()) < 1.0
 
 
+@pytest.mark.slow  # heavy for the quick loop; make test runs it
 @settings(max_examples=5)
 @given(sensor_rate=st.sampled_from([120.0, 160.0, 200.0]), start=st.integers(5, 15))
 def test_categories_ordered_and_found_rate_below_the_knee(sensor_rate, start):

@@ -13,6 +13,8 @@ from tamp.sim.refine.runner import simulate
 from tests.sim.refine.helpers import fast_architecture, short
 from verification.refine import check_run
 
+pytestmark = pytest.mark.slow  # Drake simulations of the short Task 4 program
+
 
 @pytest.fixture(scope="module")
 def run():
