@@ -54,6 +54,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/verify.py
 	$(BIN)/python benchmarks/sim_smp.py
 	$(BIN)/python benchmarks/grasp.py
+	$(BIN)/python benchmarks/refine.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check tamp verification tests benchmarks
