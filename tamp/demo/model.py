@@ -43,6 +43,11 @@ class Demonstration:
     appear: tuple[Appear, ...] = ()
 
     def goal(self, gid: str) -> Goal:
+        """The goal ``gid``: O(1) for the ``G<step>`` ids the demonstration gives its goals."""
+        if gid[:1] == "G" and gid[1:].isdigit() and int(gid[1:]) < len(self.goals):
+            g = self.goals[int(gid[1:])]
+            if g.id == gid:
+                return g
         for g in self.goals:
             if g.id == gid:
                 return g
@@ -55,6 +60,15 @@ class Demonstration:
     def goal_chain(self, obj: str) -> list[Goal]:
         """The goals of one object in demonstrated order (intent constraints chain them)."""
         return [g for g in self.goals if g.object == obj]
+
+    def pick_points(self) -> list[Point]:
+        """`pick_point` of every goal in demonstrated order, in one pass (O(goals))."""
+        where = dict(self.objects)
+        out = []
+        for g in self.goals:
+            out.append(where[g.object])
+            where[g.object] = g.pos
+        return out
 
     def pick_point(self, goal: Goal) -> Point:
         """Where the object of ``goal`` is just before it: its previous goal, or its P."""
