@@ -21,6 +21,8 @@ conjunct whose bad prefix is shortest.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from tamp import ltl
 from tamp.errors import InputError
 from tamp.ltl.automata import Automaton, Stepper, accepting_continuation, accepts_lasso
@@ -33,7 +35,14 @@ from verification.words import Word
 #: then computed conjunct by conjunct, which is sound for a conjunction.
 MAX_CONJUNCTS_FOR_WHOLE = 8
 
-__all__ = ["MAX_CONJUNCTS_FOR_WHOLE", "as_formula", "check_trace", "explain", "explain_on"]
+__all__ = [
+    "MAX_CONJUNCTS_FOR_WHOLE",
+    "as_formula",
+    "check_trace",
+    "explain",
+    "explain_on",
+    "known_violations",
+]
 
 
 def check_trace(
@@ -99,6 +108,38 @@ def check_trace(
     ce.aps = ltl.ap_names(f)
     ce.steps = steps
     return Verdict(subject, str(f), semantics, False, explored, ce)
+
+
+def known_violations(
+    formula: str,
+    aps: list[str],
+    word: Callable[[], Word],
+    violated: list[tuple[str, int | None]],
+    *,
+    explored: int,
+    subject: str,
+    steps: list[str] | None = None,
+    accepting_word: Word | None = None,
+) -> Verdict:
+    """The infinite-word verdict of a conjunction whose violated conjuncts the caller has
+    already decided exactly (the order-check fast path, `verification.rg.order_violations`).
+
+    ``violated``: those conjuncts in the formula's order, each with the end of its
+    shortest bad prefix (None: none); the other conjuncts hold. No conjunction is built and
+    no conjunct is checked on an automaton: only the violated conjunct with the shortest
+    bad prefix is translated, for the counterexample — what the conjunct-by-conjunct path
+    of `check_trace` reports. ``formula`` is the conjunction's text, ``aps`` its
+    propositions, ``word()`` makes the checked word (only needed for a counterexample).
+    """
+    if not violated:
+        return Verdict(subject, formula, "infinite", True, explored)
+    first = min(violated, key=lambda cp: (cp[1] is None, cp[1] or 0))[0]
+    ce = explain(as_formula(first), word(), finite=False)
+    ce.accepting_word = accepting_word
+    ce.violated = [str(as_formula(c)) for c, _ in violated]
+    ce.aps = list(aps)
+    ce.steps = steps
+    return Verdict(subject, formula, "infinite", False, explored, ce)
 
 
 def _holds_finite(f: Formula, word: Word) -> tuple[bool, int]:

@@ -113,11 +113,18 @@ class RGTooLarge(RuntimeError):
 
 
 def _masks(index: GoalIndex, limit: float) -> tuple[list[int], list[tuple[int, int, int]]]:
-    """States (breadth-first) and edges ``(state, child, goal)`` of the merged RG."""
+    """States (breadth-first) and edges ``(state, child, goal)`` of the merged RG.
+
+    Every subset of the goals without predecessors is a state, so 2^|those| > ``limit``
+    proves the RG too large before enumerating anything.
+    """
+    initial = index.initial()
+    if 2 ** len(initial) > limit:
+        raise RGTooLarge(f"the RG has more than {limit} states")
     seen = {0}
     order = [0]
     edges = []
-    frontier = {0: index.initial()}
+    frontier = {0: initial}
     while frontier:
         nxt: dict[int, tuple[int, ...]] = {}
         for m, enabled in frontier.items():
