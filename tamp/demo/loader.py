@@ -44,13 +44,15 @@ from tamp.world.events import Appear, check_events, parse_appear
 from tamp.world.geometry import Area, Point, Pose, Quaternion
 
 #: Size limits of a demonstration (exit 2 beyond them, before any geometry is computed).
-#: Everything after parsing is linear in the steps for one object's chain of goals, but a
-#: search state holds a bitmask of the goals, so memory grows with steps × states: 50,000
-#: steps of one object plan in seconds within a few hundred MB; the limit leaves a factor
-#: two. Objects: the search's width (and the bound's size) grows with the objects that
-#: still have goals; beyond this many the exact search is hopeless anyway.
-MAX_STEPS = 100_000
+#: Deriving C and enumerating a chain are linear, but a search state holds a bitmask of
+#: the goals, so time and memory grow with steps × states: one object's chain of 20,000
+#: goals plans in a few seconds, 50,000 took 100 s and 0.5 GB (benchmarks/demo_scale.py),
+#: and no person demonstrates that many moves. Objects: the search's width grows with the
+#: objects that still have goals. The file size limit refuses a huge file before the
+#: (pure-Python, about 0.5 ms per step) YAML parser reads it.
+MAX_STEPS = 20_000
 MAX_OBJECTS = 10_000
+MAX_BYTES = 4 * 1024 * 1024
 
 _KEYS = {
     "version",
@@ -81,7 +83,14 @@ def _matrix(f: Fields, key: str, default, *, proper: bool) -> tuple[tuple[float,
 
 def load_demonstration(path: str | Path) -> Demonstration:
     """Read, validate and transform a demonstration; bad input raises `InputError`."""
-    data, file = load_yaml(resolve(path), kind="demonstration")
+    source = resolve(path)
+    if Path(source).is_file() and Path(source).stat().st_size > MAX_BYTES:
+        raise InputError(
+            f"larger than {MAX_BYTES // (1024 * 1024)} MiB, the size limit of a demonstration "
+            f"file ({MAX_STEPS} steps take about 1 MiB)",
+            file=str(path),
+        )
+    data, file = load_yaml(source, kind="demonstration")
     f = Fields(data, file)
     f.check_keys(_KEYS)
     for key, limit in (("objects", MAX_OBJECTS), ("steps", MAX_STEPS)):

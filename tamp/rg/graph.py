@@ -113,7 +113,8 @@ class RGTooLarge(RuntimeError):
 
 
 def _masks(index: GoalIndex, limit: float) -> tuple[list[int], list[tuple[int, int, int]]]:
-    """States (breadth-first) and edges ``(state, child, goal)`` of the merged RG.
+    """States (breadth-first) and edges ``(state, child, goal)`` of the merged RG; an edge
+    names its states by their positions in the state list.
 
     Every subset of the goals without predecessors is a state, so 2^|those| > ``limit``
     proves the RG too large before enumerating anything.
@@ -121,34 +122,33 @@ def _masks(index: GoalIndex, limit: float) -> tuple[list[int], list[tuple[int, i
     initial = index.initial()
     if 2 ** len(initial) > limit:
         raise RGTooLarge(f"the RG has more than {limit} states")
-    seen = {0}
+    seen = {0: 0}
     order = [0]
     edges = []
     frontier = {0: initial}
     while frontier:
         nxt: dict[int, tuple[int, ...]] = {}
         for m, enabled in frontier.items():
+            at = seen[m]
             for g in enabled:
                 child = m | 1 << g
-                edges.append((m, child, g))
-                if child not in seen:
+                to = seen.get(child)
+                if to is None:
                     if len(seen) >= limit:
                         raise RGTooLarge(f"the RG has more than {limit} states")
-                    seen.add(child)
+                    to = seen[child] = len(order)
                     order.append(child)
                     nxt[child] = index.enabled_after(enabled, m, g)
+                edges.append((at, to, g))
         frontier = nxt
     return order, edges
 
 
 def _alg1_count(order: list[int], edges: list[tuple[int, int, int]]) -> int:
     """Alg. 1's tree nodes: count(S) = 1 + Σ count(child), over the DAG in reverse BFS order."""
-    children: dict[int, list[int]] = {}
-    for m, child, _ in edges:
-        children.setdefault(m, []).append(child)
-    count: dict[int, int] = {}
-    for m in reversed(order):
-        count[m] = 1 + sum(count[c] for c in children.get(m, ()))
+    count = [1] * len(order)
+    for at, to, _ in reversed(edges):  # edges leave states in BFS order: children first
+        count[at] += count[to]
     return count[0]
 
 
@@ -211,8 +211,9 @@ class ReachabilityGraph:
                 if goal.id in achieved:
                     places[goal.object] = goal.id
             g.add_node(achieved, places=places, mask=m)
-        for m, child, gi in self._edges:
-            g.add_edge(index.names(m), index.names(child), goal=index.ids[gi])
+        masks = self._masks
+        for at, to, gi in self._edges:
+            g.add_edge(index.names(masks[at]), index.names(masks[to]), goal=index.ids[gi])
         return g
 
 
