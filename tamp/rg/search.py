@@ -119,16 +119,20 @@ def _forced_robot_row(cost: np.ndarray, rows: np.ndarray, cols: np.ndarray, opt:
     rho = np.empty(m, dtype=np.intp)
     rho[sigma] = np.arange(m)
     by_col = square[rho]  # row j: the costs of the row now holding column j
-    w = by_col - by_col[np.arange(m), np.arange(m)][:, None]
+    # wt[j', j]: weight of the arc j -> j' (transposed so a round gathers rows)
+    wt = np.ascontiguousarray((by_col - by_col[np.arange(m), np.arange(m)][:, None]).T)
     target = sigma[0]
     dist = np.full(m, np.inf)
     dist[target] = 0.0
-    for _ in range(m):
-        new = np.minimum(dist, (w + dist[None, :]).min(axis=1))
-        new[target] = 0.0
-        if np.array_equal(new, dist):
+    changed = np.array([target])
+    for _ in range(m):  # a round relaxes only through the columns the last one improved
+        cand = (wt[changed] + dist[changed][:, None]).min(axis=0)
+        better = cand < dist - 1e-12
+        better[target] = False
+        if not better.any():
             break
-        dist = new
+        dist = np.where(better, cand, dist)
+        changed = np.flatnonzero(better)
     return opt - square[0, target] + dist[:n]
 
 
