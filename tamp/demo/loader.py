@@ -52,7 +52,7 @@ from tamp.world.geometry import Area, Point, Pose, Quaternion
 #: (pure-Python, about 0.5 ms per step) YAML parser reads it.
 MAX_STEPS = 20_000
 MAX_OBJECTS = 10_000
-MAX_BYTES = 4 * 1024 * 1024
+MAX_BYTES = 2 * 1024 * 1024  # about 100 bytes for each of MAX_STEPS steps
 
 _KEYS = {
     "version",
@@ -87,7 +87,7 @@ def load_demonstration(path: str | Path) -> Demonstration:
     if Path(source).is_file() and Path(source).stat().st_size > MAX_BYTES:
         raise InputError(
             f"larger than {MAX_BYTES // (1024 * 1024)} MiB, the size limit of a demonstration "
-            f"file ({MAX_STEPS} steps take about 1 MiB)",
+            f"file (about 100 bytes for each of at most {MAX_STEPS} steps)",
             file=str(path),
         )
     data, file = load_yaml(source, kind="demonstration")

@@ -15,14 +15,9 @@ from tamp.rg.costs import CostModel
 from tamp.rg.search import OrderProblem, astar
 from tamp.world import IsObjectAt, default_domain
 from tests.demo.generate import write_demo
+from tests.demo.test_demonstration import BASE
 
-HEAD = """version: 1
-frame: {robot_position: [0, 0, 0]}
-area_radius: 0.15
-objects:
-  - {id: A, position: [0, 0, 1]}
-  - {id: B, position: [0, 0, 2]}
-"""
+HEAD = BASE  # objects A at [0, 0, 1] and B at [0, 0, 2] (user frame)
 SWAP = HEAD + "steps:\n  - {object: A, to: [0, 0, 2]}\n  - {object: B, to: [0, 0, 1]}\n"
 FREE = "free_areas:\n  - {id: free1, position: [1, 0, 1.5]}\n"
 
