@@ -13,7 +13,8 @@ once, and when the tree fails grows it before returning (l. 8-10):
   action node. A failed alternative's priority in its PriorityFallback is multiplied by
   ``failure_decay``, so another achieving action may rank first on the next attempt.
 - Otherwise, or when growth is impossible (no template, unresolvable conflict, more than
-  ``max_expansions`` expansions, the same action started again from the same state after
+  ``max_expansions`` expansions (default `default_max_expansions`: it scales with the
+  goals), the same action started again from the same state after
   it had already succeeded from it ``max_repeats`` times — a livelock), the executor stops
   with FAILURE and ``reason`` says why. It never loops.
 
@@ -123,6 +124,15 @@ class ExecutorSnapshot:
         return copy.deepcopy(self.executor)
 
 
+def default_max_expansions(goals: int) -> int:
+    """The expansion cap that scales with the task: 20 per goal, at least 200.
+
+    A goal needs a handful of expansions (its condition, the action's preconditions, a
+    recovery or two); a fixed cap stopped feasible tasks of more than about 66 goals.
+    """
+    return max(200, 20 * goals)
+
+
 class PaBtExecutor(TreeGrowth):
     """Grows and ticks a behavior tree for C_goal against any `World` (Alg. 2)."""
 
@@ -133,7 +143,7 @@ class PaBtExecutor(TreeGrowth):
         *,
         free_areas: Iterable[str | Area] = (),
         priority: PriorityFn = success_rate_priority,
-        max_expansions: int = 200,
+        max_expansions: int | None = None,
         max_retries: int = 3,
         max_repeats: int = 2,
         max_fruitless: int = 50,
@@ -144,7 +154,9 @@ class PaBtExecutor(TreeGrowth):
             raise ValueError("C_goal is empty: nothing to execute")
         self.domain = domain or default_domain()
         self.priority = priority
-        self.max_expansions = max_expansions
+        self.max_expansions = (
+            max_expansions if max_expansions is not None else default_max_expansions(len(c_goal))
+        )
         self.max_retries = max_retries
         self.max_repeats = max_repeats
         self.max_fruitless = max_fruitless
@@ -271,7 +283,9 @@ class PaBtExecutor(TreeGrowth):
                 return self._stop(str(exc), world)
             if self.stats.expansions > self.max_expansions:
                 return self._stop(
-                    f"more than {self.max_expansions} expansions; the tree stops growing", world
+                    f"more than {self.max_expansions} expansions; the tree stops growing "
+                    "(the max_expansions cap: raise it with --max-expansions)",
+                    world,
                 )
             self._register_new_areas(world)
             return RUNNING

@@ -1,7 +1,12 @@
 """The ``--execute`` part of ``tamp plan``: argument definitions and the run function.
 
 ``tamp plan DEMO.yaml --execute [--appear OBJ@PLACE[@WHEN]] [--fail ACTION[(ARGS)][xTIMES]]
-[--skill-ticks N] [--max-ticks N] [--json] [--bt-xml out.xml] [--bt-dot out.dot]``
+[--skill-ticks N] [--max-ticks N] [--max-expansions N] [--json] [--bt-xml out.xml]
+[--bt-dot out.dot]``
+
+- ``--max-ticks`` and ``--max-expansions`` default to caps that scale with the number of
+  goals (`default_max_ticks`, `tamp.bt.executor.default_max_expansions`); a run stopped by
+  one says which cap and how to raise it.
 
 - The demonstration's own ``appear:`` entries happen (Case 3's O_a at l_1); ``--appear``
   adds objects or overrides an object's entry (`tamp.commands.events_args`).
@@ -33,11 +38,30 @@ def add_execute_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_event_arguments(g)
     g.add_argument("--skill-ticks", type=int, default=1, metavar="N", help="ticks per skill")
-    g.add_argument("--max-ticks", type=int, default=5000, metavar="N", help="tick budget")
+    g.add_argument(
+        "--max-ticks",
+        type=int,
+        default=None,
+        metavar="N",
+        help="tick budget (default: scales with the goals, see default_max_ticks)",
+    )
+    g.add_argument(
+        "--max-expansions",
+        type=int,
+        default=None,
+        metavar="N",
+        help="tree expansions before the executor gives up (default: 20 per goal, >= 200)",
+    )
     g.add_argument(
         "--bt-xml", metavar="PATH", help="write the grown tree as BehaviorTree.CPP v4 XML"
     )
     g.add_argument("--bt-dot", metavar="PATH", help="write the grown tree as Graphviz DOT")
+
+
+def default_max_ticks(goals: int, skill_ticks: int) -> int:
+    """The tick budget that scales with the task: at least 5,000, and 10 ticks per goal for
+    each tick a skill takes plus two (the tree's own ticks), so long tasks are not cut."""
+    return max(5000, 10 * goals * (max(skill_ticks, 0) + 2))
 
 
 def check_execute_arguments(args: argparse.Namespace) -> None:
@@ -66,8 +90,12 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any, *, 
             output_file(getattr(args, option), "--" + option.replace("_", "-"))
     if args.skill_ticks < 0:
         raise InputError("must be >= 0", field="--skill-ticks")
-    if args.max_ticks < 1:
+    if args.max_ticks is not None and args.max_ticks < 1:
         raise InputError("must be >= 1", field="--max-ticks")
+    if args.max_expansions is not None and args.max_expansions < 1:
+        raise InputError("must be >= 1", field="--max-expansions")
+    goals = len(plan_result.c_goal)
+    max_ticks = args.max_ticks or default_max_ticks(goals, args.skill_ticks)
     appear, fail = demo_events(args, demo)
     verified = None
     if verify:
@@ -84,8 +112,11 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any, *, 
         failures=fail,
         skill_ticks=args.skill_ticks,
         domain=domain,
-        max_ticks=args.max_ticks,
+        max_ticks=max_ticks,
+        max_expansions=args.max_expansions,
     )
+    if not report.reached and report.ticks >= max_ticks:
+        report.reason += f" (the --max-ticks cap, {max_ticks} here: raise it with --max-ticks)"
     if getattr(args, "bt_xml", None):
         from tamp.bt.export import write_btcpp_xml
 
@@ -101,6 +132,9 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any, *, 
         "appear": [str(a) for a in appear],
         "fail": [str(f) for f in fail],
         "verified": None if verified is None else verified.holds,
+        **(
+            {"buffers": [b.to_json() for b in demo.buffers]} if getattr(demo, "buffers", ()) else {}
+        ),
         **report.to_json(),
     }
     return report, doc, EXIT_OK if report.reached else EXIT_INFEASIBLE
@@ -114,6 +148,8 @@ def run_execute(args: argparse.Namespace, demo: Any, plan_result: Any, *, verify
     if getattr(args, "json", False):
         print_json(doc)
     else:
+        for b in getattr(demo, "buffers", ()):
+            print(f"buffer goal {b}")
         print(report.text())
     if code != EXIT_OK:
         print(f"tamp plan: goal not reached: {report.reason}", file=sys.stderr)

@@ -81,6 +81,10 @@ def _print_human(result) -> None:
     for g in d.goals:
         x, y, z = g.pos.as_tuple()
         print(f"  {g.id}: {g.object} -> ({x:.3f}, {y:.3f}, {z:.3f})  area {g.area.name}")
+    if d.buffers:
+        print("buffer goals (a swap with no room passes through a free area):")
+        for b in d.buffers:
+            print(f"  {b}")
     print("constraints:")
     for (a, b), why in sorted(d.constraint_reasons.items()):
         print(f"  {a} <= {b}   ({why})")

@@ -24,26 +24,29 @@ def make_demonstration(
     object_labels: dict[str, str] | None = None,
     appear: tuple[Appear, ...] = (),
 ) -> Demonstration:
-    """Goals ``G<k>`` for step k, constraints C derived (and checked) from the steps."""
+    """Goals ``G<k>`` for step k, constraints C derived (and checked) from the steps.
+
+    A swap with no room is broken through a free area when there is one (a buffer goal,
+    numbered after the steps; that free area is then a goal area, no longer free).
+    """
     labels = object_labels or {o: f"objects[{i}]" for i, o in enumerate(objects)}
-    constraints, reasons = derive_constraints(
-        objects, labels, steps, radius, explicit or [], source
+    derived = derive_constraints(
+        objects, labels, steps, radius, explicit or [], source, list(free_areas or [])
     )
-    goals = [
-        Goal(f"G{k}", obj, to, Area(f"L{k}", to, radius), k) for k, (obj, to) in enumerate(steps)
-    ]
+    goals = [Goal(s.gid, s.obj, s.area.pos, s.area, int(s.gid[1:])) for s in derived.steps]
     return Demonstration(
         objects=dict(objects),
         goals=goals,
-        constraints=constraints,
-        free_areas=list(free_areas or []),
+        constraints=derived.constraints,
+        free_areas=derived.free_left,
         robot_start=start or Pose(Point(0.0, 0.0, 0.0)),
         area_radius=radius,
         object_height=object_height,
         domain_file=domain_file,
         source=source,
-        constraint_reasons=reasons,
+        constraint_reasons=derived.reasons,
         appear=tuple(appear),
+        buffers=tuple(derived.buffers),
     )
 
 

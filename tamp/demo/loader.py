@@ -16,8 +16,9 @@ Format (positions of objects, steps and free areas are in the user's MR frame)::
       - {id: O0, position: [x, y, z]}
     steps:                           # the person's illustrated moves, in order
       - {object: O0, to: [x, y, z]}
-    free_areas:                      # optional places that do not affect the task
-      - {id: free1, position: [x, y, z]}
+    free_areas:                      # optional places that do not affect the task; one
+      - {id: free1, position: [x, y, z]}  # may become a buffer goal to break a swap with
+                                     # no room (`tamp.demo.constraints`)
     constraints: [[G0, G1]]          # optional explicit order specifications G_i <= G_j
     appear: ["Oa@L1"]                # optional: what happens during execution (SMP-MRO
                                      # Case 3), in the run vocabulary OBJ@PLACE[@WHEN] of
@@ -41,6 +42,17 @@ from tamp.fileio import Fields, check_vector, load_yaml
 from tamp.scenarios import resolve
 from tamp.world.events import Appear, check_events, parse_appear
 from tamp.world.geometry import Area, Point, Pose, Quaternion
+
+#: Size limits of a demonstration (exit 2 beyond them, before any geometry is computed).
+#: Deriving C and enumerating a chain are linear, but a search state holds a bitmask of
+#: the goals, so time and memory grow with steps × states: one object's chain of 20,000
+#: goals plans in a few seconds, 50,000 took 100 s and 0.5 GB (benchmarks/demo_scale.py),
+#: and no person demonstrates that many moves. Objects: the search's width grows with the
+#: objects that still have goals. The file size limit refuses a huge file before the
+#: (pure-Python, about 0.5 ms per step) YAML parser reads it.
+MAX_STEPS = 20_000
+MAX_OBJECTS = 10_000
+MAX_BYTES = 2 * 1024 * 1024  # about 100 bytes for each of MAX_STEPS steps
 
 _KEYS = {
     "version",
@@ -71,9 +83,20 @@ def _matrix(f: Fields, key: str, default, *, proper: bool) -> tuple[tuple[float,
 
 def load_demonstration(path: str | Path) -> Demonstration:
     """Read, validate and transform a demonstration; bad input raises `InputError`."""
-    data, file = load_yaml(resolve(path), kind="demonstration")
+    source = resolve(path)
+    if Path(source).is_file() and Path(source).stat().st_size > MAX_BYTES:
+        raise InputError(
+            f"larger than {MAX_BYTES // (1024 * 1024)} MiB, the size limit of a demonstration "
+            f"file (about 100 bytes for each of at most {MAX_STEPS} steps)",
+            file=str(path),
+        )
+    data, file = load_yaml(source, kind="demonstration")
     f = Fields(data, file)
     f.check_keys(_KEYS)
+    for key, limit in (("objects", MAX_OBJECTS), ("steps", MAX_STEPS)):
+        items = data.get(key)
+        if isinstance(items, list) and len(items) > limit:
+            raise f.error(key, f"{len(items)} entries: more than the limit of {limit}")
 
     fr = f.sub("frame")
     fr.check_keys({"robot_position", "rotation", "handedness"})
@@ -137,7 +160,9 @@ def load_demonstration(path: str | Path) -> Demonstration:
             )
         item.check_keys({"id", "position", "radius"})
         name = item.str("id")
-        if name in {a.name for a in free} or name in {f"L{k}" for k in range(len(steps))}:
+        if name in {a.name for a in free} or (
+            name[:1] == "L" and name[1:].isdigit() and int(name[1:]) < len(steps)
+        ):
             raise item.error("id", f"duplicate area name {name!r}")
         r = item.float("radius", radius, min=0.0, strict_min=True)
         free.append(Area(name, frame.to_robot(item.vector("position", 3)), r))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from tamp.demo.constraints import Buffer
 from tamp.world.events import Appear
 from tamp.world.geometry import Area, Point, Pose
 from tamp.world.state import ObjectState, WorldState
@@ -14,7 +15,9 @@ class Goal:
     """One illustrated step: object ``object`` must reach area ``area`` (centre ``pos``).
 
     ``step`` is the index of the step in the person's order; goal ids are ``G<step>`` and
-    their areas ``L<step>`` (the paper's L_i centred on G_i).
+    their areas ``L<step>`` (the paper's L_i centred on G_i). A buffer goal the robot adds
+    to break a swap with no room (`tamp.demo.constraints`) is numbered after the steps and
+    its area is the free area it uses; goals are listed in the order they happen.
     """
 
     id: str
@@ -41,8 +44,15 @@ class Demonstration:
     #: What happens during execution that the person did not show (SMP-MRO §V-D Case 3: an
     #: obstacle O_a appears at l_1); flags of the CLI override entries of the same object.
     appear: tuple[Appear, ...] = ()
+    #: Goals the robot adds to pass an object through a free area (a swap with no room).
+    buffers: tuple[Buffer, ...] = ()
 
     def goal(self, gid: str) -> Goal:
+        """The goal ``gid``: O(1) for the ``G<step>`` ids the demonstration gives its goals."""
+        if gid[:1] == "G" and gid[1:].isdigit() and int(gid[1:]) < len(self.goals):
+            g = self.goals[int(gid[1:])]
+            if g.id == gid:
+                return g
         for g in self.goals:
             if g.id == gid:
                 return g
@@ -55,6 +65,15 @@ class Demonstration:
     def goal_chain(self, obj: str) -> list[Goal]:
         """The goals of one object in demonstrated order (intent constraints chain them)."""
         return [g for g in self.goals if g.object == obj]
+
+    def pick_points(self) -> list[Point]:
+        """`pick_point` of every goal in demonstrated order, in one pass (O(goals))."""
+        where = dict(self.objects)
+        out = []
+        for g in self.goals:
+            out.append(where[g.object])
+            where[g.object] = g.pos
+        return out
 
     def pick_point(self, goal: Goal) -> Point:
         """Where the object of ``goal`` is just before it: its previous goal, or its P."""

@@ -5,13 +5,18 @@ every object is); an edge achieves one more goal whose predecessors in C are all
 (Alg. 1 line 10, "goal not in constraints"). Alg. 1 expands depth-first and never merges
 equal states, so it builds a tree with one node per constraint-respecting *prefix*; we merge
 them into a DAG and report both sizes.
+
+Cost: the enabled goals of a state are derived from its parent's (`GoalIndex.enabled_after`:
+only the successors of the goal just achieved can become enabled), so enumerating the RG
+costs O(edges · width) and never O(states · goals): one object's chain of 5,000 goals is a
+5,001-state path enumerated in linear time. Alg. 1's node count is a dynamic programme over
+the merged DAG (no recursion, so no depth limit).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass
-from functools import cache
 
 import networkx as nx
 
@@ -20,32 +25,77 @@ from tamp.demo.model import Demonstration
 
 @dataclass(frozen=True)
 class GoalIndex:
-    """Goals as bit positions, with the bitmask of their direct predecessors in C."""
+    """Goals as bit positions, with their direct predecessors and successors in C."""
 
     ids: tuple[str, ...]
-    preds: tuple[int, ...]
+    preds: tuple[tuple[int, ...], ...]
+    succs: tuple[tuple[int, ...], ...]
 
     @staticmethod
     def of(demo: Demonstration) -> GoalIndex:
         ids = tuple(demo.goal_ids)
         pos = {g: i for i, g in enumerate(ids)}
-        preds = [0] * len(ids)
-        for gi, gj in demo.constraints:
-            preds[pos[gj]] |= 1 << pos[gi]
-        return GoalIndex(ids, tuple(preds))
+        preds: list[list[int]] = [[] for _ in ids]
+        succs: list[list[int]] = [[] for _ in ids]
+        for gi, gj in sorted(demo.constraints):
+            preds[pos[gj]].append(pos[gi])
+            succs[pos[gi]].append(pos[gj])
+        return GoalIndex(
+            ids, tuple(tuple(sorted(p)) for p in preds), tuple(tuple(sorted(s)) for s in succs)
+        )
 
     @property
     def full(self) -> int:
         return (1 << len(self.ids)) - 1
 
+    def ready(self, mask: int, g: int) -> bool:
+        """Goal ``g`` is not achieved in ``mask`` and all its predecessors are."""
+        return not mask >> g & 1 and all(mask >> p & 1 for p in self.preds[g])
+
     def enabled(self, mask: int) -> Iterator[int]:
         """Goals not yet achieved whose predecessors are all achieved in ``mask``."""
-        for i, p in enumerate(self.preds):
-            if not mask >> i & 1 and p & mask == p:
+        for i in range(len(self.ids)):
+            if self.ready(mask, i):
                 yield i
 
+    def initial(self) -> tuple[int, ...]:
+        """The goals enabled before any is achieved (those without predecessors)."""
+        return tuple(i for i, p in enumerate(self.preds) if not p)
+
+    def enabled_after(self, enabled: tuple[int, ...], mask: int, g: int) -> tuple[int, ...]:
+        """``enabled(mask | 1 << g)`` from ``enabled == enabled(mask)``, ascending.
+
+        Only a successor of ``g`` can become enabled by achieving ``g``: O(width + out(g)).
+        """
+        child = mask | 1 << g
+        new = [j for j in self.succs[g] if self.ready(child, j)]
+        rest = [i for i in enabled if i != g]
+        return tuple(sorted(rest + new)) if new else tuple(rest)
+
+    def acyclic(self) -> bool:
+        """True when C has an order at all (Kahn's algorithm, O(goals + constraints))."""
+        missing = [len(p) for p in self.preds]
+        ready = [i for i, n in enumerate(missing) if n == 0]
+        seen = 0
+        while ready:
+            i = ready.pop()
+            seen += 1
+            for j in self.succs[i]:
+                missing[j] -= 1
+                if missing[j] == 0:
+                    ready.append(j)
+        return seen == len(self.ids)
+
     def names(self, mask: int) -> frozenset[str]:
-        return frozenset(g for i, g in enumerate(self.ids) if mask >> i & 1)
+        return frozenset(self.ids[i] for i in _bits(mask))
+
+
+def _bits(mask: int) -> Iterator[int]:
+    """Positions of the set bits of ``mask``, ascending (O(set bits · words))."""
+    while mask:
+        low = mask & -mask
+        yield low.bit_length() - 1
+        mask ^= low
 
 
 @dataclass(frozen=True)
@@ -62,43 +112,50 @@ class RGTooLarge(RuntimeError):
     """Raised when enumerating the RG would exceed the requested limit."""
 
 
-def _masks(index: GoalIndex, limit: int) -> tuple[list[int], list[tuple[int, int, int]]]:
-    seen = {0}
+def _masks(index: GoalIndex, limit: float) -> tuple[list[int], list[tuple[int, int, int]]]:
+    """States (breadth-first) and edges ``(state, child, goal)`` of the merged RG; an edge
+    names its states by their positions in the state list.
+
+    Every subset of the goals without predecessors is a state, so 2^|those| > ``limit``
+    proves the RG too large before enumerating anything.
+    """
+    initial = index.initial()
+    if 2 ** len(initial) > limit:
+        raise RGTooLarge(f"the RG has more than {limit} states")
+    seen = {0: 0}
     order = [0]
     edges = []
-    frontier = [0]
+    frontier = {0: initial}
     while frontier:
-        nxt = []
-        for m in frontier:
-            for g in index.enabled(m):
+        nxt: dict[int, tuple[int, ...]] = {}
+        for m, enabled in frontier.items():
+            at = seen[m]
+            for g in enabled:
                 child = m | 1 << g
-                edges.append((m, child, g))
-                if child not in seen:
+                to = seen.get(child)
+                if to is None:
                     if len(seen) >= limit:
                         raise RGTooLarge(f"the RG has more than {limit} states")
-                    seen.add(child)
+                    to = seen[child] = len(order)
                     order.append(child)
-                    nxt.append(child)
+                    nxt[child] = index.enabled_after(enabled, m, g)
+                edges.append((at, to, g))
         frontier = nxt
     return order, edges
 
 
+def _alg1_count(order: list[int], edges: list[tuple[int, int, int]]) -> int:
+    """Alg. 1's tree nodes: count(S) = 1 + Σ count(child), over the DAG in reverse BFS order."""
+    count = [1] * len(order)
+    for at, to, _ in reversed(edges):  # edges leave states in BFS order: children first
+        count[at] += count[to]
+    return count[0]
+
+
 def alg1_node_count(index: GoalIndex) -> int:
     """Nodes Alg. 1 generates without merging: one per constraint-respecting prefix."""
-
-    @cache
-    def count(mask: int) -> int:
-        return 1 + sum(count(mask | 1 << g) for g in index.enabled(mask))
-
-    # Deep recursion only on very long goal lists; the cache keeps the work to #states.
-    import sys
-
-    old = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(old, 10 * len(index.ids) + 100))
-    try:
-        return count(0)
-    finally:
-        sys.setrecursionlimit(old)
+    order, edges = _masks(index, float("inf"))
+    return _alg1_count(order, edges)
 
 
 class ReachabilityGraph:
@@ -132,7 +189,7 @@ class ReachabilityGraph:
                 self._stats = RGStats(None, None, -1, False)
             else:
                 self._stats = RGStats(
-                    len(self._masks), len(self._edges), alg1_node_count(self.index), True
+                    len(self._masks), len(self._edges), _alg1_count(self._masks, self._edges), True
                 )
         return self._stats
 
@@ -154,8 +211,9 @@ class ReachabilityGraph:
                 if goal.id in achieved:
                     places[goal.object] = goal.id
             g.add_node(achieved, places=places, mask=m)
-        for m, child, gi in self._edges:
-            g.add_edge(index.names(m), index.names(child), goal=index.ids[gi])
+        masks = self._masks
+        for at, to, gi in self._edges:
+            g.add_edge(index.names(masks[at]), index.names(masks[to]), goal=index.ids[gi])
         return g
 
 

@@ -38,9 +38,8 @@ class PlanResult:
     @property
     def c_goal(self) -> list[IsObjectAt]:
         """The order as the BT layer's goal conditions (Alg. 2 input C_goal)."""
-        return [
-            IsObjectAt(self.demo.goal(g).object, self.demo.goal(g).area.name) for g in self.order
-        ]
+        goals = {g.id: g for g in self.demo.goals}
+        return [IsObjectAt(goals[g].object, goals[g].area.name) for g in self.order]
 
     def to_json(self) -> dict:
         d = self.demo
@@ -69,6 +68,7 @@ class PlanResult:
             "cost": round(self.cost, 9),
             "cost_model": self.cost_model,
             "search": {"expanded": self.expanded, "generated": self.generated},
+            **({"buffers": [b.to_json() for b in d.buffers]} if d.buffers else {}),
         }
 
 

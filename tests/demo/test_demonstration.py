@@ -80,12 +80,6 @@ objects:
         ("steps:\n  - {object: C, to: [0, 0, 3]}\n", "steps[0].object", "unknown object"),
         ("steps:\n  - {object: A, to: [0, 0, 2]}\n", "steps[0]", "never leaves"),
         (
-            "steps:\n  - {object: A, to: [0, 0, 3]}\n  - {object: B, to: [0, 0, 3]}\n"
-            "  - {object: A, to: [0, 0, 4]}\n",
-            "steps[1]",
-            "same stage",
-        ),
-        (
             "steps:\n  - {object: A, to: [0, 0, 3]}\n  - {object: B, to: [0, 0, 4]}\n"
             "constraints: [[G0, G1], [G1, G0]]\n",
             "constraints",

@@ -323,3 +323,37 @@ def test_bt_appearance_after_an_action_is_explored() -> None:
     steps = r.counterexample.steps
     k = next(i for i, s in enumerate(steps) if "Pick(O1) -> SUCCESS" in s)
     assert "Oa appears at (2.2, 0.8)" in steps[k]
+
+
+def test_order_scan_agrees_with_the_automata() -> None:
+    """Above MAX_CONJUNCTS_FOR_WHOLE conjuncts the order is decided by one scan: the same
+    verdict, violated conjuncts and bad-prefix end as checking every conjunct's automaton."""
+    import random
+
+    from tamp.demo import cyclic_swap
+    from verification.traces import check_trace
+    from verification.words import Word
+
+    demo = cyclic_swap(3)  # 6 goals, 6 constraints: 12 conjuncts
+    ids = demo.goal_ids
+    f = constraint_formula(ids, demo.constraints)
+    rng = random.Random(7)
+    seen_bad = 0
+    for _ in range(60):
+        order = rng.sample(ids, rng.randint(0, len(ids)))
+        fast = check_order(demo, order)
+        slow = check_trace(f, order_word(order), finite=False)
+        assert fast.holds == slow.holds == _respects_all(order, ids, demo.constraints), order
+        assert fast.states_explored == len(order) + 2
+        if fast.holds:
+            continue
+        seen_bad += 1
+        a, b = fast.counterexample, slow.counterexample
+        assert sorted(a.violated) == sorted(b.violated)
+        assert a.position == b.position
+        assert isinstance(a.accepting_word, Word) and a.steps[0] == "start"
+    assert seen_bad > 30
+
+
+def _respects_all(order, ids, constraints) -> bool:
+    return len(order) == len(ids) and _respects(order, constraints)

@@ -1,0 +1,48 @@
+"""Generated demonstrations of any size, for the scale tests and `benchmarks/demo_scale.py`.
+
+``multi``: n steps over max(1, n // 3) objects standing in a row (0.4 m apart), each moved
+up its own column in turn (independent goal chains). ``one``: n steps of one object along a
+grid of places 0.4 m apart (one chain). Area radius 0.15 m, so no two areas overlap.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import yaml
+
+
+def demo_document(n: int, kind: str = "multi") -> dict:
+    """The YAML document (user frame, robot 1 m behind the origin) of an n-step demo."""
+    objects, steps = [], []
+    if kind == "one":
+        objects = [{"id": "O0", "position": [0.0, 0.0, 0.0]}]
+        for k in range(n):
+            steps.append(
+                {
+                    "object": "O0",
+                    "to": [round(0.5 + (k % 50) * 0.4, 3), 0, round(1 + (k // 50) * 0.4, 3)],
+                }
+            )
+    elif kind == "multi":
+        m = max(1, n // 3)
+        objects = [{"id": f"O{i}", "position": [round(i * 0.4, 3), 0, 0]} for i in range(m)]
+        for k in range(n):
+            i, r = k % m, k // m
+            steps.append({"object": f"O{i}", "to": [round(i * 0.4, 3), 0, round(1 + r * 0.4, 3)]})
+    else:
+        raise ValueError(f"unknown kind {kind!r} (multi, one)")
+    return {
+        "version": 1,
+        "frame": {"robot_position": [0, 0, -1]},
+        "area_radius": 0.15,
+        "objects": objects,
+        "steps": steps,
+    }
+
+
+def write_demo(path: str | Path, n: int, kind: str = "multi") -> Path:
+    """Write the n-step demonstration of ``kind`` to ``path``."""
+    p = Path(path)
+    p.write_text(yaml.safe_dump(demo_document(n, kind)))
+    return p
