@@ -195,21 +195,26 @@ class PortWorld:
         self._s.extra_areas[area.name] = area
 
 
-class BtExecutor(LeafSystem):
-    """Ticks the behavior tree at a fixed period; outputs the `SkillCommand`."""
+class ControllerSystem(LeafSystem):
+    """A tick-based controller in the diagram (BT executor, LOTS controller).
 
-    def __init__(self, policy: Policy, *, period: float):
+    Ports: the subclass's observation input, ``skill_status`` in, ``skill_command`` out.
+    The controller's state lives in the Context (abstract state, holding ``command``,
+    ``result``, ``finished_at`` and ``ticks``); a periodic unrestricted update calls
+    `_tick` on Drake's copy of it until the controller stops, and the output is computed
+    from that state only.
+    """
+
+    def __init__(self, name: str, observation: tuple[str, Any], initial: Any, *, period: float):
         super().__init__()
-        self.set_name("bt_executor")
-        self.world_state_port = self.DeclareAbstractInputPort(
-            "world_state", AbstractValue.Make(WorldState(robot=Pose(Point(0.0, 0.0))))
+        self.set_name(name)
+        self.observation_port = self.DeclareAbstractInputPort(
+            observation[0], AbstractValue.Make(observation[1])
         )
         self.skill_status_port = self.DeclareAbstractInputPort(
             "skill_status", AbstractValue.Make(SkillStatus())
         )
-        blob = pickle.dumps(policy, protocol=pickle.HIGHEST_PROTOCOL)
-        self._live: tuple[bytes, Any] = (blob, policy)
-        self._state = self.DeclareAbstractState(AbstractValue.Make(ExecutorState(blob)))
+        self._state = self.DeclareAbstractState(AbstractValue.Make(initial))
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
         self.command_port = self.DeclareAbstractOutputPort(
             "skill_command",
@@ -218,35 +223,60 @@ class BtExecutor(LeafSystem):
             prerequisites_of_calc={self.abstract_state_ticket(self._state)},
         )
 
-    def state(self, context) -> ExecutorState:
-        """The executor state in this system's ``context`` (tree, log, result)."""
+    def state(self, context) -> Any:
+        """The controller state in this system's ``context``."""
         return context.get_abstract_state(self._state).get_value()
-
-    def policy(self, context) -> Any:
-        """The tree as it is in ``context`` (a live object; do not tick it)."""
-        blob = self.state(context).policy_blob
-        return self._live[1] if self._live[0] is blob else pickle.loads(blob)
 
     def _calc_command(self, context, output) -> None:
         output.set_value(self.state(context).command)
 
+    def _tick(self, context, s: Any, world: PortWorld) -> Status:
+        """One tick of the controller held in ``s`` against ``world`` (subclasses)."""
+        raise NotImplementedError
+
+    def _observe(self, context) -> WorldState:
+        """The `WorldState` the controller observes this tick (subclasses may convert)."""
+        return self.observation_port.Eval(context)
+
     def _update(self, context, state) -> EventStatus:
         # ``state`` holds Drake's own (deep) copy of the context's state: change it in place
-        s: ExecutorState = state.get_mutable_abstract_state(self._state).get_value()
+        s = state.get_mutable_abstract_state(self._state).get_value()
         if s.result is not None:
             return EventStatus.DidNothing()
         t = context.get_time()
-        world = PortWorld(
-            s, self.world_state_port.Eval(context), self.skill_status_port.Eval(context), t
-        )
-        blob = s.policy_blob
-        policy = self._live[1] if self._live[0] is blob else pickle.loads(blob)
-        status = policy.tick(world)
-        s.policy_blob = pickle.dumps(policy, protocol=pickle.HIGHEST_PROTOCOL)
-        self._live = (s.policy_blob, policy)
+        world = PortWorld(s, self._observe(context), self.skill_status_port.Eval(context), t)
+        status = self._tick(context, s, world)
         s.ticks += 1
         if status is not Status.RUNNING:
             s.result = status
             s.finished_at = t
         state.get_mutable_abstract_state(self._state).set_value(s)
         return EventStatus.Succeeded()
+
+
+class BtExecutor(ControllerSystem):
+    """Ticks the behavior tree at a fixed period; outputs the `SkillCommand`."""
+
+    def __init__(self, policy: Policy, *, period: float):
+        blob = pickle.dumps(policy, protocol=pickle.HIGHEST_PROTOCOL)
+        self._live: tuple[bytes, Any] = (blob, policy)
+        super().__init__(
+            "bt_executor",
+            ("world_state", WorldState(robot=Pose(Point(0.0, 0.0)))),
+            ExecutorState(blob),
+            period=period,
+        )
+        self.world_state_port = self.observation_port
+
+    def policy(self, context) -> Any:
+        """The tree as it is in ``context`` (a live object; do not tick it)."""
+        blob = self.state(context).policy_blob
+        return self._live[1] if self._live[0] is blob else pickle.loads(blob)
+
+    def _tick(self, context, s: ExecutorState, world: PortWorld) -> Status:
+        blob = s.policy_blob
+        policy = self._live[1] if self._live[0] is blob else pickle.loads(blob)
+        status = policy.tick(world)
+        s.policy_blob = pickle.dumps(policy, protocol=pickle.HIGHEST_PROTOCOL)
+        self._live = (s.policy_blob, policy)
+        return status

@@ -27,13 +27,10 @@ from __future__ import annotations
 import copy
 from dataclasses import dataclass, field
 
-from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import EventStatus, LeafSystem
-
 from tamp.lots.cell import SIDES, initial_state, view_state
 from tamp.lots.controller import LotsController
-from tamp.sim.core.executor import ActionLog, PortWorld
-from tamp.sim.core.messages import SkillCommand, SkillStatus
+from tamp.sim.core.executor import ActionLog, ControllerSystem, PortWorld
+from tamp.sim.core.messages import SkillCommand
 from tamp.sim.lots.perception import Observation
 from tamp.world.actions import Action
 from tamp.world.interface import Status
@@ -85,46 +82,22 @@ def observed_state(obs: Observation) -> WorldState:
     return view_state(obs.side, dict(obs.counts))
 
 
-class LotsControllerSystem(LeafSystem):
+class LotsControllerSystem(ControllerSystem):
     """Ticks a `LotsController` every ``period`` seconds; outputs its `SkillCommand`."""
 
     def __init__(self, controller: LotsController, *, period: float = PERIOD):
-        super().__init__()
-        self.set_name("lots_controller")
-        self.observation_port = self.DeclareAbstractInputPort(
-            "observation", AbstractValue.Make(Observation())
-        )
-        self.skill_status_port = self.DeclareAbstractInputPort(
-            "skill_status", AbstractValue.Make(SkillStatus())
-        )
-        init = ControllerState(controller.snapshot())
-        self._state = self.DeclareAbstractState(AbstractValue.Make(init))
-        self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
-        self.command_port = self.DeclareAbstractOutputPort(
-            "skill_command",
-            lambda: AbstractValue.Make(SkillCommand()),
-            self._calc_command,
-            prerequisites_of_calc={self.abstract_state_ticket(self._state)},
+        super().__init__(
+            "lots_controller",
+            ("observation", Observation()),
+            ControllerState(controller.snapshot()),
+            period=period,
         )
 
-    def state(self, context) -> ControllerState:
-        """The controller state in this system's ``context`` (controller, log, result)."""
-        return context.get_abstract_state(self._state).get_value()
+    def _observe(self, context) -> WorldState:
+        return observed_state(self.observation_port.Eval(context))
 
-    def _calc_command(self, context, output) -> None:
-        output.set_value(self.state(context).command)
-
-    def _update(self, context, state) -> EventStatus:
-        # ``state`` is Drake's own copy of the context's state: change it in place
-        s: ControllerState = state.get_mutable_abstract_state(self._state).get_value()
-        if s.result is not None:
-            return EventStatus.DidNothing()
-        t = context.get_time()
-        obs = self.observation_port.Eval(context)
-        world = PortWorld(s, observed_state(obs), self.skill_status_port.Eval(context), t)
+    def _tick(self, context, s: ControllerState, world: PortWorld) -> Status:
         status = s.controller.tick(world)
-        s.ticks += 1
         if status is not Status.RUNNING:
-            s.result, s.reason, s.finished_at = status, s.controller.reason, t
-        state.get_mutable_abstract_state(self._state).set_value(s)
-        return EventStatus.Succeeded()
+            s.reason = s.controller.reason
+        return status
