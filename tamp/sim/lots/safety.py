@@ -61,15 +61,15 @@ EE_BODIES = (ARM.hand_body, *ARM.finger_bodies)
 
 @dataclass(frozen=True)
 class SafetyStop:
-    """One stop: when it began (sim s), why, how long it lasted (None: still stopped)."""
+    """One stop: when it began (sim s), why, and how long the arm was held (s)."""
 
     time: float
     cause: str
     detail: str = ""
-    duration: float | None = None
+    duration: float = 0.0
 
     def to_json(self) -> dict[str, Any]:
-        d = None if self.duration is None else round(self.duration, 3)
+        d = round(self.duration, 3)
         return {
             "time": round(self.time, 3),
             "cause": self.cause,
