@@ -94,6 +94,23 @@ def camera_config(scenario: CellScenario) -> CameraConfig:
     )
 
 
+def add_wrist_camera(builder, plant, scene_graph, arm, config: CameraConfig):
+    """A plain `RgbdSensor` (no zero-order hold: it renders only when a port is evaluated)
+    at the arm's ``camera`` frame, configured by ``config``; (sensor, (fx, fy, cx, cy))."""
+    color_cam, depth_cam = config.MakeCameras()
+    hand = plant.GetBodyByName(ARM.hand_body, arm)
+    X_HC = plant.GetFrameByName(ARM.camera_frame, arm).GetFixedPoseInBodyFrame()
+    camera = builder.AddSystem(
+        RgbdSensor(
+            plant.GetBodyFrameIdOrThrow(hand.index()), RigidTransform(X_HC), color_cam, depth_cam
+        )
+    )
+    camera.set_name("wrist_camera")
+    builder.Connect(scene_graph.get_query_output_port(), camera.query_object_input_port())
+    K = color_cam.core().intrinsics()
+    return camera, (K.focal_x(), K.focal_y(), K.center_x(), K.center_y())
+
+
 def build_diagram(
     scenario: CellScenario, *, meshcat: Any = None, hand_labels=frozenset({HAND_LABEL})
 ) -> LotsCell:
@@ -105,19 +122,7 @@ def build_diagram(
     scene_graph.AddRenderer(RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL")))
 
     config = camera_config(scenario)
-    color_cam, depth_cam = config.MakeCameras()
-    hand = plant.GetBodyByName(ARM.hand_body, cell.arm)
-    X_HC = plant.GetFrameByName(ARM.camera_frame, cell.arm).GetFixedPoseInBodyFrame()
-    camera = builder.AddSystem(
-        RgbdSensor(
-            plant.GetBodyFrameIdOrThrow(hand.index()), RigidTransform(X_HC), color_cam, depth_cam
-        )
-    )
-    camera.set_name("wrist_camera")
-    builder.Connect(scene_graph.get_query_output_port(), camera.query_object_input_port())
-
-    K = color_cam.core().intrinsics()
-    intrinsics = (K.focal_x(), K.focal_y(), K.center_x(), K.center_y())
+    camera, intrinsics = add_wrist_camera(builder, plant, scene_graph, cell.arm, config)
     labels = {int(body.index()): cell.classes[uid] for uid, body in cell.bodies.items()}
     perception = builder.AddSystem(
         Perception(

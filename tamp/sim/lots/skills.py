@@ -201,9 +201,12 @@ class SkillController(LeafSystem):
             self._finish(s, t, Status.FAILURE, "cancelled")
         held = self.hold_port.HasValue(context) and self.hold_port.Eval(context)[0] > 0.5
         if held and s.steps and s.status.status is Status.RUNNING:
-            # stopped by the safety monitor: the step's clock stands still, the targets follow
-            # the held arm, and a move resumes from rest (within the acceleration limits)
-            if s.step_t0 is not None:
+            # stopped by the safety monitor: the targets follow the held arm; a move starts
+            # afresh from rest where the arm stands when it resumes (a new minimum-jerk
+            # profile), any other step's clock stands still
+            if s.steps[0].kind == "move":
+                s.step_t0, s.move_from = None, None
+            elif s.step_t0 is not None:
                 s.step_t0 += self.dt
             s.q, s.v = np.array(q_meas[:7], float), np.zeros(7)
         elif s.steps and s.status.status is Status.RUNNING:

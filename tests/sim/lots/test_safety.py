@@ -181,3 +181,28 @@ def test_measured_speed_breach_stops():
     v[4] = 2.8  # joint 5: 2.61 rad/s
     s, _ = _stream_and_monitor(0.001, Q9, v_meas=v)
     assert s.stop.cause == "speed_limit" and "measured joint5" in s.stop.detail
+
+
+def test_scenario_safety_section_defaults_and_errors(tmp_path):
+    from tamp.errors import InputError
+    from tamp.sim.lots.scenario import load_cell_scenario
+    from tests.sim.lots.helpers import BASE, write_scenario
+
+    s = load_cell_scenario(write_scenario(tmp_path, []))
+    assert s.safety == SafetySettings() and s.control.command_period == 0.001
+    assert (s.safety.hand_distance, s.safety.min_command_rate) == (0.05, 1000.0)
+    s = load_cell_scenario(write_scenario(tmp_path, [], safety={"hand_distance": 0.08}))
+    assert s.safety.hand_distance == 0.08
+    bad = [
+        ({"safety": {"hand_distanse": 0.05}}, "safety.hand_distanse"),
+        ({"safety": {"hand_distance": 0}}, "safety.hand_distance"),
+        ({"safety": {"min_command_rate": "fast"}}, "safety.min_command_rate"),
+        ({"safety": {"image_period": 0.001}}, "safety.image_period"),  # below perception's
+        ({"safety": {"enabled": "yes"}}, "safety.enabled"),
+        ({"control": {**BASE["control"], "command_period": 0.05}}, "control.command_period"),
+    ]
+    for changes, field in bad:
+        with pytest.raises(InputError) as err:
+            load_cell_scenario(write_scenario(tmp_path, [], **changes))
+        assert err.value.field == field, changes
+        assert "cell.yaml" in str(err.value.file)
