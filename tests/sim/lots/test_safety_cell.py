@@ -98,3 +98,19 @@ def test_a_slow_command_stream_is_an_emergency_stop(tmp_path):
     assert s.command_rate == pytest.approx(500.0)
     assert abs(_tcp_z(d) - z0) < 1e-3
     assert np.isfinite(s.min_rate)
+
+
+def test_the_monitor_renders_nothing_of_its_own_without_a_hand(tmp_path):
+    """It reads perception's frames in the same update (the sensor's cache: no second render)
+    and renders nothing else while no hand is in view and no person is present."""
+    cell = build_diagram(load_cell_scenario(write_scenario(tmp_path, BLOCK)))
+    d = CellDriver(cell)
+    assert d.run("LookAt(A)").status is Status.SUCCESS
+    assert d.run("LookAt(B)").status is Status.SUCCESS
+    s = _safety(d)
+    assert d.stats().frames == 2 and s.frames == 0 and s.shared == 2
+    looks = cell.safety.looks
+    assert [own for _, own, _ in looks] == [False, False]
+    assert max(seconds for _, _, seconds in looks) < 2e-3  # a render costs >= 10 ms
+    assert s.stops == () and s.stop is None
+    assert s.command_rate == pytest.approx(1000.0) and s.min_rate == pytest.approx(1000.0)
