@@ -50,9 +50,11 @@ from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.perception import Observation, ViewRequest
 from tamp.sim.lots.scenario import SafetySettings
 
-#: The render label of a person's hand (a Drake `RenderLabel` value outside the plant's body
-#: indices and below Drake's reserved labels). The person's hand geometry carries it.
-HAND_LABEL = 32000
+#: The render label of a person's hand: its perception geometry carries
+#: ``RenderLabel(HAND_LABEL)``; objects' pixels carry their body index, always far below.
+#: The same value as the scripted person's (``catalogue.HAND_LABEL`` on the lots-person
+#: branch); one of the two goes when both are merged.
+HAND_LABEL = 1000
 CAUSES = ("hand_near", "speed_limit", "accel_limit", "command_rate")
 #: slack on the joint limits for the diff-IK QP's solver tolerance
 LIMIT_SLACK = 1.01
