@@ -264,11 +264,18 @@ def _safety(s: Fields, control: ControlSettings) -> SafetySettings:
     s.check_keys(
         {"enabled", "hand_distance", "min_command_rate", "check_period", "image_period", "recovery"}
     )
+    check = s.float("check_period", 0.01, min=control.command_period, max=0.1)
+    ticks = control.perception_period / check
+    if abs(ticks - round(ticks)) > 1e-6:  # the monitor reads perception's frames at its ticks
+        raise s.error(
+            "check_period",
+            f"must divide control.perception_period ({control.perception_period:g} s)",
+        )
     return SafetySettings(
         enabled=s.bool("enabled", True),
         hand_distance=s.float("hand_distance", 0.05, min=0.0, max=0.5, strict_min=True),
         min_command_rate=s.float("min_command_rate", 1000.0, min=0.0, max=1e5),
-        check_period=s.float("check_period", 0.01, min=control.command_period, max=0.1),
+        check_period=check,
         image_period=s.float("image_period", 0.1, min=control.perception_period, max=2.0),
         recovery=s.float("recovery", 1.0, min=0.0, max=60.0),
     )

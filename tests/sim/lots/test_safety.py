@@ -199,6 +199,7 @@ def test_scenario_safety_section_defaults_and_errors(tmp_path):
         ({"safety": {"min_command_rate": "fast"}}, "safety.min_command_rate"),
         ({"safety": {"image_period": 0.001}}, "safety.image_period"),  # below perception's
         ({"safety": {"enabled": "yes"}}, "safety.enabled"),
+        ({"safety": {"check_period": 0.015}}, "safety.check_period"),  # 0.02 / 0.015
         ({"control": {**BASE["control"], "command_period": 0.05}}, "control.command_period"),
     ]
     for changes, field in bad:
