@@ -332,9 +332,10 @@ class SafetyMonitor(LeafSystem):
             {ticket, self.command_port.ticket()},
         )
         self.stopped_port = self.DeclareVectorOutputPort("stopped", 1, self._calc_stopped, {ticket})
-        #: (sim time, own render?, wall seconds of reading label + depth) of every look: a
+        #: (sim time, own render?, CPU seconds of reading label + depth) of every look: a
         #: shared look finds perception's images in the sensor's cache and costs no render
-        #: (measurement only; not simulation state)
+        #: (measurement only, not simulation state; CPU time, so that other jobs on the
+        #: machine do not count)
         self.looks: list[tuple[float, bool, float]] = []
 
     def state(self, context) -> SafetyState:
@@ -402,10 +403,10 @@ class SafetyMonitor(LeafSystem):
             return s, False
         if not (perception_renders or own):
             return s, False
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         label = self.label_port.Eval(context).data[..., 0]
         depth = self.depth_port.Eval(context).data[..., 0]
-        self.looks.append((t, own, time.perf_counter() - t0))
+        self.looks.append((t, own, time.process_time() - t0))
         self.gripper.set(q_meas)
         points, too_close = hand_points(
             label, depth, self.hand_labels, self.intrinsics, self.gripper.camera_pose()

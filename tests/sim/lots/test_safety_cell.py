@@ -111,6 +111,6 @@ def test_the_monitor_renders_nothing_of_its_own_without_a_hand(tmp_path):
     assert d.stats().frames == 2 and s.frames == 0 and s.shared == 2
     looks = cell.safety.looks
     assert [own for _, own, _ in looks] == [False, False]
-    assert max(seconds for _, _, seconds in looks) < 2e-3  # a render costs >= 10 ms
+    assert max(cpu for _, _, cpu in looks) < 3e-3  # label + depth renders cost 6-8 ms of CPU
     assert s.stops == () and s.stop is None
     assert s.command_rate == pytest.approx(1000.0) and s.min_rate == pytest.approx(1000.0)
