@@ -106,9 +106,9 @@ class SafetyState:
         """Finished stops and the one in force (its duration up to ``now``)."""
         out = list(self.stops)
         if self.stop is not None:
-            out.append(
-                SafetyStop(self.stop.time, self.stop.cause, self.stop.detail, now - self.stop.time)
-            )
+            stop = self.stop
+            detail = f"{stop.detail}; still stopped at the end"
+            out.append(SafetyStop(stop.time, stop.cause, detail, now - stop.time))
         return out
 
 

@@ -122,6 +122,9 @@ def test_emergency_stops_last_the_recovery_time_and_until_cleared():
     s = next_stop(s, 3.5, SETTINGS, Checks(1000.0), False, HOLD)
     assert [x.cause for x in s.stops] == ["command_rate", "accel_limit"]
     assert s.all_stops(4.0)[-1].duration == pytest.approx(0.5)
+    s = next_stop(s, 4.0, SETTINGS, Checks(10.0), False, HOLD)
+    assert s.all_stops(4.25)[-1].duration == pytest.approx(0.25)
+    assert s.all_stops(4.25)[-1].detail == "10 Hz; still stopped at the end"
 
 
 def _stream_and_monitor(command_period: float, target: np.ndarray, v_meas=None):
