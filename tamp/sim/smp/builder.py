@@ -12,9 +12,12 @@ are driven by the plant's PD-controlled actuators (`PdControllerGains`, implicit
 tracking the controller's desired state; gravity is switched off for the robot only
 (ideal gravity compensation, as the real youBot's controllers provide), objects fall.
 
-Grasps are weld constraints: two per graspable object (`tamp.sim.smp.ik.grasp_transform`),
-added before `Finalize`, all inactive at the start. They are switched between simulation
-steps by `SimRunner` (see `tamp.sim.smp.runner`), never inside an event.
+Grasps (``grasp:`` of the scenario). ``weld``: weld constraints, two per graspable object
+(`tamp.sim.smp.ik.grasp_transform`), added before `Finalize`, all inactive at the start,
+switched between simulation steps by `SimRunner` (see `tamp.sim.smp.runner`), never inside
+an event. ``friction``: no weld at all; the fingers squeeze the object (their PD force) and
+friction holds it, so a poor grasp slips. A run's drawn friction coefficient
+(`RunConditions.friction`) replaces the objects' SDF coefficients.
 """
 
 from __future__ import annotations
@@ -72,6 +75,13 @@ def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
     return text
 
 
+def with_friction(sdf: str, mu: float) -> str:
+    """An object's SDF with every Coulomb coefficient (static and dynamic) set to ``mu``."""
+    for tag in ("drake:mu_dynamic", "drake:mu_static"):
+        sdf = re.sub(rf"<{tag}>[^<]*</{tag}>", f"<{tag}>{mu:.6f}</{tag}>", sdf)
+    return sdf
+
+
 def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None) -> SimSystem:
     """The named Diagram of ``scenario`` with ``policy`` (the grown BT) in the BtExecutor."""
     builder = DiagramBuilder()
@@ -114,6 +124,8 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
     for i, obj in enumerate(scenario.objects):
         text = sdf_path(obj.kind.name).read_text()
         text = text.replace(f'<model name="{obj.kind.name}">', f'<model name="{obj.id}">')
+        if scenario.conditions.friction is not None:  # the run's drawn coefficient
+            text = with_friction(text, scenario.conditions.friction)
         (m,) = parser.AddModelsFromString(text, "sdf")
         body = plant.GetBodyByName(obj.kind.body, m)
         if obj.appear is None:
@@ -124,7 +136,7 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
         plant.SetDefaultFloatingBaseBodyPose(body, X)
         bodies[obj.id] = body
         kinds[obj.id] = obj.kind
-        for variant in (0, 1):
+        for variant in (0, 1) if scenario.grasp == "weld" else ():
             welds[(obj.id, variant)] = plant.AddWeldConstraint(
                 palm, grasp_transform(obj.kind, variant), body, RigidTransform()
             )
@@ -165,6 +177,8 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
             base_limits=scenario.base,
             workspace=scenario.workspace,
             failures=scenario.failures,
+            chance_failures=scenario.conditions.chance_failures,
+            grasp=scenario.grasp,
         )
     )
     executor = builder.AddSystem(BtExecutor(policy, period=scenario.bt_period))
