@@ -23,7 +23,6 @@ poses), so nothing assumes the previous phase ended exactly where it was meant t
 from __future__ import annotations
 
 import copy
-import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -63,9 +62,12 @@ PREGRASP_HEIGHTS = (0.08, 0.06, 0.04)
 LIFT_HEIGHTS = (0.10, 0.08, 0.06)
 PREPLACE_HEIGHTS = (0.08, 0.06, 0.04)
 PLACE_CLEARANCE = 0.004
-#: friction grasps hold the object this much lower than welds (m): both finger pads
-#: (``youbot.sdf``) then press on its side, and the palm still clears its top by 5 mm
-FRICTION_GRASP_DROP = 0.005
+#: friction grasps let go a little higher: the object can slip down in the fingers while
+#: lifted, and lowering it onto the floor pushes it askew in the hand (measured)
+FRICTION_PLACE_CLEARANCE = 0.008
+#: finger reference of a friction grasp (m, below the joints' lower limit 0): the fingers'
+#: PD force is kp x (opening - SQUEEZE), ~21 N each on a bottle (weight 2.9 N)
+SQUEEZE = -0.02
 
 PHASES = {
     "MoveTo": ("fold", "drive"),
@@ -152,6 +154,7 @@ class SkillController(LeafSystem):
         failures: tuple[Fail, ...] = (),
         chance_failures: tuple[tuple[str, tuple[bool, ...]], ...] = (),
         grasp: str = "weld",
+        perception: str = "truth",
     ):
         super().__init__()
         self.set_name("skill_controller")
@@ -165,11 +168,8 @@ class SkillController(LeafSystem):
         self._failures = tuple(failures)
         self._chance = dict(chance_failures)  # action -> does attempt k+1 fail (drawn)
         self._friction = grasp == "friction"  # fingers hold by friction, no weld
-        if self._friction:  # both finger pads on the object's side, the palm clear of its top
-            self._kinds = {
-                k: dataclasses.replace(v, grasp_height=v.grasp_height - FRICTION_GRASP_DROP)
-                for k, v in self._kinds.items()
-            }
+        #: body poses of objects are the plant's (truth) or the camera's estimates (camera)
+        self._truth = perception == "truth"
         self._ik = ArmIK()
         self._planner = BasePlanner(workspace)
 
@@ -283,7 +283,7 @@ class SkillController(LeafSystem):
         if t < seg.t_end - 1e-9:
             return
         err = np.abs(seg.q1 - q)
-        if self._friction and seg.q1[8] == 0.0:
+        if self._friction and seg.q1[8] == SQUEEZE:
             err[FING] = 0.0  # squeezing: the object stops the fingers short of their target
         settled = err[0:2].max() < 0.02 and err[2] < 0.03 and err[3:].max() < 0.03
         if not settled and t < seg.t_end + SETTLE_TIMEOUT:
@@ -462,7 +462,7 @@ class SkillController(LeafSystem):
         elif st.memo["lost"]:
             q1[FING] = ROBOT.finger_open  # an injected failure: the hand does not close
         else:
-            q1[FING] = 0.0  # squeeze: the PD force on the fingers holds it by friction
+            q1[FING] = SQUEEZE  # the PD force on the fingers holds it by friction
         return joint_segment(t, q, q1, 0.2, 0.3)
 
     def _phase_weld(self, st, t, q, poses):
@@ -500,7 +500,13 @@ class SkillController(LeafSystem):
     def _phase_check_pick(self, st, t, q, poses):
         uid = st.cmd.args[0]
         z = self._X(poses, uid).translation()[2]
-        risen = z >= st.memo["z0"] + 0.5 * st.memo["lift_height"]
+        # Did it come up with the hand? Friction grasps ask the gripper (the fingers stand
+        # apart); weld grasps look at the object's height on the plant, or, with the camera
+        # (which cannot see under the gripper), trust the weld they switched on.
+        if self._truth:
+            risen = z >= st.memo["z0"] + 0.5 * st.memo["lift_height"]
+        else:
+            risen = self._friction or not st.memo["lost"]
         held = not self._friction or self._in_hand(uid, q)
         if st.grasp.obj != uid or not risen or not held:
             st.grasp = GraspRequest()
@@ -518,7 +524,8 @@ class SkillController(LeafSystem):
         uid, area = st.cmd.args
         a = self._area(st, area).pos
         kind = self._kinds[uid]
-        z = kind.half_height + PLACE_CLEARANCE + kind.grasp_height + height
+        clearance = FRICTION_PLACE_CLEARANCE if self._friction else PLACE_CLEARANCE
+        z = kind.half_height + clearance + kind.grasp_height + height
         return np.array([a.x, a.y, z])
 
     def _phase_preplace(self, st, t, q, poses):
@@ -539,6 +546,10 @@ class SkillController(LeafSystem):
         return joint_segment(t, q, q1, ARM_SPEED, 0.6)
 
     def _phase_lower(self, st, t, q, poses):
+        uid = st.cmd.args[0]
+        if self._friction and not self._in_hand(uid, q):
+            st.grasp = GraspRequest()
+            raise SkillFailure(f"{uid} slipped out of the fingers above the area", "grasp_slipped")
         q1 = st.segment.q1.copy()
         q1[ARM] = st.memo["down"]
         return joint_segment(t, q, q1, 0.8, 0.6)
@@ -561,6 +572,7 @@ class SkillController(LeafSystem):
         uid, area = st.cmd.args
         why = why_not_in(self._body(poses, uid), self._area(st, area), self._bodies_now(poses))
         if why is not None:
+            st.grasp = GraspRequest()  # the hand let go: it holds nothing, whatever happened
             raise SkillFailure(why, "placement_off")
         st.grasp = GraspRequest()
         return None

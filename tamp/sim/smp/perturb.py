@@ -78,6 +78,7 @@ def perturb(scenario: SimScenario, seed: int) -> tuple[SimScenario, Applied]:
         depth_noise=spec.depth_noise,
         pose_noise=spec.pose_noise,
         chance_failures=tuple(failures),
+        nominal=tuple((o.id, o.xy[0], o.xy[1], o.yaw) for o in standing),
     )
     out = dataclasses.replace(
         scenario, robot_start=robot, objects=tuple(objects), conditions=conditions

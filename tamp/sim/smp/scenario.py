@@ -93,6 +93,9 @@ class RunConditions:
     depth_noise: float = 0.0
     pose_noise: float = 0.0
     chance_failures: tuple[tuple[str, tuple[bool, ...]], ...] = ()
+    #: (id, x, y, yaw) where the robot was shown each object (its camera prior), when the run
+    #: moved them; empty: the scenario's own poses
+    nominal: tuple[tuple[str, float, float, float], ...] = ()
 
 
 @dataclass(frozen=True)
