@@ -167,6 +167,10 @@ def run_lots(args: argparse.Namespace) -> int:
         f"replans {result.replans}, grasps {g['successes']}/{g['attempts']}, "
         f"frames {result.frames_rendered}"
     )
+    if scenario.perturbation.fields():
+        print(f"seed {result.seed}: perturbation size {result.perturbation['size']:.3f} m")
+    if result.cause is not None:
+        print(f"cause: {result.cause}")
     verdict = "task satisfied" if result.satisfied else f"task NOT satisfied: {result.reason}"
     print(
         f"{result.status}: {verdict}; sim {result.sim_time:.2f} s, wall {result.wall_time:.2f} s, "

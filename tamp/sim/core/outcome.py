@@ -17,6 +17,8 @@ CAUSES: dict[str, str] = {
     "unreachable": "no place to stand, no base path, or no arm pose for the skill",
     "area_occupied": "the place to put the object on is occupied",
     "placement_off": "an object does not rest in its goal area on the plant",
+    "collision": "a robot's chassis or lever touched something (refinement workcell)",
+    "order_violated": "the measured event order breaks the program's ordering property",
     "task_failed": "the controller gave up with no skill failure to blame",
     "crash": "the simulation raised an error (a campaign records it, the run's own code not)",
 }

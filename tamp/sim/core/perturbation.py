@@ -5,10 +5,10 @@ carry a ``perturbation:`` section; it is parsed strictly here (`parse_perturbati
 name file and field) into a `Perturbation`. ``Perturbation.sample(seed)`` draws one
 `PerturbationSample` from ``numpy.random.default_rng``: the same seed gives the same sample
 bit for bit. Each workcell applies a sample to its own scenario (a new scenario, nothing
-mutated: `tamp.sim.smp.perturb`, `tamp.sim.lots.scenario.perturbed`,
-`tamp.sim.refine.seeded`) and records what it applied as an `Applied` (JSON: the sampled
-values and the perturbation's ``size``, the largest start displacement of an object, so a
-campaign can plot success against it). No Drake import here.
+mutated: `tamp.sim.smp.perturb.perturb`, `tamp.sim.lots.scenario.perturbed`,
+`tamp.sim.refine.seeded.perturbed_program`) and records what it applied as an `Applied`
+(JSON: the sampled values and the perturbation's ``size``, the largest start displacement
+of an object, so a campaign can plot success against it). No Drake import here.
 
 Format (every key optional; a spread is a standard deviation for ``normal``, clipped at
 3 sigma so every draw is bounded, or the half-width of the range for ``uniform``)::
@@ -173,6 +173,12 @@ class PerturbationSample:
     robot: tuple[float, float, float]
     friction: float | None
 
+    def robot_offset(self, name: str, attempt: int = 0) -> tuple[float, float, float]:
+        """(dx, dy, dyaw) of the start of robot ``name`` (workcells with several robots)."""
+        if not self.spec.robot.active:
+            return (0.0, 0.0, 0.0)
+        return self.spec.robot.draw(stream(self.seed, "robot", name, attempt))
+
     def object_offset(self, uid: str, attempt: int = 0) -> tuple[float, float, float]:
         """(dx, dy, dyaw) of object ``uid``; ``attempt`` > 0 redraws (a start that collides)."""
         if not self.spec.objects.active:
@@ -207,6 +213,7 @@ class Applied:
     seed: int
     objects: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     robot: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    robots: dict[str, tuple[float, float, float]] = field(default_factory=dict)  # several
     friction: float | None = None
     depth_noise: float = 0.0
     pose_noise: float = 0.0
@@ -226,9 +233,12 @@ class Applied:
         return {
             "seed": self.seed,
             "size": round(self.size, 6),
-            "robot_displacement": round(math.hypot(*self.robot[:2]), 6),
+            "robot_displacement": round(
+                max(math.hypot(*v[:2]) for v in [self.robot, *self.robots.values()]), 6
+            ),
             "objects": {k: r(v) for k, v in sorted(self.objects.items())},
             "robot": r(self.robot),
+            "robots": {k: r(v) for k, v in sorted(self.robots.items())},
             "friction": None if self.friction is None else round(self.friction, 6),
             "depth_noise": self.depth_noise,
             "pose_noise": self.pose_noise,

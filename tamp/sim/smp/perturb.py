@@ -3,8 +3,9 @@
 `perturb(scenario, seed)` draws ``scenario.perturbation`` for ``seed``
 (`tamp.sim.core.perturbation`) and returns a new `SimScenario` with
 - every object standing at the start moved by its drawn offset (x, y, yaw); an offset that
-  would put it outside the workspace, onto another object or under the robot is redrawn
-  (up to `REDRAWS` times, then the object keeps its nominal pose, with a note);
+  would put it outside the workspace, onto another object (moved or still nominal) or under
+  the robot is redrawn (up to `REDRAWS` times, then the object keeps its nominal pose, with
+  a note), so the start stays valid;
 - the robot's start pose moved likewise (drawn first, so objects avoid it);
 - appearances at a time or tick shifted by the person's timing jitter (never below 0);
 - `RunConditions`: the seed, the objects' friction coefficient, the camera's depth noise and
@@ -44,7 +45,8 @@ def perturb(scenario: SimScenario, seed: int) -> tuple[SimScenario, Applied]:
 
     placed: list[SimObject] = []
     objects: list[SimObject] = []
-    for o in scenario.objects:
+    for i, o in enumerate(scenario.objects):
+        later = [p for p in scenario.objects[i + 1 :] if p.appear is None]
         if o.appear is not None:
             objects.append(_jittered(o, sample.jitter(o.id), applied, scenario.bt_period))
             continue
@@ -53,7 +55,7 @@ def perturb(scenario: SimScenario, seed: int) -> tuple[SimScenario, Applied]:
             for attempt in range(REDRAWS):
                 ox, oy, oyaw = sample.object_offset(o.id, attempt)
                 cand = dataclasses.replace(o, xy=(o.xy[0] + ox, o.xy[1] + oy), yaw=o.yaw + oyaw)
-                if _object_fits(scenario, cand, placed, robot):
+                if _object_fits(scenario, cand, placed + later, robot):
                     moved, offset = cand, (ox, oy, oyaw)
                     break
             if moved is None:
