@@ -243,10 +243,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"skill failure: t={t:.2f} s {action}: {cause} ({detail})")
     if scenario.perturbation.fields():
         p = result.perturbation
+        mu = "as modelled" if p["friction"] is None else f"{p['friction']:.3f}"
         print(
             f"seed {result.seed}: perturbation size {p['size']:.3f} m (largest object "
             f"displacement), robot moved {p['robot_displacement']:.3f} m, friction "
-            f"{p['friction']}, grasp {result.grasp}, perception {result.perception}"
+            f"{mu}, grasp {result.grasp}, perception {result.perception}"
         )
     if result.cause is not None:
         print(f"cause: {result.cause}")
