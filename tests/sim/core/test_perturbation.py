@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
@@ -10,9 +9,9 @@ from tamp.errors import InputError
 from tamp.fileio import Fields
 from tamp.sim.core.outcome import CAUSES, run_cause
 from tamp.sim.core.perturbation import (
+    MAX_ATTEMPTS,
     NONE,
     NORMAL_CLIP,
-    MAX_ATTEMPTS,
     Applied,
     Perturbation,
     PoseSpread,
