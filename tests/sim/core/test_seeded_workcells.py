@@ -96,3 +96,38 @@ def test_a_packaged_program_has_no_perturbation():
     assert program_perturbation(program).fields() == set()
     moved, _ = perturbed_program(program, Perturbation(), 1)
     assert moved == dataclasses.replace(program)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["simulate", "smp-mro", "--case", "1", "--seed", "-1"],
+        ["simulate", "lots", "--task", "tower", "--seed", "-1"],
+        ["refine", "task4", "--seed", "-1"],
+    ],
+)
+def test_a_negative_seed_exits_2_before_any_work(argv, capsys):
+    from tamp.commands.main import main
+
+    assert main([*argv, "--json"]) == 2
+    assert '"field": "--seed"' in capsys.readouterr().out
+
+
+@pytest.mark.slow  # two short Drake simulations of the refinement workcell
+def test_refine_seeded_runs_repeat_per_seed(tmp_path):
+    from tamp.sim.refine.seeded import run_seeded
+    from tests.sim.refine.helpers import SHORT
+
+    data = yaml.safe_load(SHORT.read_text())
+    data["perturbation"] = {"robot": {"xy": 0.01, "yaw": 0.02}}
+    arch = data.get("architecture")
+    if arch:
+        data["architecture"] = str(SHORT.parent / arch)
+    f = tmp_path / "short.yaml"
+    f.write_text(yaml.safe_dump(data))
+    a, b = run_seeded(str(f), 5), run_seeded(str(f), 5)
+    for r in (a, b):
+        assert r.pop("wall_time") > 0
+    assert a == b
+    assert a["status"] == "SUCCESS" and a["cause"] is None and a["task_time"] > 0
+    assert a["seed"] == 5 and set(a["perturbation"]["robots"]) == {"R1", "R2"}
