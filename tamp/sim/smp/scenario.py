@@ -243,10 +243,10 @@ def load_scenario(path: str | Path) -> SimScenario:
     objects = _objects(f, demo, workspace)
     perturbation = parse_perturbation(f)
     perturbation.require(PERTURBED, "SMP-MRO")
-    for name in perturbation.skill_failure:
-        if name not in SIMULATED_FAILURES:
+    for action in perturbation.skill_failure:
+        if action not in SIMULATED_FAILURES:
             raise f.error(
-                f"perturbation.skills.{name}",
+                f"perturbation.skills.{action}",
                 f"only {', '.join(SIMULATED_FAILURES)} failures (lost grasps) are simulated",
             )
     scenario = SimScenario(

@@ -23,6 +23,7 @@ def scenario(name="case3_perturbed.yaml"):
 
 def test_packaged_perturbed_cases_load():
     s = scenario()
+    assert s.name == "case3_perturbed"
     assert (s.grasp, s.perception) == ("friction", "truth")
     assert s.perturbation.fields() == {"objects", "robot", "friction", "skills"}
     c = scenario("case3_camera.yaml")
