@@ -306,23 +306,33 @@ def run_seeded(
     seed: int,
     *,
     scenario: str | None = None,
+    interference: str | None = None,
     grasp: str | None = None,
     max_sim_time: float | None = None,
     record: str | None = None,
 ) -> dict[str, Any]:
     """ONE seeded run of LOTS task ``task`` (file or packaged name) in the workcell
-    ``scenario`` (default: the packaged one named like the task), as the JSON of
+    ``scenario`` (default: the packaged one named like the task), with the person's
+    ``interference`` file (events, as ``--interference``) if given, as the JSON of
     ``tamp simulate lots --task T --seed N --json``: ``status``, ``cause``, ``task_time``
     (sim s), ``seed``, ``perturbation``, ``satisfied``, ... The entry point of
     ``tamp campaign --kind lots``; ``seed`` drives the perturbation draw and the
     controller's tree update."""
-    from tamp.lots.task import load_task
+    from tamp.lots.task import load_events, load_task
     from tamp.sim.lots.scenario import load_cell_scenario
     from verification import gate
 
     loaded = load_task(task)
     cell = load_cell_scenario(scenario or loaded.name)
+    events = load_events(interference, loaded) if interference else None
     result = simulate_lots(
-        cell, loaded, grasp=grasp, seed=seed, record=record, max_sim_time=max_sim_time, check=gate
+        cell,
+        loaded,
+        events,
+        grasp=grasp,
+        seed=seed,
+        record=record,
+        max_sim_time=max_sim_time,
+        check=gate,
     )
     return result.to_json()

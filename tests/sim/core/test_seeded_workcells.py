@@ -131,3 +131,36 @@ def test_refine_seeded_runs_repeat_per_seed(tmp_path):
     assert a == b
     assert a["status"] == "SUCCESS" and a["cause"] is None and a["task_time"] > 0
     assert a["seed"] == 5 and set(a["perturbation"]["robots"]) == {"R1", "R2"}
+
+
+def _lots_result(status, satisfied, details):
+    from tamp.sim.core.executor import ActionLog
+    from tamp.sim.lots.simulate import LotsSimResult
+
+    actions = [
+        ActionLog(i + 1, "Pick(peak)", 1.0, 2.0, "FAILURE" if d else "SUCCESS", d)
+        for i, d in enumerate(details)
+    ]
+    return LotsSimResult(
+        "tower", "tower", status, "", satisfied, actions, [], 0, 0, {}, 10.0, 1.0, {}
+    )
+
+
+@pytest.mark.parametrize(
+    ("status", "satisfied", "details", "cause"),
+    [
+        ("SUCCESS", True, ["slipped: the fingers closed after the lift"], None),
+        ("SUCCESS", False, [], "placement_off"),
+        ("TIMEOUT", False, ["missed: the fingers closed on nothing"], "timeout"),
+        ("FAILURE", False, ["missed: the fingers closed on nothing (3 attempts)"], "grasp_missed"),
+        ("FAILURE", False, ["dropped the peak while carrying it"], "grasp_slipped"),
+        ("FAILURE", False, ["no grasp found on the saw (3 attempts)"], "object_not_found"),
+        ("FAILURE", False, ["no peak in W^A"], "object_not_found"),
+        ("FAILURE", False, ["already holding peak"], "task_failed"),
+    ],
+)
+def test_lots_runs_name_their_cause(status, satisfied, details, cause):
+    r = _lots_result(status, satisfied, details)
+    assert r.cause == cause
+    out = r.to_json()
+    assert out["cause"] == cause and out["task_time"] == 10.0 and out["seed"] == 0
