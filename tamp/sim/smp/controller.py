@@ -488,9 +488,11 @@ class SkillController(LeafSystem):
         return 0 < n <= len(draws) and draws[n - 1]
 
     def _in_hand(self, uid: str, q) -> bool:
-        """The gripper's own sensor (friction grasps): the fingers stand apart by at least
-        the object's half width, so something is between them."""
-        return float(q[8] + q[9]) > self._kinds[uid].half_width
+        """The gripper's own sensor (friction grasps): the fingers have closed (they stand
+        1 cm short of fully open at least) and stand apart by at least the object's half
+        width, so something is between them."""
+        gap = float(q[8] + q[9])
+        return self._kinds[uid].half_width < gap < 2 * ROBOT.finger_open - 0.01
 
     def _phase_lift(self, st, t, q, poses):
         q1 = st.segment.q1.copy()

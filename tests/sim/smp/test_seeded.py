@@ -102,3 +102,21 @@ def test_camera_estimates_are_within_a_centimetre_and_drive_the_skills(tmp_path)
     frames = system.diagram.GetSubsystemByName("perception")
     ctx = frames.GetMyContextFromRoot(runner.root)
     assert frames.state(ctx).frames > 10
+
+
+@pytest.mark.parametrize("perception", ["truth", "camera"])
+def test_an_injected_friction_grasp_failure_is_seen_and_retried(tmp_path, perception):
+    """``fail:`` with friction grasps: the hand does not close, the gripper's sensor says so
+    (also with the camera, which cannot see under the gripper), the tree retries."""
+    path = write_one_bottle(
+        tmp_path,
+        f"grasp: friction\nplant: {{time_step: 0.005}}\nperception: {perception}\n"
+        'fail: ["Pick(O0)"]\n',
+    )
+    out = run_seeded(str(path), 0, verify=False)
+    assert out["status"] == "SUCCESS", out["reason"]
+    assert [f["cause"] for f in out["failures"]] == ["injected_failure"]
+    assert [a["action"] for a in out["actions"] if a["status"] == "SUCCESS"][:2] == [
+        "Pick(O0)",
+        "Place(O0, L0)",
+    ]
