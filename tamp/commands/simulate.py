@@ -94,7 +94,9 @@ def add_seed(parser, also: str = "") -> None:
         "--seed",
         type=int,
         default=0,
-        help=f"seed of the scenario's perturbation draw {also}(default 0)".replace("  ", " "),
+        help=" ".join(["seed of the scenario's perturbation draw", also, "(default 0)"]).replace(
+            "  ", " "
+        ),
     )
 
 
