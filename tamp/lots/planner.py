@@ -142,53 +142,64 @@ def initial_lasso(aut: Automaton, task: Task) -> tuple[list[Step], list[Letter],
 def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]:
     """Every W^B state that ends one round of some accepting way of the task, ``final`` first.
 
-    A round of a way: deliveries (and ∅) from an empty W^B to a live accepting state ``q_F``,
-    then the cheapest accepting cycle of ``q_F`` (`cheapest_cycle`); its end is the W^B
-    counts after both, within the objects that exist. ``F p | F q`` (classes x, y) has two,
-    ``x^1 y^0`` and ``x^0 y^1``. Only the minimal ends are kept (a round that delivers more
-    than another of the same way is not another way), plus ``final`` (the planned round).
-    Breadth-first by number of deliveries; a W^B state above a known end is not expanded.
+    A round of a way, from an empty W^B: a prefix of deliveries (and ∅) to an accepting state
+    ``q_F`` on an accepting cycle, then one traversal of *any* non-empty cycle back to ``q_F``
+    (a recurring choice, ``GF(p | q)``, gives one way per class); its end is W^B after both.
+    Objects are those that exist (W^A and W^B at the start); delivering a class again when
+    all its objects are already in W^B takes one out first (∅, then the delivery), so a way
+    that delivers an object twice (``F(p & F(q & F p))`` with one cup) ends with it in W^B
+    once. ``F p | F q`` (classes x, y) has two ends, ``x^1 y^0`` and ``x^0 y^1``. Only the
+    minimal ends are kept (a round that leaves more in W^B than another is not another way),
+    plus ``final`` (the planned round).
+
+    Search: pairs ``(q, b)`` (prefix) and triples ``(q, b, q_F)`` (cycle), by levels of
+    ``Σ b`` (W^B only grows along a round); a state above a known end is not expanded. At
+    most ``|Q|·(|Q_F| + 1)·∏(n_i + 1)`` states.
     """
     classes = task.classes
     idx = {c: i for i, c in enumerate(classes)}
-    prop_class = {p.name: idx[p.cls] for p in task.propositions}
-    cost_of = {p.name: p.cost for p in task.propositions}
+    props = [(frozenset({p.name}), idx[p.cls]) for p in task.propositions]
     avail = tuple(task.initial_a.get(c, 0) + task.initial_b.get(c, 0) for c in classes)
+    live = aut.live_accepting
     found: list[Counts] = [final]
-    deltas: dict[int, Counts | None] = {}
 
     def above(b: Counts, strict: bool) -> bool:
         return any(
             all(x >= y for x, y in zip(b, g, strict=True)) and (b != g or not strict) for g in found
         )
 
-    start = (aut.initial, (0,) * len(classes))
+    def steps(q: int, b: Counts) -> Iterator[tuple[int, Counts]]:
+        for nq in aut.successors(q, EMPTY):
+            yield nq, b
+        for letter, i in props:
+            if b[i] < avail[i]:
+                nb = b[:i] + (b[i] + 1,) + b[i + 1 :]
+                for nq in aut.successors(q, letter):
+                    yield nq, nb
+            elif avail[i]:  # every object of the class is in W^B: one out (∅), then again
+                for mid in aut.successors(q, EMPTY):
+                    for nq in aut.successors(mid, letter):
+                        yield nq, b
+
+    start = (aut.initial, (0,) * len(classes), -1)  # qf -1: still in the prefix
     seen = {start}
     level = [start]
     while level:
-        nxt_level: list[Pair] = []
+        nxt_level: list[tuple[int, Counts, int]] = []
         stack = list(level)
         while stack:
-            q, b = stack.pop()
+            q, b, qf = stack.pop()
             if above(b, strict=True):
                 continue
-            if q in aut.live_accepting:
-                if q not in deltas:
-                    deltas[q] = _deliveries(cheapest_cycle(aut, cost_of, q), prop_class, classes)
-                end = tuple(x + d for x, d in zip(b, deltas[q], strict=True))
-                if all(x <= n for x, n in zip(end, avail, strict=True)) and not above(end, False):
-                    found.append(end)
-            for nq in aut.successors(q, EMPTY):
-                if (nq, b) not in seen:
-                    seen.add((nq, b))
-                    stack.append((nq, b))
-            for p, i in prop_class.items():
-                if b[i] < avail[i]:
-                    nb = b[:i] + (b[i] + 1,) + b[i + 1 :]
-                    for nq in aut.successors(q, frozenset({p})):
-                        if (nq, nb) not in seen:
-                            seen.add((nq, nb))
-                            nxt_level.append((nq, nb))
+            if qf >= 0 and q == qf and not above(b, strict=False):
+                found.append(b)
+            succ = [(nq, nb, qf) for nq, nb in steps(q, b)]
+            if qf < 0 and q in live:  # the cycle starts here (its first step)
+                succ += [(nq, nb, q) for nq, nb in steps(q, b)]
+            for node in succ:
+                if node not in seen:
+                    seen.add(node)
+                    (stack if node[1] == b else nxt_level).append(node)
         level = nxt_level
     rest = [
         g
@@ -196,14 +207,6 @@ def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]
         if not any(h != g and all(x >= y for x, y in zip(g, h, strict=True)) for h in found)
     ]
     return (final, *sorted(set(rest) - {final}))
-
-
-def _deliveries(letters: list[Letter], prop_class: dict[str, int], classes) -> Counts:
-    out = [0] * len(classes)
-    for letter in letters:
-        for p in letter:
-            out[prop_class[p]] += 1
-    return tuple(out)
 
 
 def cheapest_cycle(aut: Automaton, cost_of: dict[str, float], qf: int) -> list[Letter]:

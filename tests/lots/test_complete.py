@@ -208,8 +208,7 @@ def test_lots_completes_whenever_the_product_planner_can(task, when, takes):
         qs = {n for q in qs for n in c.aut.successors(q, letter)}
     ends = brute_force_ends(task, c.aut)
     assert ends <= set(c.lots.goals)  # every accepting way is a goal of LOTS
-    # (a way that needs one object delivered twice, removed in between, is known only as the
-    # planned round: `round_goals` delivers monotonically; see docs/lots.md)
+    # (ways that deliver an object twice or choose inside GF: tests/lots/test_ways.py)
     a_now, b_now = c.lots.vector(seen["A"]), c.lots.vector(seen["B"])
     totals = tuple(x + y for x, y in zip(a_now, b_now, strict=True))
     oracle = Lots(c.lots.classes, c.lots.prop_class, c.lots.final, tuple(sorted(ends)))
