@@ -38,6 +38,7 @@ def test_unfired_event_is_reported_by_the_api(tmp_path):
     assert item["after"] == 99 and item["phase"] == "idle"
     assert item["where"].endswith("late.yaml: events[0]")
     assert "removes body from W^B" in item["event"]
+    assert item["message"].startswith("never happened: person removes body from W^B (dis_2)")
     checked = check_run_of(task, events)
     assert checked.holds and checked.unfired_events == events
     assert checked.to_json()["unfired_events"] == [item]
@@ -57,11 +58,15 @@ def test_unfired_event_is_reported_by_the_clis(tmp_path, capsys):
     assert main(["lots", "tower.yaml", "--interference", str(ev), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert [e["after"] for e in data["unfired_events"]] == [99]
+    # the JSON says it in words too, and the run still counts as satisfied (exit 0): the
+    # issue asks to say so, not to refuse the script
+    assert data["satisfied"] and "after action 99" in data["unfired_events"][0]["message"]
     assert verify_main(["lots", "tower.yaml", "--interference", str(ev)]) == 0
     assert "never happened: person removes body" in capsys.readouterr().out
     assert verify_main(["lots", "tower.yaml", "--interference", str(ev), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["holds"] and [e["after"] for e in data["unfired_events"]] == [99]
+    assert data["unfired_events"][0]["message"].startswith("never happened: person removes")
     assert main(["lots", "tower.yaml", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["unfired_events"] == []
 
