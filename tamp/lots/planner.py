@@ -148,25 +148,34 @@ def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]
     Objects are those that exist (W^A and W^B at the start); delivering a class again when
     all its objects are already in W^B takes one out first (∅, then the delivery), so a way
     that delivers an object twice (``F(p & F(q & F p))`` with one cup) ends with it in W^B
-    once. ``F p | F q`` (classes x, y) has two ends, ``x^1 y^0`` and ``x^0 y^1``. Only the
-    minimal ends are kept (a round that leaves more in W^B than another is not another way),
-    plus ``final`` (the planned round).
+    once. ``F p | F q`` (classes x, y) has two ends, ``x^1 y^0`` and ``x^0 y^1``. Kept: the
+    minimal ends of each accepting state ``q_F`` (a round of the same ``q_F`` that leaves
+    more in W^B is not another way; one of another ``q_F`` is — ``F(p & F q) | GF p`` ends
+    with a cup alone and with cup and mug, and the branch that has delivered ``p`` for the
+    first way needs the second), plus ``final`` (the planned round).
 
-    Search: pairs ``(q, b)`` (prefix) and triples ``(q, b, q_F)`` (cycle), by levels of
-    ``Σ b`` (W^B only grows along a round); a state above a known end is not expanded. At
-    most ``|Q|·(|Q_F| + 1)·∏(n_i + 1)`` states.
+    Search: triples ``(q, b, q_F)`` (``q_F`` = -1 in the prefix), by levels of ``Σ b`` (W^B
+    only grows along a round); a state above a known end of its ``q_F`` (of every ``q_F`` in
+    the prefix) is not expanded. At most ``|Q|·(|Q_F| + 1)·∏(n_i + 1)`` states.
     """
     classes = task.classes
     idx = {c: i for i, c in enumerate(classes)}
     props = [(frozenset({p.name}), idx[p.cls]) for p in task.propositions]
     avail = tuple(task.initial_a.get(c, 0) + task.initial_b.get(c, 0) for c in classes)
     live = aut.live_accepting
-    found: list[Counts] = [final]
+    ends: dict[int, list[Counts]] = {qf: [] for qf in live}  # minimal ends of each q_F
 
-    def above(b: Counts, strict: bool) -> bool:
+    def above(b: Counts, gs: list[Counts], strict: bool) -> bool:
         return any(
-            all(x >= y for x, y in zip(b, g, strict=True)) and (b != g or not strict) for g in found
+            all(x >= y for x, y in zip(b, g, strict=True)) and (b != g or not strict) for g in gs
         )
+
+    def pruned(b: Counts, qf: int) -> bool:
+        """No new minimal end can follow: b is above an end of its q_F (of every q_F while
+        still in the prefix)."""
+        if qf >= 0:
+            return above(b, ends[qf], strict=True)
+        return all(above(b, gs, strict=True) for gs in ends.values())
 
     def steps(q: int, b: Counts) -> Iterator[tuple[int, Counts]]:
         for nq in aut.successors(q, EMPTY):
@@ -189,10 +198,10 @@ def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]
         stack = list(level)
         while stack:
             q, b, qf = stack.pop()
-            if above(b, strict=True):
+            if pruned(b, qf):
                 continue
-            if qf >= 0 and q == qf and not above(b, strict=False):
-                found.append(b)
+            if qf >= 0 and q == qf and not above(b, ends[qf], strict=False):
+                ends[qf].append(b)
             succ = [(nq, nb, qf) for nq, nb in steps(q, b)]
             if qf < 0 and q in live:  # the cycle starts here (its first step)
                 succ += [(nq, nb, q) for nq, nb in steps(q, b)]
@@ -201,12 +210,8 @@ def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]
                     seen.add(node)
                     (stack if node[1] == b else nxt_level).append(node)
         level = nxt_level
-    rest = [
-        g
-        for g in found[1:]
-        if not any(h != g and all(x >= y for x, y in zip(g, h, strict=True)) for h in found)
-    ]
-    return (final, *sorted(set(rest) - {final}))
+    rest = {g for gs in ends.values() for g in gs} - {final}
+    return (final, *sorted(rest))
 
 
 def cheapest_cycle(aut: Automaton, cost_of: dict[str, float], qf: int) -> list[Letter]:

@@ -21,7 +21,7 @@ from tamp.lots.run import run_task
 from tamp.lots.task import Event, Proposition, Task, load_events, load_task
 from verification.lots import check_run_of
 
-from .helpers import scenario
+from .helpers import TWO_CLASSES, scenario, take_away, write_files
 
 LATE = "version: 1\nevents:\n  - {after: 99, kind: remove, class: body, side: B}\n"
 
@@ -73,16 +73,8 @@ def test_unfired_event_is_reported_by_the_clis(tmp_path, capsys):
 
 # -- alternatives and objects already in W^B --------------------------------------------------
 
-ALT = """version: 1
-name: alt
-formula: "F p | F q"
-propositions:
-  p: {class: cup}
-  q: {class: mug, cost: 2.0}
-initial:
-  A: {cup: 1, mug: 1}
-"""
-TAKE_CUP = "version: 1\nevents:\n  - {after: 0, kind: remove, class: cup, side: A}\n"
+ALT = TWO_CLASSES.format(name="alt", formula="F p | F q")
+TAKE_CUP = take_away("cup")
 IN_B = """version: 1
 name: inb
 formula: "F p"
@@ -94,12 +86,7 @@ initial:
 """
 
 
-def _files(tmp_path, **texts):
-    out = {}
-    for name, text in texts.items():
-        out[name] = tmp_path / f"{name}.yaml"
-        out[name].write_text(text)
-    return out
+_files = write_files
 
 
 def test_alternative_way_is_taken_when_the_planned_class_is_gone(tmp_path, capsys):
