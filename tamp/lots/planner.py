@@ -148,69 +148,78 @@ def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]
     Objects are those that exist (W^A and W^B at the start); delivering a class again when
     all its objects are already in W^B takes one out first (∅, then the delivery), so a way
     that delivers an object twice (``F(p & F(q & F p))`` with one cup) ends with it in W^B
-    once. ``F p | F q`` (classes x, y) has two ends, ``x^1 y^0`` and ``x^0 y^1``. Kept: the
-    minimal ends of each accepting state ``q_F`` (a round of the same ``q_F`` that leaves
-    more in W^B is not another way; one of another ``q_F`` is — ``F(p & F q) | GF p`` ends
-    with a cup alone and with cup and mug, and the branch that has delivered ``p`` for the
-    first way needs the second), plus ``final`` (the planned round).
+    once. ``F p | F q`` (classes x, y) has two ends, ``x^1 y^0`` and ``x^0 y^1``. Kept, for
+    each accepting state ``q_F``: the minimal ends of its *plain* rounds (each object
+    delivered once), and the ends of its redelivering rounds that are minimal among all its
+    ends — a round of the same kind through the same ``q_F`` that leaves more in W^B is
+    surplus, not another way; a round through another ``q_F`` is another way even with a
+    larger end (``F(p & F q) | GF p`` keeps cup, and cup with mug: once ``p`` is delivered
+    for the first way only the mug completes it), and a plain round stays a way beside a
+    redelivering one with a smaller end (``(F p0 & F p2) | F(p1 & F p2)`` with one mug keeps
+    cup with mug beside mug alone). Plus ``final`` (the planned round).
 
-    Search: triples ``(q, b, q_F)`` (``q_F`` = -1 in the prefix), by levels of ``Σ b`` (W^B
-    only grows along a round); a state above a known end of its ``q_F`` (of every ``q_F`` in
-    the prefix) is not expanded. At most ``|Q|·(|Q_F| + 1)·∏(n_i + 1)`` states.
+    Search: ``(q, b, q_F, redelivered?)`` (``q_F`` = -1 in the prefix), by levels of ``Σ b``
+    (W^B only grows along a round); a state above a known end of its ``q_F`` (of every ``q_F``
+    in the prefix) is not expanded. At most ``4·|Q|·(|Q_F| + 1)·∏(n_i + 1)`` states.
     """
     classes = task.classes
     idx = {c: i for i, c in enumerate(classes)}
     props = [(frozenset({p.name}), idx[p.cls]) for p in task.propositions]
     avail = tuple(task.initial_a.get(c, 0) + task.initial_b.get(c, 0) for c in classes)
     live = aut.live_accepting
-    ends: dict[int, list[Counts]] = {qf: [] for qf in live}  # minimal ends of each q_F
+    # per q_F: the minimal ends of plain rounds, and of all rounds (plain and redelivering)
+    plain: dict[int, list[Counts]] = {qf: [] for qf in live}
+    every: dict[int, list[Counts]] = {qf: [] for qf in live}
 
     def above(b: Counts, gs: list[Counts], strict: bool) -> bool:
         return any(
             all(x >= y for x, y in zip(b, g, strict=True)) and (b != g or not strict) for g in gs
         )
 
-    def pruned(b: Counts, qf: int) -> bool:
-        """No new minimal end can follow: b is above an end of its q_F (of every q_F while
-        still in the prefix)."""
+    def pruned(b: Counts, qf: int, sat: bool) -> bool:
+        """No new end can follow: b is above a known end of its q_F (of every q_F while in
+        the prefix) — a plain end for a plain round, any end for a redelivering one."""
+        known = every if sat else plain
         if qf >= 0:
-            return above(b, ends[qf], strict=True)
-        return all(above(b, gs, strict=True) for gs in ends.values())
+            return above(b, known[qf], strict=True)
+        return all(above(b, gs, strict=True) for gs in known.values())
 
-    def steps(q: int, b: Counts) -> Iterator[tuple[int, Counts]]:
+    def steps(q: int, b: Counts, sat: bool) -> Iterator[tuple[int, Counts, bool]]:
         for nq in aut.successors(q, EMPTY):
-            yield nq, b
+            yield nq, b, sat
         for letter, i in props:
             if b[i] < avail[i]:
                 nb = b[:i] + (b[i] + 1,) + b[i + 1 :]
                 for nq in aut.successors(q, letter):
-                    yield nq, nb
+                    yield nq, nb, sat
             elif avail[i]:  # every object of the class is in W^B: one out (∅), then again
                 for mid in aut.successors(q, EMPTY):
                     for nq in aut.successors(mid, letter):
-                        yield nq, b
+                        yield nq, b, True
 
-    start = (aut.initial, (0,) * len(classes), -1)  # qf -1: still in the prefix
+    start = (aut.initial, (0,) * len(classes), -1, False)  # qf -1: still in the prefix
     seen = {start}
     level = [start]
     while level:
-        nxt_level: list[tuple[int, Counts, int]] = []
+        nxt_level: list[tuple[int, Counts, int, bool]] = []
         stack = list(level)
         while stack:
-            q, b, qf = stack.pop()
-            if pruned(b, qf):
+            q, b, qf, sat = stack.pop()
+            if pruned(b, qf, sat):
                 continue
-            if qf >= 0 and q == qf and not above(b, ends[qf], strict=False):
-                ends[qf].append(b)
-            succ = [(nq, nb, qf) for nq, nb in steps(q, b)]
+            if qf >= 0 and q == qf and not above(b, (every if sat else plain)[qf], False):
+                if not sat:
+                    plain[qf].append(b)
+                every[qf].append(b)
+            succ = [(nq, nb, qf, s) for nq, nb, s in steps(q, b, sat)]
             if qf < 0 and q in live:  # the cycle starts here (its first step)
-                succ += [(nq, nb, q) for nq, nb in steps(q, b)]
+                succ += [(nq, nb, q, s) for nq, nb, s in steps(q, b, sat)]
             for node in succ:
                 if node not in seen:
                     seen.add(node)
                     (stack if node[1] == b else nxt_level).append(node)
         level = nxt_level
-    rest = {g for gs in ends.values() for g in gs} - {final}
+    rest = {g for gs in every.values() for g in gs} - {final}
     return (final, *sorted(rest))
 
 

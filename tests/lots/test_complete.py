@@ -6,7 +6,7 @@ from __future__ import annotations
 import itertools
 import json
 
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from tamp.commands.main import main
@@ -168,6 +168,16 @@ def brute_force_ends(task, aut) -> set:
 
 @settings(max_examples=60, deadline=None)
 @given(task=random_task(), when=st.integers(0, 2), takes=st.lists(takeaway, max_size=3))
+@example(  # a plain way beside a redelivering one with a smaller end (found by this test)
+    task=Task(
+        "(F p0 & F p2) | F(p1 & F p2)",
+        (Proposition("p0", "cup"), Proposition("p1", "mug"), Proposition("p2", "mug")),
+        {"cup": 1, "mug": 0, "jar": 0},
+        {"cup": 1, "mug": 1, "jar": 0},
+    ),
+    when=0,
+    takes=[],
+)
 def test_lots_completes_whenever_the_product_planner_can(task, when, takes):
     """After a person takes objects away (W^A or W^B, any class), LOTS finishes the task
     whenever the product baseline finds a plan from that situation (automaton state reached by

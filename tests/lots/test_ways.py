@@ -6,11 +6,12 @@ objects that exist) and the Büchi automaton with plain sets, no pruning and no 
 * a *round* of the task from an empty W^B is a prefix to an accepting state ``q_F`` and
   one non-empty cycle back to ``q_F``; a step is ∅, a delivery ``{p}`` of an object still in
   W^A, or — when every object of p's class is in W^B — taking one out (∅) and delivering it
-  again (``{p}``); its *end* is W^B after the cycle, and the ends that count are those
-  minimal among the rounds through the same ``q_F`` (more in W^B is surplus);
+  again (``{p}``); its *end* is W^B after the cycle; the ends that count are, per ``q_F``,
+  the minimal ends of plain rounds and the redelivering ends minimal among all its ends;
 * the task can be completed from ``(q, W^B)`` with ``cap`` objects per class when some
-  sequence of ∅, deliveries (within ``cap``) and removals from W^B (∅) leads to a live
-  accepting state whose W^B is the end of some round.
+  sequence of ∅, deliveries and removals from W^B (∅) leads to a live accepting state whose
+  W^B is the end of some round, W^B staying in the count abstraction (Lemma 1's box of the
+  ends, and ``cap``).
 
 Checked with hypothesis: the planner finds a plan from exactly the pairs the oracle accepts,
 and the controller ends satisfied exactly when the oracle says the task could still be
@@ -57,21 +58,22 @@ def _add(b: tuple, i: int, d: int) -> tuple:
 
 def oracle_round_ends(task: Task, aut, *, minimal: bool = True) -> set[tuple]:
     """The ends of every round of the task, by brute force: all of them (``minimal=False``),
-    or those minimal among the ends of rounds through the same accepting state (a round of
-    the same ``q_F`` that leaves more in W^B is the same way with surplus, which the robot
-    takes out; a round through another ``q_F`` is another way)."""
+    or the ones that count as ways: per accepting state ``q_F``, the minimal ends of its plain
+    rounds (no object delivered twice) and the ends of its redelivering rounds that are
+    minimal among all its ends (more in W^B by a round of the same kind through the same
+    ``q_F`` is surplus, which the robot takes out)."""
     cls = _class_of(task)
     avail = tuple(task.initial_a.get(c, 0) + task.initial_b.get(c, 0) for c in task.classes)
 
-    def succ(q, b):
-        out = {(n, b) for n in aut.successors(q, EMPTY)}
+    def succ(q, b, sat):
+        out = {(n, b, sat) for n in aut.successors(q, EMPTY)}
         for p, i in cls.items():
             letter = frozenset({p})
             if b[i] < avail[i]:
-                out |= {(n, _add(b, i, 1)) for n in aut.successors(q, letter)}
+                out |= {(n, _add(b, i, 1), sat) for n in aut.successors(q, letter)}
             elif avail[i] > 0:
                 for m in aut.successors(q, EMPTY):
-                    out |= {(n, b) for n in aut.successors(m, letter)}
+                    out |= {(n, b, True) for n in aut.successors(m, letter)}
         return out
 
     def closure(sources):
@@ -83,21 +85,29 @@ def oracle_round_ends(task: Task, aut, *, minimal: bool = True) -> set[tuple]:
                     todo.append(nxt)
         return seen
 
-    reach = closure([(aut.initial, (0,) * len(avail))])
+    def mins(ends):
+        return {e for e in ends if not any(f != e and all(map(int.__le__, f, e)) for f in ends)}
+
+    reach = closure([(aut.initial, (0,) * len(avail), False)])
     out = set()
     for qf in aut.accepting:
-        firsts = [n for (q, b) in reach if q == qf for n in succ(q, b)]
-        ends = {b for (q, b) in closure(firsts) if q == qf}
-        if minimal:
-            ends = {e for e in ends if not any(f != e and all(map(int.__le__, f, e)) for f in ends)}
-        out |= ends
+        firsts = [n for (q, b, sat) in reach if q == qf for n in succ(q, b, sat)]
+        ends = {(b, sat) for (q, b, sat) in closure(firsts) if q == qf}
+        if not minimal:
+            out |= {b for b, _ in ends}
+            continue
+        every = mins({b for b, _ in ends})
+        out |= mins({b for b, sat in ends if not sat}) | {b for b, sat in ends if sat} & every
     return out
 
 
 def oracle_can_complete(task: Task, aut, ends: set, q: int, b: tuple, cap: tuple) -> bool:
-    """Some ∅ / delivery / removal sequence from (q, b), within ``cap``, reaches a live
-    accepting state whose W^B is a round's end."""
+    """Some ∅ / delivery / removal sequence from (q, b) reaches a live accepting state whose
+    W^B is a round's end, with W^B inside the count abstraction: at most ``cap`` objects of a
+    class, and at most Lemma 1's n' (the componentwise maximum of the ends)."""
     cls = _class_of(task)
+    box = tuple(max(e[i] for e in ends) for i in range(len(b))) if ends else (0,) * len(b)
+    cap = tuple(map(min, cap, box))
     # live accepting: on a cycle of executable letters (∅ or one proposition)
     letters = [EMPTY, *(frozenset({p}) for p in cls)]
 
@@ -223,6 +233,7 @@ def random_task(draw):
 
 
 AROUND = "F(p0 & F p2) | GF p1"
+PLAIN = "(F p0 & F p2) | F(p1 & F p2)"
 
 
 def _task(formula, classes, a, b):
@@ -236,6 +247,8 @@ def _task(formula, classes, a, b):
 # found by this test: a way through another accepting state whose end is above another way's
 @example(_task(AROUND, [("cup", 1.0), ("cup", 1.0), ("mug", 2.0)], (0, 1, 0), (1, 0, 0)))
 @example(_task(AROUND, [("mug", 1.0), ("cup", 1.0), ("jar", 1.0)], (0, 0, 1), (0, 1, 0)))
+# a plain way (cup, mug) beside a redelivering one with a smaller end (the mug twice)
+@example(_task(PLAIN, [("cup", 1.0), ("mug", 1.0), ("mug", 1.0)], (1, 0, 0), (1, 1, 0)))
 def test_the_planner_plans_from_exactly_the_pairs_the_oracle_accepts(task):
     try:
         c = LotsController(task)
@@ -246,8 +259,12 @@ def test_the_planner_plans_from_exactly_the_pairs_the_oracle_accepts(task):
         return
     ends = oracle_round_ends(task, c.aut)
     every = oracle_round_ends(task, c.aut, minimal=False)
+    assert c.lots.final in every  # the planned round (from the true initial W^B) is a round
+    if task.formula == PLAIN and task.initial_a["cup"] == 1:
+        assert {(1, 1), (0, 1)} <= set(c.lots.goals)  # classes cup, mug
     # every way, and nothing that is not one (the planned round may carry surplus)
     assert ends <= set(c.lots.goals) <= every
+    ends |= {c.lots.final}
     avail = tuple(task.initial_a.get(k, 0) + task.initial_b.get(k, 0) for k in task.classes)
     caps = list(itertools.product(*(range(n + 1) for n in avail)))
     for q in range(c.aut.num_states):
@@ -298,7 +315,7 @@ def test_the_robot_completes_exactly_when_some_way_is_left(task, when, takes):
         qs = {n for q in qs for n in c.aut.successors(q, letter)}
     a_now, b_now = c.lots.vector(seen["A"]), c.lots.vector(seen["B"])
     cap = tuple(x + y for x, y in zip(a_now, b_now, strict=True))
-    ends = oracle_round_ends(task, c.aut)
+    ends = oracle_round_ends(task, c.aut) | {c.lots.final}  # the planned round counts too
     feasible = any(oracle_can_complete(task, c.aut, ends, q, b_now, cap) for q in qs)
     assert r.satisfied == feasible, (task.formula, r.reason, [a.text() for a in r.actions], seen)
     if not r.satisfied:
