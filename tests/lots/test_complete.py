@@ -21,7 +21,7 @@ from tamp.lots.run import run_task
 from tamp.lots.task import Event, Proposition, Task, load_events, load_task
 from verification.lots import check_run_of
 
-from .helpers import TWO_CLASSES, scenario, take_away, write_files
+from .helpers import TWO_CLASSES, random_tasks, scenario, take_away, write_files
 
 LATE = "version: 1\nevents:\n  - {after: 99, kind: remove, class: body, side: B}\n"
 
@@ -131,17 +131,8 @@ ALTERNATIVES = (
 )
 
 
-@st.composite
-def random_task(draw):
-    shape = draw(st.sampled_from(ALTERNATIVES))
-    classes = ("cup", "mug", "jar")
-    props = tuple(
-        Proposition(f"p{i}", draw(st.sampled_from(classes)), draw(st.sampled_from((1.0, 2.0))))
-        for i in range(3)
-    )
-    init_a = {c: draw(st.integers(0, 2)) for c in classes}
-    init_b = {c: draw(st.integers(0, 1)) for c in classes}
-    return Task(shape.format("p0", "p1", "p2"), props, init_a, init_b)
+def random_task():
+    return random_tasks(ALTERNATIVES)
 
 
 takeaway = st.tuples(st.sampled_from(("A", "B")), st.integers(0, 2), st.integers(1, 2))

@@ -40,7 +40,7 @@ from tamp.lots.run import run_task
 from tamp.lots.task import Event, Proposition, Task, load_events, load_task
 from verification.lots import check_run_of
 
-from .helpers import TWO_CLASSES, take_away, write_files
+from .helpers import CLASSES, TWO_CLASSES, random_tasks, take_away, write_files
 
 # -- the oracle -------------------------------------------------------------------------------
 
@@ -217,19 +217,10 @@ SHAPES = (
     "GF {0} & GF {1}",
     "F({0} & F {2}) | GF {1}",
 )
-CLASSES = ("cup", "mug", "jar")
 
 
-@st.composite
-def random_task(draw):
-    shape = draw(st.sampled_from(SHAPES))
-    props = tuple(
-        Proposition(f"p{i}", draw(st.sampled_from(CLASSES)), draw(st.sampled_from((1.0, 2.0))))
-        for i in range(3)
-    )
-    init_a = {c: draw(st.integers(0, 2)) for c in CLASSES}
-    init_b = {c: draw(st.integers(0, 1)) for c in CLASSES}
-    return Task(shape.format("p0", "p1", "p2"), props, init_a, init_b)
+def random_task():
+    return random_tasks(SHAPES)
 
 
 AROUND = "F(p0 & F p2) | GF p1"
