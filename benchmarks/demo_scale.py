@@ -4,15 +4,17 @@ Instances come from `tests.demo.generate` (the same generator the tests use):
 
 * ``multi`` — n steps over n/3 objects in a row, each object moved three times up its own
   column (independent goal chains: a wide RG, an exact search over many interleavings);
-* ``one`` — n steps of a single object (one chain: a path-shaped RG of n+1 states).
+* ``one`` — n steps of a single object (one chain: a path-shaped RG of n+1 states);
+* ``wide`` — n objects in a row, each moved once (n interleavable goals, many equal-cost
+  orders: where a plateau of equal f used to make the search wander for minutes).
 
 Each instance runs in its own process (so peak memory is its own): parse (load and derive
 C), plan (A* + RG statistics), gate (the order check and, when small enough, the whole
 RG), each timed, plus the process's peak resident memory. A demonstration above the
 loader's limits is refused (exit 2) and the row says so.
 
-    python benchmarks/demo_scale.py                       # 300 multi, 5000 one, 50000 one
-    python benchmarks/demo_scale.py --cases 300:multi 1000:multi 20000:one
+    python benchmarks/demo_scale.py       # 300 multi, 1000 multi, 1000 wide, 5000/20000/50000 one
+    python benchmarks/demo_scale.py --cases 300:multi 20000:one
 
 Prints a table and one JSON line (``{"benchmark": "demo_scale", "rows": [...]}``).
 """
@@ -28,19 +30,21 @@ import tempfile
 import time
 from pathlib import Path
 
-DEFAULT = ["300:multi", "5000:one", "50000:one"]
+DEFAULT = ["300:multi", "1000:multi", "1000:wide", "5000:one", "20000:one", "50000:one"]
 
 
 def measure(path: str) -> dict:
     """Run parse, plan and gate on one file in this process; peak memory from rusage."""
     import resource
 
+    from tamp import fileio
     from tamp.demo import load_demonstration
     from tamp.errors import TampError
     from tamp.rg import plan
     from verification.gate import gate_order
 
-    row: dict = {}
+    c_scanner = fileio._LOADER is not fileio._StrictLoader
+    row: dict = {"yaml_loader": "libyaml" if c_scanner else "pure-python"}
     t0 = time.perf_counter()
     try:
         demo = load_demonstration(path)
@@ -121,6 +125,8 @@ def main(argv: list[str] | None = None) -> int:
                 f"{r['plan_s']:7.2f} {r['gate_s']:7.2f} {r['wall_s']:7.2f} {r['peak_mb']:8.0f}"
                 f"  {note}"
             )
+    if rows and "yaml_loader" in rows[0]:
+        print(f"YAML: {rows[0]['yaml_loader']} scanner")
     print(json.dumps({"benchmark": "demo_scale", "rows": rows}))
     return 0
 

@@ -6,9 +6,19 @@ import time
 
 import pytest
 
+from tamp import fileio
 from tamp.demo import load_demonstration
 from tamp.errors import InputError
-from tamp.fileio import MAX_ALIASES, load_yaml
+from tamp.fileio import MAX_ALIASES, load_yaml, parse_yaml_text
+
+LOADERS = {"libyaml": fileio._LOADER, "pure-python": fileio._StrictLoader}
+
+
+@pytest.fixture(autouse=True, params=sorted(LOADERS))
+def loader(request, monkeypatch):
+    """Every refusal holds for the C-scanner loader and for the pure-Python fallback."""
+    monkeypatch.setattr(fileio, "_LOADER", LOADERS[request.param])
+    return request.param
 
 
 def _write(tmp_path, text: str):
@@ -73,3 +83,25 @@ def test_messages_quote_only_a_prefix_of_a_huge_value(tmp_path):
     with pytest.raises(InputError) as err:
         load_demonstration(_write(tmp_path, text))
     assert len(str(err.value)) < 300
+
+
+def test_the_c_scanner_is_used_where_libyaml_exists_and_parses_the_same():
+    import yaml
+
+    assert (LOADERS["libyaml"] is not fileio._StrictLoader) == yaml.__with_libyaml__
+    from pathlib import Path
+
+    import tamp
+
+    files = sorted(Path(tamp.__file__).parent.joinpath("scenarios").rglob("*.yaml"))
+    assert len(files) > 10
+    for f in files:
+        text = f.read_text()
+        assert parse_yaml_text(text) == parse_yaml_text(text, pure_python=True), f
+
+
+def test_nesting_far_beyond_the_limit_is_refused_not_crashed(tmp_path):
+    # libyaml's own composer recurses in C and crashes the process on this file
+    n = 200_000
+    with pytest.raises(InputError, match="nested deeper"):
+        load_yaml(_write(tmp_path, "version: 1\nx: " + "[" * n + "]" * n + "\n"), kind="x")

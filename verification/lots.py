@@ -226,7 +226,7 @@ class LotsReport(Report):
 
     def to_json(self) -> dict:
         data = super().to_json()
-        data["unfired_events"] = [e.to_json() for e in self.unfired_events]
+        data["unfired_events"] = [e.unfired_json() for e in self.unfired_events]
         return data
 
     def text(self) -> str:

@@ -38,7 +38,7 @@ from tamp.demo.build import make_demonstration
 from tamp.demo.frames import IDENTITY, UNITY_TO_ROS, MRFrame, check_rotation
 from tamp.demo.model import Demonstration
 from tamp.errors import InputError
-from tamp.fileio import Fields, check_vector, load_yaml
+from tamp.fileio import Fields, check_vector, gc_paused, load_yaml
 from tamp.scenarios import resolve
 from tamp.world.events import Appear, check_events, parse_appear
 from tamp.world.geometry import Area, Point, Pose, Quaternion
@@ -82,7 +82,16 @@ def _matrix(f: Fields, key: str, default, *, proper: bool) -> tuple[tuple[float,
 
 
 def load_demonstration(path: str | Path) -> Demonstration:
-    """Read, validate and transform a demonstration; bad input raises `InputError`."""
+    """Read, validate and transform a demonstration; bad input raises `InputError`.
+
+    Linear in the steps: the garbage collector is paused while the (acyclic) goals, areas
+    and constraints are built (`tamp.fileio.gc_paused`).
+    """
+    with gc_paused():
+        return _load_demonstration(path)
+
+
+def _load_demonstration(path: str | Path) -> Demonstration:
     source = resolve(path)
     if Path(source).is_file() and Path(source).stat().st_size > MAX_BYTES:
         raise InputError(

@@ -142,68 +142,85 @@ def initial_lasso(aut: Automaton, task: Task) -> tuple[list[Step], list[Letter],
 def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]:
     """Every W^B state that ends one round of some accepting way of the task, ``final`` first.
 
-    A round of a way: deliveries (and ∅) from an empty W^B to a live accepting state ``q_F``,
-    then the cheapest accepting cycle of ``q_F`` (`cheapest_cycle`); its end is the W^B
-    counts after both, within the objects that exist. ``F p | F q`` (classes x, y) has two,
-    ``x^1 y^0`` and ``x^0 y^1``. Only the minimal ends are kept (a round that delivers more
-    than another of the same way is not another way), plus ``final`` (the planned round).
-    Breadth-first by number of deliveries; a W^B state above a known end is not expanded.
+    A round of a way, from an empty W^B: a prefix of deliveries (and ∅) to an accepting state
+    ``q_F`` on an accepting cycle, then one traversal of *any* non-empty cycle back to ``q_F``
+    (a recurring choice, ``GF(p | q)``, gives one way per class); its end is W^B after both.
+    Objects are those that exist (W^A and W^B at the start); delivering a class again when
+    all its objects are already in W^B takes one out first (∅, then the delivery), so a way
+    that delivers an object twice (``F(p & F(q & F p))`` with one cup) ends with it in W^B
+    once. ``F p | F q`` (classes x, y) has two ends, ``x^1 y^0`` and ``x^0 y^1``. Kept, for
+    each accepting state ``q_F``: the minimal ends of its *plain* rounds (each object
+    delivered once), and the ends of its redelivering rounds that are minimal among all its
+    ends — a round of the same kind through the same ``q_F`` that leaves more in W^B is
+    surplus, not another way; a round through another ``q_F`` is another way even with a
+    larger end (``F(p & F q) | GF p`` keeps cup, and cup with mug: once ``p`` is delivered
+    for the first way only the mug completes it), and a plain round stays a way beside a
+    redelivering one with a smaller end (``(F p0 & F p2) | F(p1 & F p2)`` with one mug keeps
+    cup with mug beside mug alone). Plus ``final`` (the planned round).
+
+    Search: ``(q, b, q_F, redelivered?)`` (``q_F`` = -1 in the prefix), by levels of ``Σ b``
+    (W^B only grows along a round); a state above a known end of its ``q_F`` (of every ``q_F``
+    in the prefix) is not expanded. At most ``4·|Q|·(|Q_F| + 1)·∏(n_i + 1)`` states.
     """
     classes = task.classes
     idx = {c: i for i, c in enumerate(classes)}
-    prop_class = {p.name: idx[p.cls] for p in task.propositions}
-    cost_of = {p.name: p.cost for p in task.propositions}
+    props = [(frozenset({p.name}), idx[p.cls]) for p in task.propositions]
     avail = tuple(task.initial_a.get(c, 0) + task.initial_b.get(c, 0) for c in classes)
-    found: list[Counts] = [final]
-    deltas: dict[int, Counts | None] = {}
+    live = aut.live_accepting
+    # per q_F: the minimal ends of plain rounds, and of all rounds (plain and redelivering)
+    plain: dict[int, list[Counts]] = {qf: [] for qf in live}
+    every: dict[int, list[Counts]] = {qf: [] for qf in live}
 
-    def above(b: Counts, strict: bool) -> bool:
+    def above(b: Counts, gs: list[Counts], strict: bool) -> bool:
         return any(
-            all(x >= y for x, y in zip(b, g, strict=True)) and (b != g or not strict) for g in found
+            all(x >= y for x, y in zip(b, g, strict=True)) and (b != g or not strict) for g in gs
         )
 
-    start = (aut.initial, (0,) * len(classes))
+    def pruned(b: Counts, qf: int, sat: bool) -> bool:
+        """No new end can follow: b is above a known end of its q_F (of every q_F while in
+        the prefix) — a plain end for a plain round, any end for a redelivering one."""
+        known = every if sat else plain
+        if qf >= 0:
+            return above(b, known[qf], strict=True)
+        return all(above(b, gs, strict=True) for gs in known.values())
+
+    def steps(q: int, b: Counts, sat: bool) -> Iterator[tuple[int, Counts, bool]]:
+        for nq in aut.successors(q, EMPTY):
+            yield nq, b, sat
+        for letter, i in props:
+            if b[i] < avail[i]:
+                nb = b[:i] + (b[i] + 1,) + b[i + 1 :]
+                for nq in aut.successors(q, letter):
+                    yield nq, nb, sat
+            elif avail[i]:  # every object of the class is in W^B: one out (∅), then again
+                for mid in aut.successors(q, EMPTY):
+                    for nq in aut.successors(mid, letter):
+                        yield nq, b, True
+
+    start = (aut.initial, (0,) * len(classes), -1, False)  # qf -1: still in the prefix
     seen = {start}
     level = [start]
     while level:
-        nxt_level: list[Pair] = []
+        nxt_level: list[tuple[int, Counts, int, bool]] = []
         stack = list(level)
         while stack:
-            q, b = stack.pop()
-            if above(b, strict=True):
+            q, b, qf, sat = stack.pop()
+            if pruned(b, qf, sat):
                 continue
-            if q in aut.live_accepting:
-                if q not in deltas:
-                    deltas[q] = _deliveries(cheapest_cycle(aut, cost_of, q), prop_class, classes)
-                end = tuple(x + d for x, d in zip(b, deltas[q], strict=True))
-                if all(x <= n for x, n in zip(end, avail, strict=True)) and not above(end, False):
-                    found.append(end)
-            for nq in aut.successors(q, EMPTY):
-                if (nq, b) not in seen:
-                    seen.add((nq, b))
-                    stack.append((nq, b))
-            for p, i in prop_class.items():
-                if b[i] < avail[i]:
-                    nb = b[:i] + (b[i] + 1,) + b[i + 1 :]
-                    for nq in aut.successors(q, frozenset({p})):
-                        if (nq, nb) not in seen:
-                            seen.add((nq, nb))
-                            nxt_level.append((nq, nb))
+            if qf >= 0 and q == qf and not above(b, (every if sat else plain)[qf], False):
+                if not sat:
+                    plain[qf].append(b)
+                every[qf].append(b)
+            succ = [(nq, nb, qf, s) for nq, nb, s in steps(q, b, sat)]
+            if qf < 0 and q in live:  # the cycle starts here (its first step)
+                succ += [(nq, nb, q, s) for nq, nb, s in steps(q, b, sat)]
+            for node in succ:
+                if node not in seen:
+                    seen.add(node)
+                    (stack if node[1] == b else nxt_level).append(node)
         level = nxt_level
-    rest = [
-        g
-        for g in found[1:]
-        if not any(h != g and all(x >= y for x, y in zip(g, h, strict=True)) for h in found)
-    ]
-    return (final, *sorted(set(rest) - {final}))
-
-
-def _deliveries(letters: list[Letter], prop_class: dict[str, int], classes) -> Counts:
-    out = [0] * len(classes)
-    for letter in letters:
-        for p in letter:
-            out[prop_class[p]] += 1
-    return tuple(out)
+    rest = {g for gs in every.values() for g in gs} - {final}
+    return (final, *sorted(rest))
 
 
 def cheapest_cycle(aut: Automaton, cost_of: dict[str, float], qf: int) -> list[Letter]:

@@ -64,7 +64,7 @@ class Report:
                 {"after": n, "phase": phase, "event": e.describe()}
                 for n, phase, e in self.person.log
             ],
-            "unfired_events": [e.to_json() for e in self.unfired_events],
+            "unfired_events": [e.unfired_json() for e in self.unfired_events],
             "replans": c.replans,
             "final": self.counts(),
             "satisfied": self.satisfied,

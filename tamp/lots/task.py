@@ -131,6 +131,10 @@ class Event:
         where = f" [{self.where}]" if self.where else ""
         return f"never happened: {self.describe()} {self.when()}{where}"
 
+    def unfired_json(self) -> dict:
+        """JSON of a scripted event the run ended before: `to_json` and the printed line."""
+        return self.to_json() | {"message": self.never_happened()}
+
 
 def load_task(path: str | Path) -> Task:
     """Read and validate a task file; any error is an `InputError` naming file and field."""

@@ -9,6 +9,14 @@ needs (§IV-C3: IsGraspedObject(O1) vs IsGraspedObject(Oa)).
 
 Choices where the paper is silent (written down here on purpose):
 - ``IsObjectAt(o, l)`` is false while ``o`` is held: a carried object is not *at* an area.
+  It is also false while ``o`` rests on top of another object (`resting_on`), whatever its
+  x and y: areas are places on the floor, and the Drake workcell judges success the same way
+  in 3-D (`tamp.sim.smp.placement.why_not_in`; issue 17: O0 pushed onto O_a at z = 0.25 m
+  must not look placed to the tree either). States carry centres, not sizes, so "on top" is
+  read from the centres: another unheld object closer than `STACK_RADIUS` in the plane (two
+  objects standing side by side are at least the sum of their footprint radii apart, 7 cm
+  for the packaged kinds) and more than `STACK_TOL` lower. Symbolic effects never stack
+  (they keep an object's height), so only observed plant states can make it false.
 - ``IsAreaFree(l)`` ignores the held object, which travels with the robot.
 - ``IsRobotCloseTo(ref, d)`` takes an object or area name; ``d`` defaults to the domain's
   reach (0.9 m, the paper's default). The paper writes ``IsRobotCloseTo(l.pos, l.radius)``
@@ -30,6 +38,24 @@ from tamp.world.geometry import Point, Pose, Quaternion
 from tamp.world.state import WorldState
 
 DEFAULT_REACH = 0.9
+#: m: centres closer than this in the plane cannot both stand on the floor (footprints 2 × 3.5 cm)
+STACK_RADIUS = 0.07
+#: m: a centre higher than another's by more than this, above it, rests on it
+STACK_TOL = 0.01
+
+
+def resting_on(state: WorldState, uid: str) -> list[str]:
+    """The unheld objects that object ``uid`` stands on (its centre above theirs, see the
+    module notes), in uid order; empty for an object on the floor."""
+    o = state.objects[uid].pos
+    return sorted(
+        other
+        for other, s in state.objects.items()
+        if other != uid
+        and other != state.held
+        and s.pos.z < o.z - STACK_TOL
+        and s.pos.planar_distance(o) < STACK_RADIUS
+    )
 
 
 class Predicate:
@@ -57,7 +83,8 @@ class Predicate:
 
 @dataclass(frozen=True, slots=True)
 class IsObjectAt(Predicate):
-    """True when object ``obj`` lies (not held) inside area ``area``."""
+    """True when object ``obj`` lies (not held) inside area ``area``, on the floor there (not
+    on top of another object: `resting_on`)."""
 
     obj: str
     area: str
@@ -71,7 +98,7 @@ class IsObjectAt(Predicate):
         o = state.objects.get(self.obj)
         if o is None or state.held == self.obj:
             return False
-        return state.area(self.area).contains(o.pos)
+        return state.area(self.area).contains(o.pos) and not resting_on(state, self.obj)
 
     def achieve(self, state: WorldState) -> WorldState:
         target = state.area(self.area).pos

@@ -2,7 +2,9 @@
 
 ``multi``: n steps over max(1, n // 3) objects standing in a row (0.4 m apart), each moved
 up its own column in turn (independent goal chains). ``one``: n steps of one object along a
-grid of places 0.4 m apart (one chain). Area radius 0.15 m, so no two areas overlap.
+grid of places 0.4 m apart (one chain). ``wide``: n objects in a row, each moved once, 1 m
+straight ahead (n interleavable goals, every order allowed; many orders cost the same).
+Area radius 0.15 m, so no two areas overlap.
 """
 
 from __future__ import annotations
@@ -30,8 +32,11 @@ def demo_document(n: int, kind: str = "multi") -> dict:
         for k in range(n):
             i, r = k % m, k // m
             steps.append({"object": f"O{i}", "to": [round(i * 0.4, 3), 0, round(1 + r * 0.4, 3)]})
+    elif kind == "wide":
+        objects = [{"id": f"O{i}", "position": [round(i * 0.4, 3), 0, 0]} for i in range(n)]
+        steps = [{"object": f"O{i}", "to": [round(i * 0.4, 3), 0, 1.0]} for i in range(n)]
     else:
-        raise ValueError(f"unknown kind {kind!r} (multi, one)")
+        raise ValueError(f"unknown kind {kind!r} (multi, one, wide)")
     return {
         "version": 1,
         "frame": {"robot_position": [0, 0, -1]},
