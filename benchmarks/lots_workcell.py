@@ -89,10 +89,12 @@ def run_pick(scene, target: str, uid: str, network: str, timeout: float) -> dict
     """One ``Pick(target)`` in ``scene`` with ``network``; what happened and what it cost."""
     from tamp.sim.lots.builder import build_diagram
     from tamp.sim.lots.driver import CellDriver
+    from tamp.sim.lots.grasping import dilate, on_mask, snap_to_mask
     from tamp.sim.lots.simulate import with_network
     from tamp.sim.lots.timing import breakdown, cell_parts
 
     cell = build_diagram(with_network(scene, network))
+    cell.planner.record = True  # every view's crop and predictions (for the on-target count)
     driver = CellDriver(cell)
     w0, c0, t0 = time.perf_counter(), time.process_time(), driver.context.get_time()
     status = driver.run(f"Pick({target})", timeout=timeout)
@@ -103,6 +105,14 @@ def run_pick(scene, target: str, uid: str, network: str, timeout: float) -> dict
     ]
     skills = driver.skill_state()
     ok = status.status.value == "SUCCESS" and float(z) > LIFTED
+    # views whose best grasp has its centre on the target as the network put it, and after
+    # `snap_to_mask` moved it along its closing line (what the skill uses)
+    on, snapped = 0, 0
+    for crop, grasps, _ in cell.planner.history:
+        mask = dilate(np.asarray(crop.mask), 1)
+        if grasps:
+            on += on_mask(grasps[0].rect(), mask) is not None
+            snapped += snap_to_mask(grasps[0].rect(), mask) is not None
     return {
         "success": ok,
         "status": status.status.value,
@@ -114,6 +124,8 @@ def run_pick(scene, target: str, uid: str, network: str, timeout: float) -> dict
         "cpu_time": round(cpu, 3),
         "frames": driver.stats().frames,
         "network_calls": cell.planner.calls,
+        "views_best_on_target": on,
+        "views_best_snapped": snapped,
         "parts": breakdown(wall, cpu, cell_parts(cell)),
     }
 
@@ -195,6 +207,9 @@ def summarise(network: str, picks: list[dict]) -> dict:
         "network_ms_per_call": (
             round(parts["network"]["cpu"] / calls * 1000, 1) if calls else None
         ),
+        "views": calls,
+        "views_best_on_target": sum(p["views_best_on_target"] for p in picks),
+        "views_best_snapped": sum(p["views_best_snapped"] for p in picks),
         "sim_time": round(sim, 2),
         "wall_time": round(wall, 2),
         "cpu_time": round(cpu, 2),
@@ -254,6 +269,11 @@ def main() -> int:
             f"{r['network']:>9} {r['scenes']:>6} {r['success_rate'] * 100:>7.0f}% "
             f"{r['attempts']:>8} {r['mean_pick_time']:>7.2f} {r['network_ms_per_call'] or 0:>7.0f} "
             f"{r['rtf_wall']:>8.2f} {r['rtf_cpu']:>8.2f}"
+        )
+    for r in rows:
+        print(
+            f"  {r['network']}: best grasp of a view on the target in {r['views_best_on_target']}"
+            f" of {r['views']} views, after snap_to_mask in {r['views_best_snapped']}"
         )
     if rows and rows[0]["network"] == "hrgnet":
         for r in rows[1:]:
