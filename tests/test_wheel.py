@@ -73,6 +73,13 @@ def test_wheel_holds_the_models_and_the_license(installed):
     for name in ("youbot", "bottle", "obstacle", "floor", "area_marker"):
         assert f"tamp_models/sdf/{name}.sdf" in names
     assert {"tamp_models/package.xml", "tamp_models/weights/hrgnet_synth_rgbd.pt"} <= names
+    # the three grasp networks of `tamp simulate lots --grasp`; the weights stay small
+    weights = [f"tamp_models/weights/{n}_synth_rgbd.pt" for n in ("grconvnet", "ggcnn")]
+    assert set(weights) <= names
+    sizes = [
+        i.compress_size for i in zipfile.ZipFile(wheel).infolist() if i.filename.endswith(".pt")
+    ]
+    assert sum(sizes) < 8_000_000, sizes
     assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names)
     sources = {p.relative_to(ROOT).as_posix() for p in (ROOT / "tamp").rglob("*.py")}
     assert sources <= names, sorted(sources - names)[:5]

@@ -9,6 +9,7 @@ every view and, after the last (lowest) view, takes the best of all of them.
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,8 +20,14 @@ from tamp.grasp.rect import GraspRect
 from tamp.sim.core.models import models_dir
 from tamp.sim.lots.perception import TargetCrop
 from tamp.sim.lots.scenario import DEFAULT_WEIGHTS, GraspSettings
+from tamp.sim.lots.timing import Stopwatch
 
 MAX_OPENING = 0.08  # the gripper's opening (2 x 0.04 m)
+#: torch intra-op threads for the network inside the workcell. The simulation runs in the
+#: same process and the machine has 2 shared cores: with 2 threads, OpenMP's second thread
+#: spin-waits for a core, and one HRG-Net call on a 180 px crop took 6-9 s of wall time
+#: and 1.0-1.4 s of CPU (load average 14) against 0.5-0.7 s and 63-75 ms with 1 thread.
+INFERENCE_THREADS = 1
 #: the object's top must stand this high above the table where the fingers close: the pads
 #: stop 2 mm above the table, so a 6 mm saw blade gives them nothing to squeeze
 MIN_TOP = 0.008
@@ -51,6 +58,8 @@ class GraspPlanner:
         self.predictor = GraspPredictor.load(self.weights)
         self.intrinsics = intrinsics
         self.calls = 0
+        #: time spent in the network (pre-processing, inference, peak reading)
+        self.network = Stopwatch()
         #: (crop, all predicted grasps, kept candidates) of every call when ``record`` is set:
         #: what notebooks and tests show of the descending views (not simulation state)
         self.record = False
@@ -64,13 +73,14 @@ class GraspPlanner:
         """The network's ``n`` best grasps on the target's mask, best first."""
         fx, fy, cx, cy = self.intrinsics
         u0, v0 = crop.origin
-        grasps = self.predictor.predict(
-            rgb=np.asarray(crop.rgb),
-            depth=np.asarray(crop.depth, np.float32),
-            intrinsics=(fx, fy, cx - u0, cy - v0),
-            X_WC=X_WC,
-            n=n,
-        )
+        with self.network, torch_threads(INFERENCE_THREADS):
+            grasps = self.predictor.predict(
+                rgb=np.asarray(crop.rgb),
+                depth=np.asarray(crop.depth, np.float32),
+                intrinsics=(fx, fy, cx - u0, cy - v0),
+                X_WC=X_WC,
+                n=n,
+            )
         self.calls += 1
         mask = dilate(np.asarray(crop.mask), 1)
         depth = np.where(crop.mask, crop.depth, 0.0).astype(np.float32)  # the target's top
@@ -88,6 +98,21 @@ class GraspPlanner:
         if self.record:
             self.history.append((crop, grasps, out))
         return out
+
+
+@contextmanager
+def torch_threads(n: int):
+    """Run the block with ``n`` torch intra-op threads, then restore the previous number."""
+    import torch
+
+    before = torch.get_num_threads()
+    if before != n:
+        torch.set_num_threads(n)
+    try:
+        yield
+    finally:
+        if before != n:
+            torch.set_num_threads(before)
 
 
 def on_mask(rect: GraspRect, mask: np.ndarray) -> GraspRect | None:

@@ -29,6 +29,8 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I, ImageRgba8U
 
+from tamp.sim.lots.timing import Stopwatch
+
 
 @dataclass(frozen=True)
 class ViewRequest:
@@ -187,6 +189,9 @@ class Perception(LeafSystem):
         self._center = ((width - 1) / 2, (height - 1) / 2)
         #: wall seconds of every render (measurement only; not simulation state)
         self.render_seconds: list[float] = []
+        #: time spent rendering (image ports evaluated) and analysing views (the rest)
+        self.render = Stopwatch()
+        self.analysis = Stopwatch()
         self._crop = min(width, height)
         self.color_port = self.DeclareAbstractInputPort(
             "color_image", AbstractValue.Make(ImageRgba8U(width, height))
@@ -221,21 +226,30 @@ class Perception(LeafSystem):
         if req.id == 0 or req.id == s.served:
             return EventStatus.DidNothing()
         t0 = time.perf_counter()
-        label = self.label_port.Eval(context).data[..., 0]
-        depth = self.depth_port.Eval(context).data[..., 0]
+        with self.render:
+            label = self.label_port.Eval(context).data[..., 0]
+            depth = self.depth_port.Eval(context).data[..., 0]
         self.render_seconds.append(time.perf_counter() - t0)
         kinds = 2
-        counts, dets, in_hand, occupied = analyse(
-            label, depth, self._classes, min_pixels=self._min_pixels, hand_depth=self._hand_depth
-        )
+        with self.analysis:
+            counts, dets, in_hand, occupied = analyse(
+                label,
+                depth,
+                self._classes,
+                min_pixels=self._min_pixels,
+                hand_depth=self._hand_depth,
+            )
+            det = None
+            if req.target is not None:
+                det = choose_target(dets, req.target, req.track, self._center)
         target = None
-        if req.target is not None:
-            det = choose_target(dets, req.target, req.track, self._center)
-            if det is not None:
-                t0 = time.perf_counter()
+        if det is not None:
+            t0 = time.perf_counter()
+            with self.render:
                 rgb = self.color_port.Eval(context).data[..., :3]
-                self.render_seconds[-1] += time.perf_counter() - t0
-                kinds += 1
+            self.render_seconds[-1] += time.perf_counter() - t0
+            kinds += 1
+            with self.analysis:
                 u0, v0 = crop_square(self._crop, label.shape, det.u, det.v)
                 sl = (slice(v0, v0 + self._crop), slice(u0, u0 + self._crop))
                 target = TargetCrop(

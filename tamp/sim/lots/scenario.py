@@ -40,7 +40,11 @@ CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
 NETWORKS = ("hrgnet", "grconvnet", "ggcnn")
 SIDES = ("A", "B")
 #: Where each network's shipped weights are (relative to the repository's models/ folder).
-DEFAULT_WEIGHTS = {"hrgnet": "weights/hrgnet_synth_rgbd.pt"}
+DEFAULT_WEIGHTS = {
+    "hrgnet": "weights/hrgnet_synth_rgbd.pt",
+    "grconvnet": "weights/grconvnet_synth_rgbd.pt",
+    "ggcnn": "weights/ggcnn_synth_rgbd.pt",
+}
 #: The arm's comfortable reach on the table (Franka: 0.855 m from joint 2; keep a margin).
 REACH = (0.25, 0.75)
 BASKET_HALF = 0.12  # lots_waste_basket.sdf: 0.24 x 0.24 m

@@ -51,6 +51,7 @@ from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner
 from tamp.sim.lots.kinematics import ArmKinematics, down, hand_yaw_for_closing, pose_error
 from tamp.sim.lots.perception import Observation, ViewRequest
 from tamp.sim.lots.scenario import CellScenario
+from tamp.sim.lots.timing import Stopwatch
 from tamp.world.interface import Status
 
 SKILLS = ("LookAt", "Pick", "PickAt", "Place", "Discard", "Wait")
@@ -142,6 +143,10 @@ class SkillController(LeafSystem):
         self.planner = planner
         self.dt = scenario.control.period
         self._order = list(actuator_order)
+        #: time spent in the update (differential IK, view handlers, the grasp network calls
+        #: they make: `GraspPlanner.network` times those); measurement only
+        self.control = Stopwatch()
+        self._zeros9 = np.zeros(9)
         self.command_port = self.DeclareAbstractInputPort(
             "skill_command", AbstractValue.Make(SkillCommand())
         )
@@ -177,8 +182,8 @@ class SkillController(LeafSystem):
 
     def _calc_desired(self, context, output: BasicVector) -> None:
         s = self.state(context)
-        q9 = np.r_[s.q, s.finger, s.finger]
-        output.SetFromVector(np.r_[q9[self._order], np.zeros(9)])
+        q9 = np.concatenate((s.q, (s.finger, s.finger)))
+        output.SetFromVector(np.concatenate((q9[self._order], self._zeros9)))
 
     def _calc_request(self, context, output) -> None:
         output.set_value(self.state(context).request)
@@ -188,9 +193,17 @@ class SkillController(LeafSystem):
 
     # ---- the update ----------------------------------------------------------------------
     def _update(self, context, state) -> EventStatus:
-        s: SkillState = copy.deepcopy(self.state(context))
-        t = context.get_time()
+        with self.control:
+            return self._update_timed(context, state)
+
+    def _update_timed(self, context, state) -> EventStatus:
+        current = self.state(context)
         cmd: SkillCommand = self.command_port.Eval(context)
+        running = current.steps and current.status.status is Status.RUNNING
+        if not running and (cmd.id == 0 or cmd.id == current.command.id):
+            return EventStatus.DidNothing()  # idle, no new command: nothing to copy or write
+        s: SkillState = copy.deepcopy(current)
+        t = context.get_time()
         x = self.arm_state_port.Eval(context)
         q_meas, v_meas = x[:9], x[9:]
         if cmd.id != s.command.id and cmd.id != 0 and not cmd.cancel:

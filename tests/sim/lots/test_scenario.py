@@ -41,7 +41,7 @@ def test_packaged_model_building_loads():
         ),
         ([], {"camera": {"width": 8}}, "camera.width"),
         ([], {"grasp": {"view_heights": [0.2, 0.3]}}, "grasp.view_heights"),
-        ([], {"grasp": {"network": "ggcnn"}}, "grasp.network"),
+        ([], {"grasp": {"network": "yolo"}}, "grasp.network"),
         ([], {"waste_basket": [0.5, 0.05]}, "waste_basket"),
         ([], {"waste_basket": [2.0, 0.0]}, "waste_basket"),
         ([], {"plant": {"time_step": 0.5}}, "plant.time_step"),
@@ -54,6 +54,20 @@ def test_bad_scenarios_name_the_field(tmp_path, objects, changes, field):
         load_cell_scenario(path)
     assert err.value.field == field
     assert err.value.file == str(path)
+
+
+def test_every_network_loads_with_its_shipped_weights_or_names_the_field(tmp_path, monkeypatch):
+    from tamp.sim.lots import scenario
+
+    for net in scenario.NETWORKS:
+        path = write_scenario(tmp_path, [], grasp={"network": net})
+        assert load_cell_scenario(path).grasp.network == net
+    # a network without shipped weights (and none given) is refused, naming the field
+    monkeypatch.setattr(scenario, "DEFAULT_WEIGHTS", {"hrgnet": "weights/hrgnet_synth_rgbd.pt"})
+    path = write_scenario(tmp_path, [], grasp={"network": "ggcnn"})
+    with pytest.raises(InputError) as err:
+        load_cell_scenario(path)
+    assert err.value.field == "grasp.network" and "no shipped weights" in str(err.value)
 
 
 def test_workspaces_must_be_apart(tmp_path):

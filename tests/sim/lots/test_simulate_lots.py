@@ -35,9 +35,21 @@ def test_task_and_scene_must_start_from_the_same_objects():
     assert e.value.field == "objects"
 
 
-def test_networks_without_weights_are_refused():
+def test_every_network_ships_weights_and_unknown_ones_are_refused(monkeypatch):
+    from tamp.sim.core.models import models_dir
+    from tamp.sim.lots import simulate
+    from tamp.sim.lots.scenario import DEFAULT_WEIGHTS, NETWORKS
+
     scene = load_cell_scenario("tower")
     assert with_network(scene, "hrgnet") is scene
+    for net in NETWORKS:
+        assert (models_dir() / DEFAULT_WEIGHTS[net]).is_file()
+        assert with_network(scene, net).grasp.network == net
+    with pytest.raises(InputError, match="unknown network") as e:
+        with_network(scene, "yolo")
+    assert e.value.field == "--grasp"
+    # a network whose weights are not shipped is refused before anything is built
+    monkeypatch.setattr(simulate, "DEFAULT_WEIGHTS", {"hrgnet": DEFAULT_WEIGHTS["hrgnet"]})
     with pytest.raises(InputError, match="no shipped weights") as e:
         with_network(scene, "ggcnn")
     assert e.value.field == "--grasp"
@@ -54,7 +66,7 @@ def test_cli_refuses_interference_and_mismatched_scenes_with_exit_2(capsys):
         "--task", "tower", "--interference", "tower_interference"
     )
     assert "objects: W^A holds" in refused("--task", "tower", "--scenario", "model_building")
-    assert "--grasp: no shipped weights" in refused("--task", "tower", "--grasp", "ggcnn")
+    assert "--grasp" in refused("--task", "tower", "--grasp", "yolo")
     assert "--max-sim-time" in refused("--task", "tower", "--max-sim-time", "-1")
 
 

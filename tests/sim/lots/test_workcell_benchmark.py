@@ -1,0 +1,104 @@
+"""Where the workcell's time goes (`tamp.sim.lots.timing`), the grasp network's thread scope,
+and benchmarks/lots_workcell.py: its seeded scenes, and one pick per network (slow)."""
+
+from __future__ import annotations
+
+import importlib.util
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+import torch
+
+from tamp.sim.lots.catalogue import CLASSES
+from tamp.sim.lots.scenario import load_cell_scenario, rectangles_overlap
+from tamp.sim.lots.timing import Stopwatch, breakdown, cell_parts
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+@pytest.fixture(scope="module")
+def bench():
+    path = ROOT / "benchmarks" / "lots_workcell.py"
+    spec = importlib.util.spec_from_file_location("lots_workcell_bench", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_stopwatch_accumulates_wall_and_cpu():
+    sw = Stopwatch()
+    for _ in range(2):
+        with sw:
+            t = time.process_time()
+            while time.process_time() - t < 0.02:  # busy: CPU time advances too
+                pass
+    assert sw.calls == 2
+    assert sw.cpu >= 0.04 and sw.wall >= sw.cpu * 0.5
+    sw.reset()
+    assert (sw.wall, sw.cpu, sw.calls) == (0.0, 0.0, 0)
+
+
+def test_breakdown_gives_the_rest_to_physics_and_shares_sum_to_one():
+    parts = {"render": Stopwatch(1.0, 0.5, 3), "network": Stopwatch(2.0, 1.5, 4)}
+    out = breakdown(10.0, 4.0, parts)
+    assert out["physics"]["wall"] == 7.0 and out["physics"]["cpu"] == 2.0
+    assert out["render"]["wall_share"] == 0.1 and out["network"]["cpu_share"] == 0.375
+    assert sum(r["cpu_share"] for r in out.values()) == pytest.approx(1.0)
+
+
+def test_cell_parts_do_not_count_the_network_twice():
+    cell = SimpleNamespace(
+        skills=SimpleNamespace(control=Stopwatch(5.0, 3.0, 100)),
+        planner=SimpleNamespace(network=Stopwatch(2.0, 1.0, 4)),
+        perception=SimpleNamespace(render=Stopwatch(0.5, 0.2, 5), analysis=Stopwatch()),
+    )
+    parts = cell_parts(cell)
+    assert parts["skills"].wall == 3.0 and parts["skills"].cpu == 2.0
+    assert parts["network"] is cell.planner.network
+    assert set(parts) == {"render", "perception", "network", "skills"}
+
+
+def test_network_thread_scope_restores_torch_threads():
+    from tamp.sim.lots.grasping import INFERENCE_THREADS, torch_threads
+
+    before = torch.get_num_threads()
+    with torch_threads(INFERENCE_THREADS):
+        assert torch.get_num_threads() == INFERENCE_THREADS == 1
+    assert torch.get_num_threads() == before
+
+
+def test_scenes_are_seeded_valid_and_cycle_through_the_task_classes(bench):
+    base = load_cell_scenario("tower")
+    scenes = [bench.make_scene(base, s) for s in range(len(bench.TARGETS))]
+    assert [t for _, t, _ in scenes] == list(bench.TARGETS)
+    again = bench.make_scene(base, 3)
+    assert again[0].objects == scenes[3][0].objects  # the same seed, the same scene
+    assert scenes[0][0].objects != bench.make_scene(base, 8)[0].objects  # same class, new pose
+    w = base.workspaces["A"]
+    for scene, target, uid in scenes:
+        assert scene.time_step == base.time_step and scene.grasp == base.grasp
+        a, b = scene.objects
+        assert a.id == uid and a.cls == target and b.cls != target
+        corners = [CLASSES[o.cls].footprint.corners(*o.xy, o.yaw) for o in (a, b)]
+        assert all(w.contains(*c) for cs in corners for c in cs)
+        assert not rectangles_overlap(*corners, gap=0.01)
+
+
+@pytest.mark.slow
+def test_one_pick_per_network_on_the_plant(bench):
+    pytest.importorskip("pydrake")
+    base = load_cell_scenario("tower")
+    scene, target, uid = bench.make_scene(base, 4)  # a tower body
+    picks = {}
+    for net in ("hrgnet", "grconvnet", "ggcnn"):
+        p = picks[net] = bench.run_pick(scene, target, uid, net, timeout=40.0)
+        assert p["network_calls"] >= 4 and p["frames"] >= 5
+        assert p["success"] == (p["status"] == "SUCCESS" and p["target_z"] > bench.LIFTED)
+        assert 0 < p["sim_time"] <= 41.0 and p["cpu_time"] > 0
+        parts = p["parts"]
+        assert parts["network"]["calls"] == p["network_calls"]
+        assert parts["physics"]["cpu"] > 0
+        assert sum(r["cpu_share"] for r in parts.values()) == pytest.approx(1.0, abs=0.01)
+    assert picks["hrgnet"]["success"]  # the benchmark's scene 4: HRG-Net lifts the body
