@@ -108,6 +108,10 @@ class Refinement:
                     "timeline": p.run.timeline.to_json()["behaviors"],
                     "max_wait": {k: round(v, 5) for k, v in p.run.max_wait.items()},
                     "run_satisfies_ordering": p.run_holds,
+                    "collisions": [
+                        [a, b, round(t, 3)] for (a, b), t in sorted(p.run.collisions.items())
+                    ],
+                    "outcome": p.run.outcome.to_json(),
                 }
                 for p in self.phases
             ],
