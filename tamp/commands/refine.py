@@ -91,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
     first = result.phases[0].task_time
     for p in result.phases:
         change = "" if p is result.phases[0] else f"  ({p.task_time / first - 1:+.1%})"
-        print(f"  {p.name:<15} {p.task_time:8.1f} s{change:<10}  {p.run.outcome.summary()}")
+        line = f"  {p.name:<15} {p.task_time:8.1f} s{change:<10}  {p.run.outcome.summary()}"
+        print(line.rstrip())
     for p in result.parallelized:
         print(f"  parallelized: {p.describe()}")
     for p, cs in result.reverted:
