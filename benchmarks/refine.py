@@ -45,6 +45,10 @@ def run_task(n: int, category: str | None) -> dict:
         "achieved": {p.name: p.run.outcome.achieved for p in out.phases},
         "parallelized": [p.describe() for p in out.parallelized],
         "reverted": [[p.describe(), [list(c) for c in cs]] for p, cs in out.reverted],
+        "collisions": {
+            p.name: [[a, b, round(t, 2)] for (a, b), t in p.run.collisions.items()]
+            for p in out.phases
+        },
         "speed_changes": [c.describe() for c in out.speed_changes],
         "rates_found": out.tuning.found_rates() if out.tuning else {},
         "timelines": {p.name: p.run.timeline.to_json()["behaviors"] for p in out.phases},

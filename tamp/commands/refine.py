@@ -96,7 +96,9 @@ def run(args: argparse.Namespace) -> int:
     for p in result.parallelized:
         print(f"  parallelized: {p.describe()}")
     for p, cs in result.reverted:
-        print(f"  reverted: {p.describe()} (collision {cs[0][0]} with {cs[0][1]})")
+        print(
+            f"  reverted: {p.describe()} (collision {cs[0][0]} with {cs[0][1]} at {cs[0][2]:.1f} s)"
+        )
     for c in result.speed_changes:
         print(f"  speed: {c.describe()}")
     found = result.tuning.found_rates() if result.tuning else {}
