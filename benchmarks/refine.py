@@ -3,11 +3,13 @@
 For each packaged task (seed 002, Tasks 1-4): the four phases plus the tuning run, each
 simulated in the workcell (SAP, 10 ms step, Channels/executors/supervisor on the same
 tick). Reports the task time of each phase (sim seconds, measured), the rate found, the
-reduction beside the paper's, the total sim time, wall and process CPU time, and the
-real-time factors sim/wall and sim/CPU. On a shared machine the wall figure depends on
-what else runs (the load average is printed); the CPU figure is the simulation's own cost.
+reduction beside the paper's, what each phase did to the object (the chair's hinge angle,
+the scale's tilt: `tamp.sim.refine.outcome`), what was parallelized or reverted, the total
+sim time, wall and process CPU time, and the real-time factors sim/wall and sim/CPU. On a
+shared machine the wall figure depends on what else runs (the load average is printed);
+the CPU figure is the simulation's own cost.
 
-    python benchmarks/refine.py [--tasks 1 2 3 4] [--category II]
+    python benchmarks/refine.py [--tasks 1 2 3 4] [--category II] [--out rows.jsonl]
 
 Prints a table and one JSON line.
 """
@@ -39,6 +41,17 @@ def run_task(n: int, category: str | None) -> dict:
         "task": n,
         "category": out.program.communication.category,
         "phases": {p.name: round(p.task_time, 1) for p in out.phases},
+        "outcome": {p.name: p.run.outcome.to_json()["values"] for p in out.phases},
+        "achieved": {p.name: p.run.outcome.achieved for p in out.phases},
+        "parallelized": [p.describe() for p in out.parallelized],
+        "reverted": [[p.describe(), [list(c) for c in cs]] for p, cs in out.reverted],
+        "collisions": {
+            p.name: [[a, b, round(t, 2)] for (a, b), t in p.run.collisions.items()]
+            for p in out.phases
+        },
+        "speed_changes": [c.describe() for c in out.speed_changes],
+        "rates_found": out.tuning.found_rates() if out.tuning else {},
+        "timelines": {p.name: p.run.timeline.to_json()["behaviors"] for p in out.phases},
         "rate_hz": out.rate_hz,
         "reduction": round(-out.reduction, 4),
         "paper_reduction": PAPER[n],
@@ -54,8 +67,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", type=int, nargs="+", default=[1, 2, 3, 4])
     ap.add_argument("--category", choices=("I", "II", "III"))
+    ap.add_argument("--out", help="also write each task's row to this JSON-lines file")
     args = ap.parse_args()
-    rows = [run_task(n, args.category) for n in args.tasks]
+    rows = []
+    for n in args.tasks:
+        rows.append(run_task(n, args.category))
+        if args.out:
+            with open(args.out, "a") as f:
+                f.write(json.dumps(rows[-1]) + "\n")
     print(
         f"{'task':>4} {'cat':>3} {'original':>9} {'parallel':>9} {'speed':>9} {'rate':>9} "
         f"{'Hz':>4} {'ours':>7} {'paper':>7} {'sim s':>7} {'wall s':>7} {'RTF':>5} {'CPU RTF':>7}"

@@ -101,11 +101,14 @@ def run(args: argparse.Namespace) -> int:
     first = result.phases[0].task_time
     for p in result.phases:
         change = "" if p is result.phases[0] else f"  ({p.task_time / first - 1:+.1%})"
-        print(f"  {p.name:<15} {p.task_time:8.1f} s{change}")
+        line = f"  {p.name:<15} {p.task_time:8.1f} s{change:<10}  {p.run.outcome.summary()}"
+        print(line.rstrip())
     for p in result.parallelized:
         print(f"  parallelized: {p.describe()}")
     for p, cs in result.reverted:
-        print(f"  reverted: {p.describe()} (collision {cs[0][0]} with {cs[0][1]})")
+        print(
+            f"  reverted: {p.describe()} (collision {cs[0][0]} with {cs[0][1]} at {cs[0][2]:.1f} s)"
+        )
     for c in result.speed_changes:
         print(f"  speed: {c.describe()}")
     found = result.tuning.found_rates() if result.tuning else {}

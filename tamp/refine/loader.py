@@ -5,7 +5,7 @@ Format::
     version: 1
     name: task4
     description: Open the folding chair lying on the floor (Fig. 9(d), Fig. 11).
-    scene: open_chair               # flip_briefcase | flip_scale | lift_scale | open_chair
+    scene: open_chair               # flip_briefcase | flip_scale | lift_scale | open_chair | table
     architecture: arch.yaml         # optional; default: the packaged calibrated architecture
     communication:
       category: II                  # Table 1: I | II | III
@@ -58,7 +58,7 @@ from tamp.refine.program import (
 )
 
 #: The simulated scenes (Fig. 9): which objects lie where.
-SCENES = ("flip_briefcase", "flip_scale", "lift_scale", "open_chair")
+SCENES = ("flip_briefcase", "flip_scale", "lift_scale", "open_chair", "table")
 
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 _EVENT_TOKEN = re.compile(r"\b([A-Za-z][A-Za-z0-9_]*\.[A-Za-z0-9_]+)\b")

@@ -60,6 +60,25 @@ class Workcell:
     names: dict[int, str] = field(default_factory=dict)  # body index -> readable name
     visualizer: Any = None
     meshcat: Any = None
+    robot_of: dict[int, str] = field(default_factory=dict)  # body index -> robot name
+    scenery: frozenset[int] = frozenset()  # bodies of the scene's fixed objects (the table)
+
+    def collision(self, a: int, b: int) -> tuple[str, str] | None:
+        """The contact of bodies ``a`` and ``b`` as a collision ``(robot body, other)``, or
+        None when it is intended: a chassis (`scene.CHASSIS_BODIES`) touching anything, a
+        robot touching the other robot or the fixed scenery are collisions; a gripper
+        touching the task's objects (or the floor) is not."""
+        for mine, other in ((a, b), (b, a)):
+            robot = self.robot_of.get(mine)
+            if robot is None:
+                continue
+            if (
+                mine in self.chassis
+                or other in self.scenery
+                or self.robot_of.get(other, robot) != robot
+            ):
+                return (self.names.get(mine, str(mine)), self.names.get(other, str(other)))
+        return None
 
 
 def watched_sensors(program: Program, robot: str) -> tuple[str, ...]:
@@ -100,7 +119,7 @@ def build_workcell(
             plant.GetJointActuatorByName(j, m).set_controller_gains(PdControllerGains(p=kp, d=kd))
         plant.mutable_gravity_field().set_enabled(m, False)
 
-    objects = {}
+    objects, fixed = {}, []
     for p in SCENES[program.scene]:
         (m,) = parser.AddModelsFromString(_model_text(p.model, p.model), "sdf")
         objects[p.model] = m
@@ -108,11 +127,13 @@ def build_workcell(
         X = RigidTransform(RotationMatrix.MakeZRotation(p.yaw), [p.x, p.y, p.z])
         if p.fixed:
             plant.WeldFrames(plant.world_frame(), body.body_frame(), X)
+            fixed.append(m)
         else:
             plant.SetDefaultFloatingBaseBodyPose(body, X)
     plant.Finalize()
 
-    chassis, names = {}, {}
+    chassis, names, robot_of = {}, {}, {}
+    scenery = frozenset(int(i) for m in fixed for i in plant.GetBodyIndices(m))
     for m in list(robots.values()) + list(objects.values()) + [floor]:
         for index in plant.GetBodyIndices(m):
             b = plant.get_body(index)
@@ -121,6 +142,7 @@ def build_workcell(
         geoms = []
         for index in plant.GetBodyIndices(m):
             b = plant.get_body(index)
+            robot_of[int(index)] = name
             geoms += plant.GetCollisionGeometriesForBody(b)
             if b.name() in CHASSIS_BODIES:
                 chassis[int(index)] = f"{name}.{b.name()}"
@@ -217,6 +239,8 @@ def build_workcell(
         names,
         visualizer,
         meshcat,
+        robot_of,
+        scenery,
     )
 
 

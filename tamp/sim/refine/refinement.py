@@ -5,8 +5,9 @@ Phases (Fig. 3, Fig. 12):
 1. **original**: the program as given.
 2. **parallelized** (Step 1 + Step 2): `tamp.refine.steps.parallelize` on the durations
    the original run measured. The result is executed once; a parallelization after which
-   a robot's chassis or lever touches something the original run's did not is reverted
-   (`revert`) and the program runs again without it.
+   a collision appears in the plant that the original run did not have (a chassis touching
+   anything, a robot touching the other or the table: `Workcell.collision`) is reverted
+   (`revert`, latest first) and the program runs again without it.
 3. **speed-adjusted** (Fig. 6(c)): `adjust_base_speed` on the parallelized run's
    durations.
 4. **rate-refined** (Fig. 5): a tuning run of the speed-adjusted program with the
@@ -70,7 +71,10 @@ class Refinement:
 
     phases: list[Phase]
     parallelized: list[Parallelization] = field(default_factory=list)
-    reverted: list[tuple[Parallelization, list[tuple[str, str]]]] = field(default_factory=list)
+    # each reverted parallelization with the new collisions (robot body, other, first time)
+    reverted: list[tuple[Parallelization, list[tuple[str, str, float]]]] = field(
+        default_factory=list
+    )
     speed_changes: list[SpeedChange] = field(default_factory=list)
     tuning: Run | None = None
     rate_hz: float = 0.0
@@ -108,6 +112,10 @@ class Refinement:
                     "timeline": p.run.timeline.to_json()["behaviors"],
                     "max_wait": {k: round(v, 5) for k, v in p.run.max_wait.items()},
                     "run_satisfies_ordering": p.run_holds,
+                    "collisions": [
+                        [a, b, round(t, 3)] for (a, b), t in sorted(p.run.collisions.items())
+                    ],
+                    "outcome": p.run.outcome.to_json(),
                 }
                 for p in self.phases
             ],
@@ -123,7 +131,10 @@ class Refinement:
             "reduction": round(self.reduction, 4),
             "parallelized": [p.describe() for p in self.parallelized],
             "reverted": [
-                {"parallelization": p.describe(), "collisions": [list(c) for c in cs]}
+                {
+                    "parallelization": p.describe(),
+                    "collisions": [[a, b, round(t, 3)] for a, b, t in cs],
+                }
                 for p, cs in self.reverted
             ],
             "speed_changes": [c.describe() for c in self.speed_changes],
@@ -179,12 +190,15 @@ def refine(
     out.parallelized = list(done)
     r1 = run(gated(p1, "parallelized"), "parallelized")
     while True:
-        new = sorted(set(r1.collisions) - set(original.collisions))
+        new = [
+            (*k, r1.collisions[k]) for k in sorted(set(r1.collisions) - set(original.collisions))
+        ]
         if not new or not out.parallelized:
             break
         bad = out.parallelized.pop()  # the latest parallelization first
         out.reverted.append((bad, new))
-        progress(f"  collision {new[0]}: reverting '{bad.describe()}'")
+        a, b, t = new[0]
+        progress(f"  collision ({a}, {b}) at {t:.1f} s: reverting '{bad.describe()}'")
         p1 = revert(p1, bad)
         r1 = run(gated(p1, "parallelized"), "parallelized")
     if not r1.finished:

@@ -1,11 +1,14 @@
 """Runs one program in the workcell and measures it: a `Run` with the `Timeline`.
 
 The simulator advances in chunks (`tamp.sim.core.runner.run_in_chunks`); between chunks
-the runner reads the plant's contact results (a robot's chassis or lever touching anything
-is a collision, with its first time: Step 2 reverts a parallelization that causes one)
-and stops when both executors have fired every event, or, in a tuning run, when the
-supervisor's searches have ended. Nothing is computed from the program's numbers: start
-and end times are when the executors started behaviors and fired events in sim time.
+the runner reads the plant's contact results (SceneGraph's contact surfaces and point
+pairs; `Workcell.collision` says which are collisions: a robot's chassis or lever touching
+anything, a robot touching the other robot or the fixed scenery), with the first time of
+each (Step 2 reverts a parallelization that causes one), and stops when both executors
+have fired every event, or, in a tuning run, when the supervisor's searches have ended.
+Nothing is computed from the program's numbers: start and end times are when the
+executors started behaviors and fired events in sim time. At the end it measures what
+the objects did (`tamp.sim.refine.outcome`: the chair's hinge angle, the scale's tilt).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from tamp.refine.steps import RateSearch
 from tamp.refine.timeline import Timeline
 from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.refine.builder import Workcell, build_workcell, search_of
+from tamp.sim.refine.outcome import Outcome, measure, start_heights
 
 CHUNK = 0.05  # s of sim time between the runner's checks
 
@@ -37,6 +41,7 @@ class Run:
     wall_time: float = 0.0
     cpu_time: float = 0.0
     recording: str | None = None
+    outcome: Outcome = field(default_factory=Outcome)  # what the objects did (the plant's)
 
     @property
     def finished(self) -> bool:
@@ -109,16 +114,16 @@ def simulate(
                 surface = results.hydroelastic_contact_info(i).contact_surface()
                 pairs.append((body_of(surface.id_M()), body_of(surface.id_N())))
         for a, b in pairs:
-            for mine, other in ((a, b), (b, a)):
-                if mine in cell.chassis:
-                    key = (cell.chassis[mine], cell.names.get(other, str(other)))
-                    collisions.setdefault(key, t)
+            key = cell.collision(a, b)
+            if key is not None:
+                collisions.setdefault(key, t)
         if tune:
             return cell.supervisor.state(sup_ctx).done
         return all(
             e.machine.progress_of(e.state(ex_ctx[n])).done for n, e in cell.executors.items()
         )
 
+    heights = start_heights(cell.plant, plant_ctx, cell.objects)
     if record is not None:
         from tamp.sim.core.recording import start_recording
 
@@ -130,10 +135,11 @@ def simulate(
         from tamp.sim.core.recording import save_recording
 
         recording = save_recording(cell.visualizer, meshcat, record)
-    return _result(cell, root, chunked, collisions, recording)
+    outcome = measure(cell.plant, plant_ctx, cell.objects, heights, cell.program.scene)
+    return _result(cell, root, chunked, collisions, recording, outcome)
 
 
-def _result(cell: Workcell, root, chunked, collisions, recording) -> Run:
+def _result(cell: Workcell, root, chunked, collisions, recording, outcome) -> Run:
     records = []
     rates = {}
     for name, e in cell.executors.items():
@@ -151,4 +157,5 @@ def _result(cell: Workcell, root, chunked, collisions, recording) -> Run:
         wall_time=chunked.wall_time,
         cpu_time=chunked.cpu_time,
         recording=recording,
+        outcome=outcome,
     )

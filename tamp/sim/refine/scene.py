@@ -59,14 +59,42 @@ SCENES: dict[str, tuple[Placement, ...]] = {
     # briefcase lying flat, its 0.35 m side along the robots' line
     "flip_briefcase": (Placement("briefcase", 0.0, 0.0, 0.06, math.pi / 2),),
     "flip_scale": (Placement("scale", 0.0, 0.0, 0.025),),
-    # the table is fixed; the scale lies on its top (0.28 m)
+    # the table is fixed; the scale lies on its top (0.28 m), overhanging its -x edge by
+    # 0.10 m on Robot 1's side (the fork gets under it there)
     "lift_scale": (
-        Placement("table", 0.0, 0.0, 0.0, fixed=True),
+        Placement("table", 0.10, 0.0, 0.0, fixed=True),
         Placement("scale", 0.0, 0.0, 0.305),
     ),
-    # the folded chair with its frames across Robot 1's approach (frame_a's x along world
-    # y), so a pull on frame_b's handle turns it about the hinge. frame_a lies welded to the
-    # floor: free, the 4 kg frame was launched by the gripper's contact at our 10 ms step
-    # (docs/refinement.md); frame_b still swings freely about the hinge.
-    "open_chair": (Placement("folding_chair", 0.0, 0.0, 0.0, math.pi / 2, fixed=True),),
+    # the lift scene's table alone (`table_collision.yaml`: Step 2's collision check)
+    "table": (Placement("table", 0.10, 0.0, 0.0, fixed=True),),
+    # the folded chair, free on the floor, its frames across the robots' line; Robot 1's
+    # fork hooks the latch under frame_b's handle bar (models/sdf/folding_chair.sdf)
+    "open_chair": (Placement("folding_chair", 0.0, 0.0, 0.0),),
+}
+
+
+@dataclass(frozen=True)
+class Goal:
+    """What a scene's task must achieve, read on the plant at the end of a run: the measured
+    ``quantity`` (`Outcome` names: ``<model>.tilt`` rad between the object's up axis and the
+    world's, ``<model>.rise`` m its origin rose, ``<model>.<joint>`` a joint's angle) is at
+    least ``at_least``."""
+
+    quantity: str
+    at_least: float
+    what: str
+
+    def met(self, value: float) -> bool:
+        return value >= self.at_least
+
+
+#: Scene name -> its goals (all must hold for the task to succeed).
+GOALS: dict[str, tuple[Goal, ...]] = {
+    "flip_briefcase": (Goal("briefcase.tilt", 1.0, "the briefcase turned up"),),
+    "flip_scale": (Goal("scale.tilt", 1.0, "the scale turned up"),),
+    "lift_scale": (
+        Goal("scale.tilt", 0.15, "the scale tilted up off the table"),
+        Goal("scale.rise", 0.02, "the scale's centre rose"),
+    ),
+    "open_chair": (Goal("folding_chair.hinge", 0.35, "the chair opened at its hinge"),),
 }

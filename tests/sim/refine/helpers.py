@@ -1,4 +1,4 @@
-"""The shortened Task 4 the simulation tests run (about 12 s of sim time per run)."""
+"""The shortened Task 4 the simulation tests run (about 17 s of sim time per run)."""
 
 from __future__ import annotations
 

@@ -53,13 +53,14 @@ def test_waits_for_the_other_robot_and_odometry_progress():
     s = m.initial()
     s = m.step(s, 0.0, {}, {})
     s = m.step(s, 1.0, {"imu": sample("imu", -0.45, 0.9)}, {})
-    start = (-1.5, -0.385, 0.0)
+    start = task(4).robot("R1").start  # facing +x
+    x, y, _ = start
     s = m.step(s, 1.01, {"odometry": sample("odometry", start, 1.0)}, {})
     assert s.refs["approach"] == start  # no odometry delivered yet: the start pose
     t0 = s.started["approach"]
-    s = m.step(s, 19.0, {"odometry": sample("odometry", (-0.82, -0.385, 0.0), 18.9)}, {})
+    s = m.step(s, 19.0, {"odometry": sample("odometry", (x + 0.68, y, 0.0), 18.9)}, {})
     assert "approach" not in s.fired  # 0.68 m from the start: not yet 0.69
-    s = m.step(s, 20.0, {"odometry": sample("odometry", (-0.80, -0.385, 0.0), 19.9)}, {})
+    s = m.step(s, 20.0, {"odometry": sample("odometry", (x + 0.70, y, 0.0), 19.9)}, {})
     assert s.fired["approach"] == 20.0 and t0 == 1.0
     # pull_out waits for R2.grip
     s = m.step(s, 21.0, {}, {})

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from pydrake.math import RigidTransform
+from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
 from pydrake.systems.framework import DiagramBuilder
 
@@ -109,3 +109,69 @@ def test_objects_rest_on_the_floor(name, half):
     sim.AdvanceTo(0.5)
     z = plant.EvalBodyPoseInWorld(ctx, body).translation()[2]
     assert z == pytest.approx(half, abs=2e-3)
+
+
+def test_chair_latch_swings_up_one_way_only():
+    """The latch under frame_b's handle bar hangs to 3 cm above the floor and swings up
+    towards +x (a fork passes under it); its limit stops it the other way (the hook)."""
+    plant, model = load("folding_chair")
+    latch = plant.GetJointByName("latch", model)
+    assert latch.position_lower_limits()[0] == 0.0 and latch.position_upper_limits()[0] > 1.0
+    ctx = plant.CreateDefaultContext()
+    plate = plant.GetBodyByName("latch_plate")
+    bottom = np.array([0.0, 0.0, -0.105])
+    p0 = plant.EvalBodyPoseInWorld(ctx, plate).multiply(bottom)
+    assert p0[2] == pytest.approx(0.031, abs=1e-6)
+    latch.set_angle(ctx, 0.5)
+    p1 = plant.EvalBodyPoseInWorld(ctx, plate).multiply(bottom)
+    assert p1[0] > p0[0] + 0.04 and p1[2] > p0[2]  # up and away from Robot 1 (-x side)
+
+
+def test_outcome_reads_the_hinge_and_the_tilt():
+    """`outcome.measure` reads joint angles and object poses on the plant, and the scene's
+    goals judge them (no program numbers involved)."""
+    from tamp.sim.refine.outcome import measure, start_heights
+
+    plant, model = load("folding_chair")
+    ctx = plant.CreateDefaultContext()
+    frame_a = plant.GetBodyByName("frame_a")
+    plant.SetFreeBodyPose(ctx, frame_a, RigidTransform())
+    objects = {"folding_chair": model}
+    heights = start_heights(plant, ctx, objects)
+    hinge = plant.GetJointByName("hinge", model)
+    hinge.set_angle(ctx, 0.2)
+    closed = measure(plant, ctx, objects, heights, "open_chair")
+    assert closed.values["folding_chair.hinge"] == pytest.approx(0.2)
+    assert not closed.achieved and "hinge" in closed.failed()[0]
+    hinge.set_angle(ctx, 0.6)
+    tilted = RigidTransform(RotationMatrix.MakeYRotation(0.3), [0.0, 0.0, 0.05])
+    plant.SetFreeBodyPose(ctx, frame_a, tilted)
+    opened = measure(plant, ctx, objects, heights, "open_chair")
+    assert opened.achieved and opened.failed() == []
+    assert opened.values["folding_chair.tilt"] == pytest.approx(0.3)
+    assert opened.values["folding_chair.rise"] == pytest.approx(0.05)
+    assert "met" in opened.summary() and opened.to_json()["achieved"] is True
+
+
+@pytest.mark.parametrize(
+    "task,body", [("task2", "scale"), ("task3", "scale"), ("task1", "briefcase")]
+)
+def test_objects_lie_still_in_the_workcell(task, body):
+    """At the workcell's 10 ms step no object moves by itself before a robot touches it (the
+    scale at modulus 5e6 flipped itself over within a second)."""
+    from tamp.refine.architecture import default_architecture
+    from tamp.refine.loader import load_program
+    from tamp.sim.core.runner import make_simulator
+    from tamp.sim.refine.builder import build_workcell
+
+    cell = build_workcell(load_program(task), default_architecture())
+    sim = make_simulator(cell.diagram)
+    sim.Initialize()
+    ctx = cell.plant.GetMyContextFromRoot(sim.get_mutable_context())
+    b = cell.plant.GetBodyByName(body)
+    X0 = cell.plant.EvalBodyPoseInWorld(ctx, b)
+    sim.AdvanceTo(1.5)
+    X1 = cell.plant.EvalBodyPoseInWorld(ctx, b)
+    assert np.linalg.norm(X1.translation() - X0.translation()) < 2e-3
+    angle = X0.rotation().InvertAndCompose(X1.rotation()).ToAngleAxis().angle()
+    assert angle < 0.01

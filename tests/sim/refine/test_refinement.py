@@ -89,7 +89,7 @@ def test_a_colliding_parallelization_is_reverted(simulated):
     assert out.parallelized == []
     ((bad, collisions),) = out.reverted
     assert bad.absorbed == "lower_arm"
-    assert collisions == [("R1.arm_link", "folding_chair.frame_b")]
+    assert collisions == [("R1.arm_link", "folding_chair.frame_b", 12.0)]  # with its time
     assert out.phases[1].program == task(4)  # run again without it
 
 
