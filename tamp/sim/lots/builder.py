@@ -5,6 +5,7 @@ idiom: one function, one named Diagram, exported ports).
       wrist RgbdSensor (CameraConfig, VTK over EGL) ─► color/depth/label ─► Perception
       Perception.observation ─► SkillController ─► desired_state (the arm's PD actuators)
       SkillController.view_request ─► Perception
+    PersonSystem (optional, tamp.sim.lots.person) ─► the hand's desired state, carry forces
     exported: skill_command (in); skill_status, observation, view_request, arm_state (out)
     MeshcatVisualizer (optional)
 
@@ -19,6 +20,7 @@ camera's answers only (a test checks the diagram's connections).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,11 +33,13 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
+from tamp.lots.task import Event
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.grasping import GraspPlanner
 from tamp.sim.lots.kinematics import ArmKinematics
 from tamp.sim.lots.perception import Perception
+from tamp.sim.lots.person import add_person, staged_objects
 from tamp.sim.lots.plant import CellPlant, add_cell_plant
 from tamp.sim.lots.scenario import CellScenario
 from tamp.sim.lots.skills import SkillController
@@ -57,6 +61,7 @@ class LotsCell:
     planner: GraspPlanner
     visualizer: object = None
     meshcat: Any = None
+    person: Any = None  # the PersonSystem, when a person is scripted
 
     @property
     def plant(self) -> MultibodyPlant:
@@ -88,10 +93,17 @@ def camera_config(scenario: CellScenario) -> CameraConfig:
     )
 
 
-def build_diagram(scenario: CellScenario, *, meshcat: Any = None) -> LotsCell:
-    """The named Diagram of ``scenario``; drive it through ``skill_command`` (see `CellDriver`)."""
+def build_diagram(
+    scenario: CellScenario, *, meshcat: Any = None, person: Sequence[Event] | None = None
+) -> LotsCell:
+    """The named Diagram of ``scenario``; drive it through ``skill_command`` (see `CellDriver`).
+
+    ``person``: the events of an interference script: a scripted person's hand carries them
+    out (`tamp.sim.lots.person`); None: no person in the cell.
+    """
     builder = DiagramBuilder()
-    cell = add_cell_plant(builder, scenario)
+    staged = None if person is None else staged_objects(person)
+    cell = add_cell_plant(builder, scenario, staged)
     plant, scene_graph = cell.plant, cell.scene_graph
     scene_graph.AddRenderer(RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL")))
 
@@ -133,6 +145,10 @@ def build_diagram(scenario: CellScenario, *, meshcat: Any = None) -> LotsCell:
     builder.Connect(skills.desired_state_port, plant.get_desired_state_input_port(cell.arm))
 
     builder.ExportInput(skills.command_port, "skill_command")
+    person_system = None
+    if person is not None:
+        person_system = add_person(builder, cell, plant, scenario, person, skills)
+        builder.ConnectInput("skill_command", person_system.command_port)
     builder.ExportOutput(skills.status_port, "skill_status")
     builder.ExportOutput(perception.observation_port, "observation")
     builder.ExportOutput(skills.view_request_port, "view_request")
@@ -144,7 +160,17 @@ def build_diagram(scenario: CellScenario, *, meshcat: Any = None) -> LotsCell:
     diagram = builder.Build()
     diagram.set_name(f"lots_cell_{scenario.name}")
     return LotsCell(
-        diagram, scenario, cell, camera, config, perception, skills, planner, visualizer, meshcat
+        diagram,
+        scenario,
+        cell,
+        camera,
+        config,
+        perception,
+        skills,
+        planner,
+        visualizer,
+        meshcat,
+        person_system,
     )
 
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -24,19 +25,21 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from tamp.errors import InputError
 from tamp.lots.controller import ActionRecord, LotsController
-from tamp.lots.task import Task
+from tamp.lots.task import Event, Task
 from tamp.sim.core.executor import ActionLog
 from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
 from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.lots.builder import LotsCell, build_diagram
+from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.controller_system import PERIOD, LotsControllerSystem
+from tamp.sim.lots.person import RESTING_Z, STAGING, PersonAction, on_shelf
 from tamp.sim.lots.scenario import BASKET_HALF, DEFAULT_WEIGHTS, NETWORKS, CellScenario
 from tamp.world.interface import Status
 
 #: how far the simulator runs between checks of the controller's result (sim s)
 CHUNK = 0.5
-#: an object counts as lying in a workspace or the basket when its origin is this low (m)
-RESTING_Z = 0.1
+#: after the controller's result, how long the person may take to finish its trip (sim s)
+PERSON_GRACE = 15.0
 
 
 @dataclass
@@ -49,11 +52,17 @@ class LotsDiagram:
 
 
 def build_lots_diagram(
-    scenario: CellScenario, controller: LotsController, *, meshcat: Any = None, period=PERIOD
+    scenario: CellScenario,
+    controller: LotsController,
+    *,
+    meshcat: Any = None,
+    period=PERIOD,
+    person: Sequence[Event] | None = None,
 ) -> LotsDiagram:
     """The cell diagram of ``scenario`` driven by ``controller`` (observation and skill status
-    in, skill command out: nothing else reaches the controller)."""
-    cell = build_diagram(scenario, meshcat=meshcat)
+    in, skill command out: nothing else reaches the controller). ``person``: interference
+    events a scripted person carries out in the cell (`tamp.sim.lots.person`)."""
+    cell = build_diagram(scenario, meshcat=meshcat, person=person)
     builder = DiagramBuilder()
     sub = builder.AddSystem(cell.diagram)
     ctrl = builder.AddSystem(LotsControllerSystem(controller, period=period))
@@ -85,6 +94,8 @@ class LotsSimResult:
     elsewhere: list[str] = field(default_factory=list)  # objects in no workspace nor basket
     network: str = "hrgnet"
     recording: str | None = None
+    person_actions: list[PersonAction] = field(default_factory=list)
+    never_happened: list[Event] = field(default_factory=list)  # scripted, run ended first
 
     @property
     def rtf(self) -> float:
@@ -112,6 +123,8 @@ class LotsSimResult:
             "rtf": round(self.rtf, 3),
             "final_counts": self.final_counts,
             "elsewhere": self.elsewhere,
+            "person_actions": [a.to_json() for a in self.person_actions],
+            "never_happened": [e.never_happened() for e in self.never_happened],
             "recording": self.recording,
         }
 
@@ -158,6 +171,8 @@ def plant_counts(cell: LotsCell, plant_context) -> tuple[dict[str, dict[str, int
     the objects lying in none of them (held, on the floor, elsewhere on the table)."""
     plant, scenario = cell.plant, cell.scenario
     counts: dict[str, dict[str, int]] = {"A": {}, "B": {}, "waste": {}}
+    if cell.cell.staged:
+        counts[STAGING] = {}
     elsewhere = []
     bx, by = scenario.waste_basket
     for uid, body in sorted(cell.cell.bodies.items()):
@@ -169,6 +184,8 @@ def plant_counts(cell: LotsCell, plant_context) -> tuple[dict[str, dict[str, int
                 where = side
         if abs(x - bx) <= BASKET_HALF and abs(y - by) <= BASKET_HALF and z < RESTING_Z:
             where = "waste"
+        if cell.cell.staged and on_shelf(x, y, z):
+            where = STAGING
         if where is None:
             elsewhere.append(uid)
             continue
@@ -192,17 +209,19 @@ def simulate_lots(
     """Run ``task`` in the workcell of ``scenario`` (see the module docstring).
 
     ``check``: the verification gate (`verification.gate`), called on every table before it
-    is used; what it raises propagates. ``interference`` (events of an interference file) is
-    refused: the person is not simulated in Drake yet.
+    is used; what it raises propagates. ``interference``: the events of an interference file
+    (`tamp.lots.task.load_events`), carried out by a scripted person's hand; the run then
+    also waits (at most `PERSON_GRACE` s) for the person to finish what it started.
     """
-    if interference:
-        raise InputError("not yet simulated in the Drake workcell", field="--interference")
     scenario = with_network(scenario, grasp)
     check_matches(task, scenario)
+    events = list(interference) if interference else None
+    if events:
+        check_person_classes(events)
     controller = LotsController(task, seed=seed, check=check)  # the gate runs here
     if record and meshcat is None:
         meshcat = new_meshcat()
-    built = build_lots_diagram(scenario, controller, meshcat=meshcat)
+    built = build_lots_diagram(scenario, controller, meshcat=meshcat, person=events)
     if record:
         start_recording(built.cell.visualizer)
     simulator = make_simulator(built.diagram)
@@ -210,8 +229,16 @@ def simulate_lots(
     ctrl = built.controller
     ctrl_context = ctrl.GetMyContextFromRoot(context)
 
-    def finished(_t: float) -> bool:
-        return ctrl.state(ctrl_context).result is not None
+    person = built.cell.person
+    person_context = None if person is None else person.GetMyContextFromRoot(context)
+
+    def finished(t: float) -> bool:
+        s = ctrl.state(ctrl_context)
+        if s.result is None:
+            return False
+        if person is None or s.finished_at is None or t > s.finished_at + PERSON_GRACE:
+            return True
+        return person.state(person_context).idle  # let the person put down what it holds
 
     limit = max_sim_time if max_sim_time is not None else scenario.max_sim_time
     t0 = time.perf_counter()
@@ -234,6 +261,7 @@ def simulate_lots(
     skills = cell.skills.state(cell.skills.GetMyContextFromRoot(context))
     perception = cell.perception.state(cell.perception.GetMyContextFromRoot(context))
     recording = save_recording(cell.visualizer, meshcat, record) if record else None
+    ps = None if person is None else person.state(person_context)
     return LotsSimResult(
         task=task.name,
         scenario=scenario.name,
@@ -251,4 +279,20 @@ def simulate_lots(
         elsewhere=elsewhere,
         network=scenario.grasp.network,
         recording=recording,
+        person_actions=[] if ps is None else list(ps.actions),
+        never_happened=[] if ps is None else ps.script.unfired(),
     )
+
+
+def check_person_classes(events: Sequence[Event]) -> None:
+    """Every class the person brings in must be a workcell class (`InputError` naming the
+    interference file's ``events[i].class``)."""
+    for e in events:
+        if e.kind == "add" and e.cls not in CLASSES:
+            file, _, where = e.where.partition(": ")
+            raise InputError(
+                f"the workcell has no {e.cls!r} objects for the person to bring in "
+                f"(classes: {', '.join(sorted(CLASSES))})",
+                file=file or None,
+                field=f"{where}.class" if where else "class",
+            )
