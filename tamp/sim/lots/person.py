@@ -70,6 +70,9 @@ DROP_GAP = 0.004
 #: an object lies in a workspace, the basket or on the shelf when its origin is this low (m)
 RESTING_Z = 0.1
 STAGING = "staging"
+#: how long the person takes to start once its slot has begun (s): a person's reaction time,
+#: which also lets the robot's hand leave the workspace it has just placed in
+REACTION = 0.5
 #: the robot's skills that end one action (the script counts them); Discard is Place(waste)
 _ENDS_ACTION = ACTION_SKILLS | {"Discard"}
 
@@ -302,6 +305,8 @@ class PersonSystem(LeafSystem):
         self._watch_robot(s, context)
         for n, phase, e in s.script.due(s.done, s.holding):
             s.queue = (*s.queue, *(PersonAction(e, n, phase) for _ in range(e.count)))
+            if not s.steps:  # the person reacts: the robot has a moment to move on
+                s.steps = (HandStep("wait", duration=REACTION),)
         if s.idle and s.move is None and s.last_status == old.last_status and not s.queue:
             a, b = s.script, old.script
             if (a.actions_done, a._holding) == (b.actions_done, b._holding):

@@ -15,6 +15,7 @@ from tamp.lots.task import Event, load_events, load_task
 from tamp.sim.lots.catalogue import CLASSES, HAND_LABEL, PERSON
 from tamp.sim.lots.person import (
     GRIP_GAP,
+    REACTION,
     STAGING,
     on_shelf,
     shelf_spot,
@@ -142,7 +143,7 @@ def test_the_hand_carries_an_object_between_workspaces_and_parks(tmp_path):
     s = person.state(pc)
     (act,) = s.actions  # the add after action 2 never comes: the robot did one action
     assert act.outcome == "done" and act.uid == "body_0" and (act.src, act.dst) == ("A", "B")
-    assert act.start == pytest.approx(0.0, abs=0.03) and 3.0 < act.end < 6.0
+    assert act.start == pytest.approx(REACTION, abs=0.03) and 3.0 < act.end < 6.5
     assert [e.kind for e in s.script.unfired()] == ["add"]
     # the palm took the body from above: right over its top, centred on its footprint
     assert took is not None
