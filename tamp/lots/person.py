@@ -94,6 +94,10 @@ class ScriptedPerson:
         as happened: for a world that carries them out itself (the Drake person's hand)."""
         return [(n, ph, e) for n, ph in self.slots(done, holding) for e in self._take(n, ph)]
 
+    def progress(self) -> tuple[int, int, int]:
+        """Where the script stands: actions seen, last holding slot begun, events fired."""
+        return (self.actions_done, self._holding, len(self._fired))
+
     def _take(self, n: int, phase: str) -> list[Event]:
         """The not yet fired events of slot ``(n, phase)``, now marked as fired."""
         out = []

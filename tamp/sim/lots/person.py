@@ -308,8 +308,7 @@ class PersonSystem(LeafSystem):
             if not s.steps:  # the person reacts: the robot has a moment to move on
                 s.steps = (HandStep("wait", duration=REACTION),)
         if s.idle and s.move is None and s.last_status == old.last_status and not s.queue:
-            a, b = s.script, old.script
-            if (a.actions_done, a._holding) == (b.actions_done, b._holding):
+            if s.script.progress() == old.script.progress():
                 return EventStatus.DidNothing()  # parked, nothing new: keep the state
         if not s.steps and s.queue:
             self._plan_next(s, context, t)
@@ -376,6 +375,8 @@ class PersonSystem(LeafSystem):
         if not cands:
             act.outcome, act.end = "skipped", t
             act.detail = f"no {e.cls} {'on the shelf' if src == STAGING else 'in W^' + src}"
+            if tuple(s.hand) != PERSON.park:
+                s.steps = (HandStep("move", PERSON.park),)
             return
         uid = cands[0]
         act.uid, act.outcome = uid, "running"

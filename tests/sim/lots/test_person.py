@@ -110,11 +110,12 @@ def _person_cell(tmp_path, events: list[dict], objects: list[dict]):
 
 
 def test_the_hand_carries_an_object_between_workspaces_and_parks(tmp_path):
-    """One move (dis_1) after the robot's first action: the hand goes over the body, takes
-    it, carries it (the body keeps its pose in the hand), puts it down in W^B, parks."""
+    """A removal of what is not there is skipped; one move (dis_1) after the robot's first
+    action: the hand goes over the body, takes it, carries it (the body keeps its pose in the hand), puts it down in W^B, parks."""
     sim, cell, person = _person_cell(
         tmp_path,
         [
+            {"after": 0, "kind": "remove", "class": "peak", "side": "B"},
             {"after": 1, "kind": "move", "class": "body", "from": "A", "to": "B"},
             {"after": 2, "kind": "add", "class": "peak", "side": "A"},
         ],
@@ -141,7 +142,8 @@ def test_the_hand_carries_an_object_between_workspaces_and_parks(tmp_path):
         if s.idle and s.actions and s.move is None:
             break
     s = person.state(pc)
-    (act,) = s.actions  # the add after action 2 never comes: the robot did one action
+    skip, act = s.actions  # the add after action 2 never comes: the robot did one action
+    assert skip.outcome == "skipped" and skip.detail == "no peak in W^B"  # nothing to remove
     assert act.outcome == "done" and act.uid == "body_0" and (act.src, act.dst) == ("A", "B")
     assert act.start == pytest.approx(REACTION, abs=0.03) and 3.0 < act.end < 6.5
     assert [e.kind for e in s.script.unfired()] == ["add"]
