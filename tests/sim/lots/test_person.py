@@ -111,7 +111,8 @@ def _person_cell(tmp_path, events: list[dict], objects: list[dict]):
 
 def test_the_hand_carries_an_object_between_workspaces_and_parks(tmp_path):
     """A removal of what is not there is skipped; one move (dis_1) after the robot's first
-    action: the hand goes over the body, takes it, carries it (the body keeps its pose in the hand), puts it down in W^B, parks."""
+    action: the hand goes over the body, takes it, carries it (the body keeps its pose in
+    the hand), puts it down in W^B, parks."""
     sim, cell, person = _person_cell(
         tmp_path,
         [
