@@ -15,11 +15,13 @@ or flag (an appearance at time 0 onto an occupied place included). ``--json`` ha
 ``status``; its ``ok`` is ``status == "SUCCESS"``.
 
     tamp simulate lots --task TASK.yaml [--scenario CELL.yaml] [--grasp hrgnet|grconvnet|ggcnn]
-                       [--seed N] [--record out.html] [--max-sim-time S] [--json]
+                       [--interference EVENTS.yaml] [--seed N] [--record out.html]
+                       [--max-sim-time S] [--json]
 
 Runs a LOTS task by the LOTS controller inside the Drake workcell (`tamp.sim.lots.simulate`);
-exit 0 only when the plant's W^B ends a round of the task. ``--interference`` is refused
-(exit 2): the person is not simulated in Drake yet.
+exit 0 only when the plant's W^B ends a round of the task. ``--interference``: the same script
+as ``tamp lots --interference``, carried out by a scripted person's hand in the cell
+(`tamp.sim.lots.person`); a bad file exits 2 naming the field.
 """
 
 from __future__ import annotations
@@ -77,7 +79,7 @@ def register_lots(sub) -> None:
     s.add_argument(
         "--interference",
         metavar="EVENTS.yaml",
-        help="human interference script (not simulated yet)",
+        help="human interference script: a scripted person's hand carries it out",
     )
     s.add_argument("--grasp", choices=("hrgnet", "grconvnet", "ggcnn"), help="grasp network")
     add_seed(s, "and of the LOTS controller's tree update")
@@ -130,20 +132,22 @@ def run_lots(args: argparse.Namespace) -> int:
 
     check_common(args)
     task = load_task(args.task)
-    if args.interference:
-        load_events(args.interference, task)  # a bad file names its field first
-        raise InputError("not yet simulated in the Drake workcell", field="--interference")
+    events = load_events(args.interference, task) if args.interference else None
     if args.scenario is None and not resolve(task.name, "lots_sim").is_file():
         raise InputError(
             f"no packaged workcell scenario for task {task.name!r}: give one", field="--scenario"
         )
     scenario = load_cell_scenario(args.scenario or task.name)
-    from tamp.sim.lots.simulate import simulate_lots
+    from tamp.sim.lots.simulate import check_person_classes, simulate_lots
+
+    if events:
+        check_person_classes(events)
 
     progress(f"simulating task {task.name} in workcell {scenario.name}", quiet=args.json)
     result = simulate_lots(
         scenario,
         task,
+        events,
         grasp=args.grasp,
         seed=args.seed,
         record=args.record,
@@ -160,6 +164,15 @@ def run_lots(args: argparse.Namespace) -> int:
         print(f"{a.action:<22} {a.start:8.2f} {end:>8}  {a.outcome}  {a.detail}")
     for a in result.robot_actions:
         print(f"  {a.index:2d}. {a.text()}")
+    for p in result.person_actions:
+        end = "-" if p.end is None else f"{p.end:.2f}"
+        what = f"{p.uid or '-'} {p.src}→{p.dst}"
+        print(
+            f"  person: {p.event.describe()} {p.event.when()}: {what} {p.start:.2f}–{end} s, "
+            f"{p.outcome}{' (' + p.detail + ')' if p.detail else ''}"
+        )
+    for e in result.never_happened:
+        print(e.never_happened())
     c = result.final_counts
     print(f"final (plant): W^A {c['A']}  W^B {c['B']}  waste {c['waste']}")
     if result.elsewhere:

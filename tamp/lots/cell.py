@@ -107,17 +107,23 @@ def side_counts(state: WorldState) -> dict[str, dict[str, int]]:
     return {name: state.kinds_in(state.area(name)) for name in (*SIDES, WASTE)}
 
 
-def view_state(side: str, counts: dict[str, int]) -> WorldState:
-    """The state a camera view over ``side`` stands for: those objects there, nothing else.
+def view_state(side: str | None, counts: dict[str, int], in_hand: str | None = None) -> WorldState:
+    """The state a camera view over ``side`` stands for: those objects there, nothing else,
+    and ``in_hand`` (a class) in the gripper when the camera sees one there.
 
     What a world that knows only its camera's view (the Drake workcell) returns from
-    ``observe()``: `visible_counts` of it gives ``counts`` back.
+    ``observe()``: `visible_counts` of it gives ``counts`` back, `held_kind` ``in_hand``.
+    ``side`` None: the camera over neither workspace (``counts`` must be empty).
     """
     areas = {a.name: a for a in AREAS}
-    here = Pose(Point(areas[side].pos.x, areas[side].pos.y, 0.0))
+    here = HOME if side is None else Pose(Point(areas[side].pos.x, areas[side].pos.y, 0.0))
     objects = {
         f"{cls}_{i}": ObjectState(f"{cls}_{i}", here, cls)
         for cls, n in sorted(counts.items())
         for i in range(1, n + 1)
     }
-    return WorldState(here, None, objects, areas)
+    held = None
+    if in_hand is not None:
+        held = f"{in_hand}_held"
+        objects[held] = ObjectState(held, here, in_hand)
+    return WorldState(here, held, objects, areas)

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from tamp.lots.automaton import Automaton, Letter
-from tamp.lots.cell import WASTE, skill, visible_counts
+from tamp.lots.cell import WASTE, held_kind, skill, visible_counts
 from tamp.lots.lots import Counts, Lots
 from tamp.lots.planner import Entry, Plan, Planner, Table, Tree, initial_lasso, round_goals
 from tamp.lots.task import Task
@@ -155,6 +155,12 @@ class Belief:
     def dropped(self) -> None:
         self.total[self.held] -= 1
         self.held = None
+
+    def lost(self) -> None:
+        """The held object left the gripper on the way, to somewhere unknown: the next looks
+        find it (in W^A or W^B) or not (W^B then differs from the inference and re-anchors)."""
+        self.held = None
+        self._resync = True
 
     def removed(self, i: int, dest: str) -> None:
         self.b[i] -= 1
@@ -336,7 +342,7 @@ class LotsController:
             self.failures = 0
             getattr(self, f"_on_{done.then}")(done, world)
         else:
-            self._on_failure(done)
+            self._on_failure(done, world)
         return self.result or Status.RUNNING
 
     def run(self, world: World, *, max_ticks: int = 100_000, step=None) -> Status:
@@ -414,26 +420,38 @@ class LotsController:
     def _look_b(self, done: Pending, world: World) -> Counts | None:
         b_obs = self._seen(world, "B")
         if b_obs is None:
-            self._on_failure(done)
+            self._on_failure(done, world)
             return None
         return self.belief.on_b(b_obs)
 
     def _wait(self, note: str, *, blocked: bool = False) -> None:
         self._next("waited", "Wait", "A", note=note, blocked=blocked)
 
-    def _on_failure(self, done: Pending) -> None:
-        """A failed skill: try it again (a pick: look again first), up to ``max_retries``."""
+    def _on_failure(self, done: Pending, world: World | None = None) -> None:
+        """A failed skill: try it again (a pick: look again first), up to ``max_retries``.
+
+        A failed ``Place`` is decided by what the camera sees in the gripper: still holding
+        the object, the place is tried again; the gripper empty (the object slipped out on
+        the way), there is nothing to place: the robot forgets what it held and starts the
+        cycle again with a look, continuing from where the object is now seen (or not).
+        """
         self.failures += 1
         if self.failures > self.max_retries:
             self._stop(f"{done.action} failed {self.failures} times in a row")
+        elif done.action.name == "Place" and world is not None and self._hand_empty(world):
+            self.belief.lost()
         elif done.action.name != "Pick":
             self.pending = done
+
+    def _hand_empty(self, world: World) -> bool:
+        """Does the camera see the gripper empty while the robot believes it holds something?"""
+        return self.belief.held is not None and held_kind(world.observe()) is None
 
     def _on_look_a(self, done: Pending, world: World) -> None:
         """Alg. 1 lines 5-24 from the view of W^A: remove a surplus, decide, act or wait."""
         a_obs = self._seen(world, "A")
         if a_obs is None:
-            self._on_failure(done)
+            self._on_failure(done, world)
             return
         lots = self.lots
         b = self.belief.on_a(a_obs)  # Alg. 1 lines 5-11

@@ -17,6 +17,7 @@ action without a pick (a wait) during that action, right before the idle events 
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable, Iterable
 
 from tamp.errors import InputError
@@ -82,13 +83,36 @@ class ScriptedPerson:
     def act(self, world: SymbolicWorld) -> None:
         """Do what is due now in ``world`` (call it before each controller tick)."""
         for n, phase in self.slots(actions_done(world), world.state.held is not None):
-            for i, e in enumerate(self.events):
-                if i not in self._fired and e.after == n and e.phase == phase:
-                    self._fired.add(i)
-                    self.apply(world, e, n, phase)
+            for e in self._take(n, phase):
+                self.apply(world, e, n, phase)
             if self.policy is not None:
                 for e in self.policy(n, phase, world):
                     self.apply(world, e, n, phase)
+
+    def due(self, done: int, holding: bool) -> list[tuple[int, str, Event]]:
+        """The scripted events of the slots that begin now, as ``(N, phase, event)``, marked
+        as happened: for a world that carries them out itself (the Drake person's hand)."""
+        return [(n, ph, e) for n, ph in self.slots(done, holding) for e in self._take(n, ph)]
+
+    def progress(self) -> tuple[int, int, int]:
+        """Where the script stands: actions seen, last holding slot begun, events fired."""
+        return (self.actions_done, self._holding, len(self._fired))
+
+    def _take(self, n: int, phase: str) -> list[Event]:
+        """The not yet fired events of slot ``(n, phase)``, now marked as fired."""
+        out = []
+        for i, e in enumerate(self.events):
+            if i not in self._fired and e.after == n and e.phase == phase:
+                self._fired.add(i)
+                out.append(e)
+        return out
+
+    def __deepcopy__(self, memo: dict) -> ScriptedPerson:
+        """Copy the progress (counters, fired events, log); share the immutable events."""
+        new = copy.copy(self)
+        new._fired = set(self._fired)
+        new.log = list(self.log)
+        return new
 
     def apply(self, world: SymbolicWorld, e: Event, n: int = 0, phase: str = "idle") -> bool:
         """Apply one human action now; an impossible one is an `InputError` (or skipped)."""

@@ -16,7 +16,7 @@ from tamp.lots.controller import LotsController
 from tamp.lots.person import ScriptedPerson
 from tamp.lots.run import lots_world, run_task
 from tamp.lots.task import Event, load_task
-from tamp.world.events import Fail
+from tamp.world.events import Appear, Fail
 from tamp.world.interface import Status
 from tamp.world.outcomes import ScriptedOutcomes
 
@@ -211,3 +211,29 @@ def test_halt_cancels_the_running_skill():
     assert c.running is None and not world.busy
     assert world.history[-1].kind == "cancel"
     assert c.run(world, step=world.step) is Status.SUCCESS  # starts again with a look
+
+
+def test_a_place_that_lost_its_object_continues_from_what_the_camera_sees():
+    """The saw slips out on the way and lands in W^B (the Drake cell's "dropped ... while
+    carrying it"): the camera sees the gripper empty, so the controller does not place again
+    with an empty hand; it looks and continues from what it sees (the saw is in W^B)."""
+    task = load_task("model_building.yaml")
+    c = LotsController(task)
+    world = lots_world(task)
+    dropped: list[str] = []
+
+    def step():
+        world.step()
+        running = [e for e in world.history if e.kind == "start"][-1:]
+        if not dropped and running and running[0].subject == "Place(B)":
+            dropped.append(world.state.held)
+            world.happen(Appear(world.state.held, "B"))  # it falls into W^B on the way
+
+    assert c.run(world, step=step) is Status.SUCCESS
+    assert dropped == ["saw_1"]
+    starts = [e.subject for e in world.history if e.kind == "start"]
+    i = starts.index("Place(B)")
+    assert starts[i + 1] == "LookAt(A)"  # not Place(B) again with an empty hand
+    assert c.belief.held is None
+    assert [a.key() for a in c.actions] == [("move", "p2"), ("move", "p3")]
+    assert world.state.kinds_in(world.state.area("B")) == {"hammer": 1, "saw": 1, "scissors": 1}

@@ -6,6 +6,7 @@ idiom: one function, one named Diagram, exported ports).
       Perception.observation ─► SkillController ─► ArmCommandStream (1 kHz) ─► SafetyMonitor
         ─► desired_state (the arm's PD actuators); SafetyMonitor.stopped ─► SkillController.hold
       SkillController.view_request ─► Perception
+    PersonSystem (optional, tamp.sim.lots.person) ─► the hand's desired state, carry forces
     exported: skill_command, person_present (in); skill_status, observation, view_request,
       arm_state, safety_stopped (out)
     MeshcatVisualizer (optional)
@@ -21,6 +22,7 @@ camera's answers only (a test checks the diagram's connections).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,14 +35,16 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
+from tamp.lots.task import Event
 from tamp.sim.core.recording import add_visualizer
-from tamp.sim.lots.catalogue import ARM
+from tamp.sim.lots.catalogue import ARM, HAND_LABEL
 from tamp.sim.lots.command import ArmCommandStream
 from tamp.sim.lots.grasping import GraspPlanner
 from tamp.sim.lots.kinematics import ArmKinematics
 from tamp.sim.lots.perception import Perception
+from tamp.sim.lots.person import add_person, staged_objects
 from tamp.sim.lots.plant import CellPlant, add_cell_plant
-from tamp.sim.lots.safety import HAND_LABEL, SafetyMonitor
+from tamp.sim.lots.safety import SafetyMonitor
 from tamp.sim.lots.scenario import CellScenario
 from tamp.sim.lots.skills import SkillController
 
@@ -63,6 +67,7 @@ class LotsCell:
     meshcat: Any = None
     command: ArmCommandStream | None = None
     safety: SafetyMonitor | None = None
+    person: Any = None  # the PersonSystem, when a person is scripted
 
     @property
     def plant(self) -> MultibodyPlant:
@@ -112,12 +117,21 @@ def add_wrist_camera(builder, plant, scene_graph, arm, config: CameraConfig):
 
 
 def build_diagram(
-    scenario: CellScenario, *, meshcat: Any = None, hand_labels=frozenset({HAND_LABEL})
+    scenario: CellScenario,
+    *,
+    meshcat: Any = None,
+    person: Sequence[Event] | None = None,
+    hand_labels=frozenset({HAND_LABEL}),
 ) -> LotsCell:
     """The named Diagram of ``scenario``; drive it through ``skill_command`` (see `CellDriver`).
-    ``hand_labels``: the render labels the safety monitor takes for a person's hand."""
+
+    ``person``: the events of an interference script: a scripted person's hand carries them
+    out (`tamp.sim.lots.person`); None: no person in the cell. ``hand_labels``: the render
+    labels the safety monitor takes for a person's hand.
+    """
     builder = DiagramBuilder()
-    cell = add_cell_plant(builder, scenario)
+    staged = None if person is None else staged_objects(person)
+    cell = add_cell_plant(builder, scenario, staged)
     plant, scene_graph = cell.plant, cell.scene_graph
     scene_graph.AddRenderer(RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL")))
 
@@ -149,6 +163,10 @@ def build_diagram(
     )
 
     builder.ExportInput(skills.command_port, "skill_command")
+    person_system = None
+    if person is not None:
+        person_system = add_person(builder, cell, plant, scenario, person, skills)
+        builder.ConnectInput("skill_command", person_system.command_port)
     builder.ExportOutput(skills.status_port, "skill_status")
     builder.ExportOutput(perception.observation_port, "observation")
     builder.ExportOutput(skills.view_request_port, "view_request")
@@ -175,6 +193,7 @@ def build_diagram(
         meshcat,
         command,
         safety,
+        person_system,
     )
 
 

@@ -172,3 +172,33 @@ CLASSES: dict[str, ObjectClass] = {
 TABLE_URL = model_url("lots_table")
 WASTE_BASKET_URL = model_url("lots_waste_basket")
 TRAY_URL = model_url("lots_tray")
+
+#: The label image value of the scripted person's hand (``lots_person_hand.sdf``): every
+#: pixel that shows the hand carries it. Object pixels carry their body index (always far
+#: below this), so the hand is never taken for an object, and a safety monitor finds the hand
+#: in the wrist camera's label image by this one value.
+HAND_LABEL = 1000
+
+
+@dataclass(frozen=True)
+class PersonSpec:
+    """The scripted person's hand (``lots_person_hand.sdf``) and where it works from.
+
+    The hand moves on three prismatic joints (world x, y, z) driven by PD actuators; it parks
+    at ``park`` (beyond the table's far edge, out of every camera view) and takes the objects
+    it brings in from the staging shelf beside the table (``shelf_center``, ``shelf_size``;
+    its top is level with the table), where it also puts the objects it takes away.
+    """
+
+    url: str = model_url("lots_person_hand")
+    joints: tuple[str, ...] = ("person_x_joint", "person_y_joint", "person_z_joint")
+    hand_body: str = "person_hand"
+    gains: tuple[float, float] = (4000.0, 200.0)  # (kp N/m, kd N s/m), implicit in SAP
+    park: tuple[float, float, float] = (1.3, 0.0, 0.35)
+    shelf_center: tuple[float, float] = (1.1, 0.0)
+    shelf_size: tuple[float, float] = (0.26, 1.2)
+    speed: float = 1.2  # mean hand speed of a move (m/s)
+    transit: float = 0.24  # height of the hand over the table between workspaces (m)
+
+
+PERSON = PersonSpec()

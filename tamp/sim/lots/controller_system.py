@@ -27,7 +27,7 @@ from __future__ import annotations
 import copy
 from dataclasses import dataclass, field
 
-from tamp.lots.cell import SIDES, initial_state, view_state
+from tamp.lots.cell import SIDES, view_state
 from tamp.lots.controller import LotsController
 from tamp.sim.core.executor import ActionLog, ControllerSystem, PortWorld
 from tamp.sim.core.messages import SkillCommand
@@ -75,11 +75,12 @@ class ControllerState:
 
 
 def observed_state(obs: Observation) -> WorldState:
-    """What the camera's last view stands for: its counts in the workspace it looked at, or
-    (before any view) the camera over neither workspace."""
+    """What the camera's last view stands for: its counts in the workspace it looked at (or,
+    before any view, the camera over neither workspace) and what it sees in the gripper."""
+    in_hand = obs.in_hand[0] if obs.in_hand else None
     if obs.id == 0 or obs.side not in SIDES:
-        return initial_state({})
-    return view_state(obs.side, dict(obs.counts))
+        return view_state(None, {}, in_hand)
+    return view_state(obs.side, dict(obs.counts), in_hand)
 
 
 class LotsControllerSystem(ControllerSystem):

@@ -18,15 +18,35 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.geometry import Box
+from pydrake.geometry import (
+    AddContactMaterial,
+    AddRigidHydroelasticProperties,
+    Box,
+    CollisionFilterDeclaration,
+    GeometrySet,
+    PerceptionProperties,
+    ProximityProperties,
+    RenderLabel,
+    Rgba,
+    Role,
+)
 from pydrake.math import RigidTransform, RotationMatrix
-from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import PdControllerGains
 
 from tamp.sim.core.models import sdf_path
 from tamp.sim.core.plant import add_sap_plant
-from tamp.sim.lots.catalogue import ARM, CLASSES, READY, TABLE_URL, TRAY_URL, WASTE_BASKET_URL
-from tamp.sim.lots.scenario import CellScenario
+from tamp.sim.lots.catalogue import (
+    ARM,
+    CLASSES,
+    HAND_LABEL,
+    PERSON,
+    READY,
+    TABLE_URL,
+    TRAY_URL,
+    WASTE_BASKET_URL,
+)
+from tamp.sim.lots.scenario import CellObject, CellScenario
 
 #: colours of the workspace mats (W^A green, W^B blue), drawn 1 mm above the table
 MAT_RGBA = {"A": (0.55, 0.75, 0.55, 1.0), "B": (0.55, 0.65, 0.85, 1.0)}
@@ -43,6 +63,8 @@ class CellPlant:
     classes: dict[str, str]  # object id -> class
     q0: np.ndarray  # the arm's 9 positions at the start (7 joints + 2 fingers)
     actuator_order: list[int]  # actuator k drives ARM.joints[actuator_order[k]]
+    hand: object = None  # the person's hand (ModelInstanceIndex), when a person is scripted
+    staged: tuple[str, ...] = ()  # ids of the objects waiting on the person's staging shelf
 
 
 def object_sdf(cls: str, uid: str, rgb: tuple[float, float, float]) -> str:
@@ -54,8 +76,15 @@ def object_sdf(cls: str, uid: str, rgb: tuple[float, float, float]) -> str:
     return re.sub(rf"<diffuse>{re.escape(c.colour)}</diffuse>", colour, text)
 
 
-def add_cell_plant(builder, scenario: CellScenario) -> CellPlant:
-    """Adds the finalised plant + scene graph of ``scenario`` to ``builder``."""
+def add_cell_plant(
+    builder, scenario: CellScenario, staged: tuple[CellObject, ...] | None = None
+) -> CellPlant:
+    """Adds the finalised plant + scene graph of ``scenario`` to ``builder``.
+
+    ``staged``: with a scripted person (`tamp.sim.lots.person`), the objects waiting on its
+    staging shelf (workspace ``staging``, ``xy`` in the table frame); the hand and the shelf
+    are added then. None: no person in the cell.
+    """
     plant, scene_graph, parser = add_sap_plant(
         builder, time_step=scenario.time_step, contact_model=scenario.contact_model
     )
@@ -91,10 +120,12 @@ def add_cell_plant(builder, scenario: CellScenario) -> CellPlant:
         plant.GetJointActuatorByName(name, arm).set_controller_gains(PdControllerGains(p=kp, d=kd))
 
     bodies, classes = {}, {}
-    for o in scenario.objects:
+    hand = None if staged is None else _add_person(plant, parser)
+    for o in (*scenario.objects, *(staged or ())):
         (m,) = parser.AddModelsFromString(object_sdf(o.cls, o.id, o.rgb), "sdf")
         body = plant.GetBodyByName(CLASSES[o.cls].body, m)
-        z = 0.0 if not scenario.workspaces[o.workspace].tray else 0.01
+        w = scenario.workspaces.get(o.workspace)
+        z = 0.01 if w is not None and w.tray else 0.0
         X = RigidTransform(RotationMatrix.MakeZRotation(o.yaw), [o.xy[0], o.xy[1], z + 1e-4])
         plant.SetDefaultFloatingBaseBodyPose(body, X)
         bodies[o.id] = body
@@ -106,4 +137,48 @@ def add_cell_plant(builder, scenario: CellScenario) -> CellPlant:
         ARM.joints.index(plant.get_joint_actuator(i).joint().name())
         for i in plant.GetJointActuatorIndices(arm)
     ]
-    return CellPlant(plant, scene_graph, arm, bodies, classes, q0, actuator_order)
+    if hand is not None:
+        _person_roles(plant, scene_graph, hand)
+    staged_ids = tuple(o.id for o in staged or ())
+    return CellPlant(plant, scene_graph, arm, bodies, classes, q0, actuator_order, hand, staged_ids)
+
+
+def _add_person(plant: MultibodyPlant, parser) -> object:
+    """The person's hand on its PD-driven prismatic joints (parked, no gravity: kinematic)
+    and the staging shelf beside the table (rigid, level with the table top)."""
+    (hand,) = parser.AddModelsFromUrl(PERSON.url)
+    kp, kd = PERSON.gains
+    for name, q in zip(PERSON.joints, PERSON.park, strict=True):
+        plant.GetJointByName(name, hand).set_default_positions([q])
+        plant.GetJointActuatorByName(name, hand).set_controller_gains(PdControllerGains(p=kp, d=kd))
+    plant.mutable_gravity_field().set_enabled(hand, False)
+    (sx, sy), (lx, ly) = PERSON.shelf_center, PERSON.shelf_size
+    X = RigidTransform([sx, sy, -0.02])
+    props = ProximityProperties()
+    AddRigidHydroelasticProperties(props)
+    AddContactMaterial(friction=CoulombFriction(0.6, 0.6), properties=props)
+    plant.RegisterCollisionGeometry(plant.world_body(), X, Box(lx, ly, 0.04), "person_shelf", props)
+    colour = np.array([0.6, 0.5, 0.4, 1.0])
+    plant.RegisterVisualGeometry(plant.world_body(), X, Box(lx, ly, 0.04), "person_shelf", colour)
+    return hand
+
+
+def _person_roles(plant: MultibodyPlant, scene_graph, hand) -> None:
+    """Every hand pixel carries `HAND_LABEL`; the hand's collision box touches nothing."""
+    inspector = scene_graph.model_inspector()
+    body = plant.GetBodyByName(PERSON.hand_body, hand)
+    for gid in plant.GetVisualGeometriesForBody(body):
+        old = inspector.GetPerceptionProperties(gid)
+        if old is None:
+            continue
+        props = PerceptionProperties()
+        props.AddProperty("phong", "diffuse", old.GetPropertyOrDefault("phong", "diffuse", Rgba()))
+        props.AddProperty("label", "id", RenderLabel(HAND_LABEL))
+        # perception roles cannot be replaced in place: remove, then assign anew
+        scene_graph.RemoveRole(plant.get_source_id(), gid, Role.kPerception)
+        scene_graph.AssignRole(plant.get_source_id(), gid, props)
+    mine = GeometrySet(plant.GetCollisionGeometriesForBody(body))
+    everything = GeometrySet(inspector.GetAllGeometryIds(Role.kProximity))
+    scene_graph.collision_filter_manager().Apply(
+        CollisionFilterDeclaration().ExcludeBetween(mine, everything)
+    )

@@ -46,15 +46,13 @@ from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I
 
 from tamp.sim.core.parsing import make_parser
-from tamp.sim.lots.catalogue import ARM
+from tamp.sim.lots.catalogue import (
+    ARM,
+    HAND_LABEL,  # the person's hand's render label
+)
 from tamp.sim.lots.perception import Observation, ViewRequest
 from tamp.sim.lots.scenario import SafetySettings
 
-#: The render label of a person's hand: its perception geometry carries
-#: ``RenderLabel(HAND_LABEL)``; objects' pixels carry their body index, always far below.
-#: The same value as the scripted person's (``catalogue.HAND_LABEL`` on the lots-person
-#: branch); one of the two goes when both are merged.
-HAND_LABEL = 1000
 CAUSES = ("hand_near", "speed_limit", "accel_limit", "command_rate")
 #: slack on the joint limits for the diff-IK QP's solver tolerance
 LIMIT_SLACK = 1.01

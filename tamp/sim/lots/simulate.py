@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -24,12 +25,14 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from tamp.errors import InputError
 from tamp.lots.controller import ActionRecord, LotsController
-from tamp.lots.task import Task
+from tamp.lots.task import Event, Task
 from tamp.sim.core.executor import ActionLog
 from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
 from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.lots.builder import LotsCell, build_diagram
+from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.controller_system import PERIOD, LotsControllerSystem
+from tamp.sim.lots.person import RESTING_Z, STAGING, PersonAction, on_shelf
 from tamp.sim.lots.safety import SafetyStop
 from tamp.sim.lots.scenario import (
     BASKET_HALF,
@@ -42,8 +45,8 @@ from tamp.world.interface import Status
 
 #: how far the simulator runs between checks of the controller's result (sim s)
 CHUNK = 0.5
-#: an object counts as lying in a workspace or the basket when its origin is this low (m)
-RESTING_Z = 0.1
+#: after the controller's result, how long the person may take to finish its trip (sim s)
+PERSON_GRACE = 15.0
 
 
 @dataclass
@@ -56,11 +59,17 @@ class LotsDiagram:
 
 
 def build_lots_diagram(
-    scenario: CellScenario, controller: LotsController, *, meshcat: Any = None, period=PERIOD
+    scenario: CellScenario,
+    controller: LotsController,
+    *,
+    meshcat: Any = None,
+    period=PERIOD,
+    person: Sequence[Event] | None = None,
 ) -> LotsDiagram:
     """The cell diagram of ``scenario`` driven by ``controller`` (observation and skill status
-    in, skill command out: nothing else reaches the controller)."""
-    cell = build_diagram(scenario, meshcat=meshcat)
+    in, skill command out: nothing else reaches the controller). ``person``: interference
+    events a scripted person carries out in the cell (`tamp.sim.lots.person`)."""
+    cell = build_diagram(scenario, meshcat=meshcat, person=person)
     builder = DiagramBuilder()
     sub = builder.AddSystem(cell.diagram)
     ctrl = builder.AddSystem(LotsControllerSystem(controller, period=period))
@@ -101,6 +110,9 @@ class LotsSimResult:
         """Why the run failed, one of `tamp.sim.core.outcome.CAUSES` (None when satisfied)."""
         return lots_cause(self)
 
+    person_actions: list[PersonAction] = field(default_factory=list)
+    never_happened: list[Event] = field(default_factory=list)  # scripted, run ended first
+
     @property
     def rtf(self) -> float:
         return self.sim_time / self.wall_time if self.wall_time > 0 else float("inf")
@@ -128,6 +140,8 @@ class LotsSimResult:
             "rtf": round(self.rtf, 3),
             "final_counts": self.final_counts,
             "elsewhere": self.elsewhere,
+            "person_actions": [a.to_json() for a in self.person_actions],
+            "never_happened": [e.never_happened() for e in self.never_happened],
             "recording": self.recording,
             "cause": self.cause,
             "task_time": round(self.sim_time, 3),
@@ -178,6 +192,8 @@ def plant_counts(cell: LotsCell, plant_context) -> tuple[dict[str, dict[str, int
     the objects lying in none of them (held, on the floor, elsewhere on the table)."""
     plant, scenario = cell.plant, cell.scenario
     counts: dict[str, dict[str, int]] = {"A": {}, "B": {}, "waste": {}}
+    if cell.cell.staged:
+        counts[STAGING] = {}
     elsewhere = []
     bx, by = scenario.waste_basket
     for uid, body in sorted(cell.cell.bodies.items()):
@@ -189,6 +205,8 @@ def plant_counts(cell: LotsCell, plant_context) -> tuple[dict[str, dict[str, int
                 where = side
         if abs(x - bx) <= BASKET_HALF and abs(y - by) <= BASKET_HALF and z < RESTING_Z:
             where = "waste"
+        if cell.cell.staged and on_shelf(x, y, z):
+            where = STAGING
         if where is None:
             elsewhere.append(uid)
             continue
@@ -212,18 +230,20 @@ def simulate_lots(
     """Run ``task`` in the workcell of ``scenario`` (see the module docstring).
 
     ``check``: the verification gate (`verification.gate`), called on every table before it
-    is used; what it raises propagates. ``interference`` (events of an interference file) is
-    refused: the person is not simulated in Drake yet.
+    is used; what it raises propagates. ``interference``: the events of an interference file
+    (`tamp.lots.task.load_events`), carried out by a scripted person's hand; the run then
+    also waits (at most `PERSON_GRACE` s) for the person to finish what it started.
     """
-    if interference:
-        raise InputError("not yet simulated in the Drake workcell", field="--interference")
     scenario, applied = perturbed(scenario, seed)  # the run's draw of its perturbation
     scenario = with_network(scenario, grasp)
     check_matches(task, scenario)
+    events = list(interference) if interference else None
+    if events:
+        check_person_classes(events)
     controller = LotsController(task, seed=seed, check=check)  # the gate runs here
     if record and meshcat is None:
         meshcat = new_meshcat()
-    built = build_lots_diagram(scenario, controller, meshcat=meshcat)
+    built = build_lots_diagram(scenario, controller, meshcat=meshcat, person=events)
     if record:
         start_recording(built.cell.visualizer)
     simulator = make_simulator(built.diagram)
@@ -231,8 +251,16 @@ def simulate_lots(
     ctrl = built.controller
     ctrl_context = ctrl.GetMyContextFromRoot(context)
 
-    def finished(_t: float) -> bool:
-        return ctrl.state(ctrl_context).result is not None
+    person = built.cell.person
+    person_context = None if person is None else person.GetMyContextFromRoot(context)
+
+    def finished(t: float) -> bool:
+        s = ctrl.state(ctrl_context)
+        if s.result is None:
+            return False
+        if person is None or s.finished_at is None or t > s.finished_at + PERSON_GRACE:
+            return True
+        return person.state(person_context).idle  # let the person put down what it holds
 
     limit = max_sim_time if max_sim_time is not None else scenario.max_sim_time
     t0 = time.perf_counter()
@@ -259,6 +287,7 @@ def simulate_lots(
     if cell.safety is not None:  # the monitor's own renders count too (none without a hand)
         safety = cell.safety.state(cell.safety.GetMyContextFromRoot(context))
         frames, stops = frames + safety.frames, safety.all_stops(context.get_time())
+    ps = None if person is None else person.state(person_context)
     return LotsSimResult(
         task=task.name,
         scenario=scenario.name,
@@ -279,6 +308,8 @@ def simulate_lots(
         safety_stops=stops,
         seed=applied.seed,
         perturbation=applied.to_json(),
+        person_actions=[] if ps is None else list(ps.actions),
+        never_happened=[] if ps is None else ps.script.unfired(),
     )
 
 
@@ -344,3 +375,17 @@ def run_seeded(
         check=gate,
     )
     return result.to_json()
+
+
+def check_person_classes(events: Sequence[Event]) -> None:
+    """Every class the person brings in must be a workcell class (`InputError` naming the
+    interference file's ``events[i].class``)."""
+    for e in events:
+        if e.kind == "add" and e.cls not in CLASSES:
+            file, _, where = e.where.partition(": ")
+            raise InputError(
+                f"the workcell has no {e.cls!r} objects for the person to bring in "
+                f"(classes: {', '.join(sorted(CLASSES))})",
+                file=file or None,
+                field=f"{where}.class" if where else "class",
+            )

@@ -341,8 +341,22 @@ class SkillController(LeafSystem):
             done = True
         elif step.kind == "check_held":
             if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
-                lost, s.held = s.held, None
-                return self._finish(s, t, Status.FAILURE, f"dropped the {lost} while carrying it")
+                # lost on the way: one more view, so that what the controller observes
+                # after this failure shows the empty gripper (not the view before the drop)
+                lost, s.held, s.target_cls, s.track = s.held, None, None, None
+                s.steps, s.step_t0, s.move_from = (
+                    (
+                        Step("view", handler="seen"),
+                        Step(
+                            "finish",
+                            status=Status.FAILURE,
+                            detail=f"dropped the {lost} while carrying it",
+                        ),
+                    ),
+                    None,
+                    None,
+                )
+                return
             done = True
         elif step.kind == "finish":
             if step.handler == "released":
@@ -397,6 +411,9 @@ class SkillController(LeafSystem):
     def _on_counted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         detail = ",".join(f"{k}={v}" for k, v in sorted(obs.counts.items()))
         self._finish(s, t, Status.SUCCESS, detail)
+
+    def _on_seen(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
+        """A view only for the record (the observation the controller reads next)."""
 
     def _on_target(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         crop = obs.target

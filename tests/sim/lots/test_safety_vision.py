@@ -23,8 +23,8 @@ from pydrake.systems.framework import DiagramBuilder
 
 from tamp.sim.core.parsing import make_parser
 from tamp.sim.lots.builder import RENDERER, add_wrist_camera, camera_config
-from tamp.sim.lots.catalogue import ARM, READY
-from tamp.sim.lots.safety import EE_BODIES, HAND_LABEL, GripperModel, distance_to_boxes, hand_points
+from tamp.sim.lots.catalogue import ARM, HAND_LABEL, READY
+from tamp.sim.lots.safety import EE_BODIES, GripperModel, distance_to_boxes, hand_points
 from tamp.sim.lots.scenario import load_cell_scenario
 
 pytestmark = pytest.mark.slow  # renders images

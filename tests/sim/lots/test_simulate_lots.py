@@ -55,16 +55,16 @@ def test_every_network_ships_weights_and_unknown_ones_are_refused(monkeypatch):
     assert e.value.field == "--grasp"
 
 
-def test_cli_refuses_interference_and_mismatched_scenes_with_exit_2(capsys):
+def test_cli_refuses_bad_interference_and_mismatched_scenes_with_exit_2(capsys):
     from tamp.commands.main import main
 
     def refused(*args: str) -> str:
         assert main(["simulate", "lots", *args]) == 2
         return capsys.readouterr().err
 
-    assert "--interference: not yet simulated" in refused(
-        "--task", "tower", "--interference", "tower_interference"
-    )
+    assert "events[0].class" in refused(
+        "--task", "tower", "--interference", "model_building_fig8"
+    )  # no scissors in the tower task to move
     assert "objects: W^A holds" in refused("--task", "tower", "--scenario", "model_building")
     assert "--grasp" in refused("--task", "tower", "--grasp", "yolo")
     assert "--max-sim-time" in refused("--task", "tower", "--max-sim-time", "-1")

@@ -1,0 +1,286 @@
+"""The scripted person in the Drake workcell (`tamp.sim.lots.person`): the staging shelf, the
+hand's trips and what it carries, the robot actions it counts, the CLI's input checks; and
+the paper's narratives end to end (slow)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import yaml
+
+from tamp.lots.person import ScriptedPerson
+from tamp.lots.task import Event, load_events, load_task
+from tamp.sim.lots.catalogue import CLASSES, HAND_LABEL, PERSON
+from tamp.sim.lots.person import (
+    GRIP_GAP,
+    REACTION,
+    STAGING,
+    on_shelf,
+    shelf_spot,
+    staged_objects,
+)
+from tests.sim.lots.helpers import write_scenario
+
+TASK = {
+    "version": 1,
+    "name": "t",
+    "formula": "F p1",
+    "propositions": {"p1": {"class": "body"}},
+    "initial": {"A": {"body": 1}},
+}
+
+
+def _files(tmp_path, events: list[dict]):
+    (tmp_path / "task.yaml").write_text(yaml.safe_dump(TASK))
+    (tmp_path / "ev.yaml").write_text(yaml.safe_dump({"version": 1, "events": events}))
+    task = load_task(tmp_path / "task.yaml")
+    return task, load_events(tmp_path / "ev.yaml", task)
+
+
+def test_staged_objects_wait_on_the_shelf_one_per_added_object():
+    events = [
+        Event(after=1, kind="add", cls="body", side="B", count=2),
+        Event(after=2, kind="remove", cls="body", side="B"),
+        Event(after=3, kind="add", cls="toy_car", side="A"),
+    ]
+    staged = staged_objects(events)
+    assert [o.id for o in staged] == ["person_body_1", "person_body_2", "person_toy_car_3"]
+    assert {o.workspace for o in staged} == {STAGING}
+    assert [o.xy for o in staged] == [shelf_spot(0), shelf_spot(1), shelf_spot(2)]
+    for o in staged:
+        assert on_shelf(*o.xy, 0.0)
+        assert o.xy[0] - PERSON.shelf_center[0] == 0.0
+    # out of the table (x <= 0.9) and so out of every camera view
+    assert all(o.xy[0] - PERSON.shelf_size[0] / 2 > 0.9 for o in staged)
+    assert len({o.xy for o in staged}) == 3
+    assert HAND_LABEL > 255  # never a body index of the cell
+
+
+def test_due_returns_each_scripted_event_once_in_its_slot():
+    ev = [
+        Event(after=0, kind="add", cls="body", side="B"),
+        Event(after=1, kind="remove", cls="body", side="B", phase="holding"),
+        Event(after=2, kind="move", cls="body", src="B", dst="A"),
+    ]
+    p = ScriptedPerson(ev)
+    assert [(n, ph, e.kind) for n, ph, e in p.due(0, False)] == [(0, "idle", "add")]
+    assert p.due(0, False) == []
+    assert [(n, ph) for n, ph, _ in p.due(1, False)] == []  # (0, holding), (1, idle): none
+    assert [(n, ph, e.kind) for n, ph, e in p.due(1, True)] == [(1, "holding", "remove")]
+    assert [(n, e.kind) for n, _, e in p.due(2, False)] == [(2, "move")]
+    assert p.unfired() == []
+
+
+def _person_cell(tmp_path, events: list[dict], objects: list[dict]):
+    """The cell's plant (no camera, no skills) with the person, its robot inputs fixed to
+    ``Place(B)`` #1 SUCCESS: one robot action done."""
+    from pydrake.systems.analysis import Simulator
+    from pydrake.systems.framework import DiagramBuilder
+
+    from tamp.sim.core.messages import SkillCommand, SkillStatus
+    from tamp.sim.lots.person import PersonSystem
+    from tamp.sim.lots.plant import add_cell_plant
+    from tamp.sim.lots.scenario import load_cell_scenario
+    from tamp.world.interface import Status
+
+    _, ev = _files(tmp_path, events)
+    scenario = load_cell_scenario(write_scenario(tmp_path, objects))
+    builder = DiagramBuilder()
+    cell = add_cell_plant(builder, scenario, staged_objects(ev))
+    plant = cell.plant
+    person = builder.AddSystem(
+        PersonSystem(plant, scenario, ev, cell.bodies, cell.classes, cell.hand, cell.staged)
+    )
+    builder.Connect(plant.get_body_poses_output_port(), person.poses_port)
+    builder.Connect(plant.get_body_spatial_velocities_output_port(), person.velocities_port)
+    builder.Connect(person.desired_state_port, plant.get_desired_state_input_port(cell.hand))
+    builder.Connect(person.forces_port, plant.get_applied_spatial_force_input_port())
+    diagram = builder.Build()
+    sim = Simulator(diagram)
+    root = sim.get_mutable_context()
+    pc = person.GetMyContextFromRoot(root)
+    person.command_port.FixValue(pc, SkillCommand(1, "Place", ("B",)))
+    person.status_port.FixValue(pc, SkillStatus(1, Status.SUCCESS))
+    plant.get_desired_state_input_port(cell.arm).FixValue(
+        plant.GetMyContextFromRoot(root), np.r_[cell.q0[cell.actuator_order], np.zeros(9)]
+    )
+    return sim, cell, person
+
+
+def test_the_hand_carries_an_object_between_workspaces_and_parks(tmp_path):
+    """A removal of what is not there is skipped; one move (dis_1) after the robot's first
+    action: the hand goes over the body, takes it, carries it (the body keeps its pose in
+    the hand), puts it down in W^B, parks."""
+    sim, cell, person = _person_cell(
+        tmp_path,
+        [
+            {"after": 0, "kind": "remove", "class": "peak", "side": "B"},
+            {"after": 1, "kind": "move", "class": "body", "from": "A", "to": "B"},
+            {"after": 2, "kind": "add", "class": "peak", "side": "A"},
+        ],
+        [{"class": "body", "workspace": "A", "xy": [0.02, -0.03], "yaw": 30}],
+    )
+    plant = cell.plant
+    root = sim.get_mutable_context()
+    pc, mc = person.GetMyContextFromRoot(root), plant.GetMyContextFromRoot(root)
+    hand = plant.GetBodyByName(PERSON.hand_body, cell.hand)
+    body = cell.bodies["body_0"]
+    start = plant.EvalBodyPoseInWorld(mc, body)
+    offsets, took = [], None
+    t = 0.0
+    while t < 7.0:
+        t += 0.1
+        sim.AdvanceTo(t)
+        s = person.state(pc)
+        if s.carrying == "body_0":
+            X_HO = plant.EvalBodyPoseInWorld(mc, hand).inverse() @ plant.EvalBodyPoseInWorld(
+                mc, body
+            )
+            took = took if took is not None else s.X_HO[:3, 3].copy()
+            offsets.append(np.linalg.norm(X_HO.translation() - s.X_HO[:3, 3]))
+        if s.idle and s.actions and s.move is None:
+            break
+    s = person.state(pc)
+    skip, act = s.actions  # the add after action 2 never comes: the robot did one action
+    assert skip.outcome == "skipped" and skip.detail == "no peak in W^B"  # nothing to remove
+    assert act.outcome == "done" and act.uid == "body_0" and (act.src, act.dst) == ("A", "B")
+    assert act.start == pytest.approx(REACTION, abs=0.03) and 3.0 < act.end < 6.5
+    assert [e.kind for e in s.script.unfired()] == ["add"]
+    # the palm took the body from above: right over its top, centred on its footprint
+    assert took is not None
+    assert took[2] == pytest.approx(-(CLASSES["body"].height + GRIP_GAP), abs=0.004)
+    assert np.linalg.norm(took[:2]) < 0.01
+    # carried: the body kept its place in the hand (the carrying force holds it within 5 mm)
+    assert len(offsets) >= 10 and max(offsets) < 0.005
+    end = plant.EvalBodyPoseInWorld(mc, body)
+    w = person.scenario.workspaces["B"]
+    x, y, z = end.translation()
+    assert w.contains(x, y) and abs(z) < 0.003
+    # put down upright with the yaw it had
+    assert end.rotation().matrix()[2, 2] > 0.999
+    cos = np.dot(end.rotation().matrix()[:2, 0], start.rotation().matrix()[:2, 0])
+    assert cos > 0.99
+    # the hand is back at its park position, away from the table
+    sim.AdvanceTo(t + 2.0)
+    p = plant.EvalBodyPoseInWorld(mc, hand).translation()
+    assert np.linalg.norm(p - np.array(PERSON.park)) < 0.01
+
+
+def test_hand_pixels_carry_the_hand_label(tmp_path):
+    """Every visual of the hand is labelled HAND_LABEL; its collision box touches nothing."""
+    from pydrake.geometry import Role
+
+    sim, cell, _ = _person_cell(tmp_path, [], [])
+    plant = cell.plant
+    inspector = cell.scene_graph.model_inspector()
+    hand = plant.GetBodyByName(PERSON.hand_body, cell.hand)
+    gids = plant.GetVisualGeometriesForBody(hand)
+    assert len(gids) >= 3
+    for gid in gids:
+        props = inspector.GetPerceptionProperties(gid)
+        assert props.GetProperty("label", "id") == HAND_LABEL
+    (palm,) = plant.GetCollisionGeometriesForBody(hand)
+    others = [g for g in inspector.GetAllGeometryIds(Role.kProximity) if g != palm]
+    assert others and all(inspector.CollisionFiltered(palm, g) for g in others)
+
+
+def _cli(*args: str):
+    from tamp.commands.main import main
+
+    return main(["simulate", "lots", *args])
+
+
+def test_cli_refuses_a_bad_interference_file_naming_the_field(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump({"version": 1, "events": [{"after": 1, "kind": "teleport"}]}))
+    assert _cli("--task", "tower", "--interference", str(bad)) == 2
+    assert "events[0].kind" in capsys.readouterr().err
+    alien = tmp_path / "alien.yaml"
+    alien.write_text(
+        yaml.safe_dump(
+            {"version": 1, "events": [{"after": 1, "kind": "add", "class": "ufo", "side": "B"}]}
+        )
+    )
+    assert _cli("--task", "tower", "--interference", str(alien)) == 2
+    err = capsys.readouterr().err
+    assert "events[0].class" in err and "no 'ufo' objects" in err
+
+
+# ---- the paper's narratives in the workcell (long: ~100 s of sim time each) ----------------
+
+NARRATIVES = {
+    "fig8": ("model_building", "model_building_fig8"),
+    "fig9": ("model_building", "model_building_fig9"),
+    "fig10": ("tower", "tower_interference"),
+    "example1": ("example1", "example1_interference"),
+}
+
+
+def run_narrative(name: str):
+    from tamp.sim.lots.scenario import load_cell_scenario
+    from tamp.sim.lots.simulate import simulate_lots
+    from verification import gate
+
+    task_name, events_name = NARRATIVES[name]
+    task = load_task(task_name)
+    events = load_events(events_name, task)
+    result = simulate_lots(load_cell_scenario(task_name), task, events, check=gate)
+    figures = {
+        k: result.to_json()[k] for k in ("status", "satisfied", "sim_time", "wall_time", "rtf")
+    }
+    figures |= {"replans": result.replans, "final": result.final_counts}
+    print(f"\nnarrative {name}: {json.dumps(figures)}")
+    print("robot:", [a.text() for a in result.robot_actions])
+    print("person:", [a.to_json() for a in result.person_actions])
+    return result
+
+
+def _kinds(result) -> list[tuple[str, str | None]]:
+    return [a.key() for a in result.robot_actions]
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    reason="the held hammer hides the delivered scissors in the look at W^B: the robot puts "
+    "the hammer back again and again (docs/lots_workcell.md, the person's narratives)",
+    strict=False,
+)
+def test_fig8_delivered_scissors_are_discarded():
+    r = run_narrative("fig8")
+    assert r.satisfied and r.exit_code == 0
+    (p,) = r.person_actions
+    assert p.outcome == "done" and p.phase == "holding" and (p.src, p.dst) == ("A", "B")
+    assert ("discard_held", "scissors") in _kinds(r)
+    assert r.final_counts["B"] == {"saw": 1, "scissors": 1, "hammer": 1}
+    assert r.final_counts["waste"] == {"scissors": 1}
+
+
+@pytest.mark.slow
+def test_fig9_scissors_sent_back_are_brought_again_and_a_new_tool_is_ignored():
+    r = run_narrative("fig9")
+    assert r.satisfied and r.exit_code == 0
+    assert [a.outcome for a in r.person_actions] == ["done", "done"]
+    assert _kinds(r).count(("move", "p2")) == 2  # the scissors, twice
+    assert r.final_counts["B"] == {"saw": 1, "scissors": 1, "hammer": 1}
+    assert r.final_counts["A"] == {"scissors": 1, "wrench": 1}
+
+
+@pytest.mark.slow
+def test_fig10_tower_with_a_busy_person():
+    r = run_narrative("fig10")
+    assert r.satisfied and r.exit_code == 0
+    assert len(r.person_actions) == 4
+    assert all(a.outcome == "done" for a in r.person_actions[:3])
+    assert r.final_counts["B"] == {"bottom": 1, "body": 1, "peak": 1}
+
+
+@pytest.mark.slow
+def test_example1_screwdriver_put_in_early_forces_a_replan():
+    r = run_narrative("example1")
+    assert r.satisfied and r.exit_code == 0
+    (p,) = r.person_actions
+    assert p.outcome == "done" and (p.src, p.dst) == ("A", "B")
+    assert r.replans >= 1
+    assert r.final_counts["B"] == {"hammer": 1, "screw": 2, "screwdriver": 1}
