@@ -144,9 +144,11 @@ def run_campaign(
     *,
     out: Path | None = None,
     progress: bool = True,
+    plots: bool = True,
     on_record: Callable[[RunRecord], None] | None = None,
 ) -> CampaignResult:
-    """Run the campaign on ``engine`` (`tamp.campaign.engines`), entered here."""
+    """Run the campaign on ``engine`` (`tamp.campaign.engines`), entered here; with ``out``,
+    write the files (the plots too unless ``plots`` is False)."""
     from tqdm import tqdm
 
     check_scenario(spec)
@@ -183,7 +185,7 @@ def run_campaign(
         out=out,
     )
     if out is not None:
-        result.plots = _plots(result, out)
+        result.plots = _plots(result, out) if plots else []
         (out / "summary.json").write_text(json.dumps(result.to_json(), indent=2) + "\n")
     return result
 
