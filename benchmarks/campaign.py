@@ -7,6 +7,9 @@ Sections (``--only``):
   with its cause). ``--smp-scenario`` picks the scenario: the perturbed Case 3 with friction
   grasps and camera perception when that lands; the packaged ``case3.yaml`` by default.
 - ``lots``: the LOTS tower over 20 seeds (target >= 90 %); ``--lots-scenario`` likewise.
+- ``overhead``: Ray's own cost per run, without a simulation's noise: runs that only sleep
+  ``--sleep`` s, in this process and on a local Ray with 1 and 2 workers (scheduling, the
+  worker's start-up, pickling the job and the record both ways).
 - ``throughput``: the same seeds of ``--throughput-scenario`` (Case 1 by default) in this
   process (``--workers 0``), on a local Ray with 1 worker and with 2: runs per minute, the
   scaling 1 -> 2 workers, and Ray's overhead per run = (Ray 1-worker wall - in-process
@@ -15,7 +18,7 @@ Sections (``--only``):
 Every campaign is one ``tamp campaign --json`` subprocess (a fresh process each, so every
 engine pays its own imports). On a shared machine wall times depend on the load (printed).
 
-    python benchmarks/campaign.py [--runs N] [--only smp lots throughput] [--out DIR]
+    python benchmarks/campaign.py [--runs N] [--only smp lots overhead throughput] [--out DIR]
 
 Prints a table and one JSON line.
 """
@@ -28,9 +31,68 @@ import os
 import platform
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 TARGETS = {"smp": 0.95, "lots": 0.90}
+ROOT = Path(__file__).resolve().parents[1]
+SLEEP = float(os.environ.get("TAMP_BENCH_SLEEP", "0.5"))
+
+
+def accept(scenario: str) -> None:
+    """The sleeping kind's check: any file will do."""
+
+
+def sleeper(scenario: str, seed: int, *, record=None, max_sim_time=None) -> dict:
+    """A run that only sleeps `SLEEP` s: what is left is the engine's own cost."""
+    time.sleep(SLEEP)
+    return {
+        "status": "SUCCESS",
+        "cause": None,
+        "task_time": SLEEP,
+        "seed": seed,
+        "perturbation": 0.0,
+    }
+
+
+def overhead(runs: int) -> dict:
+    """Wall time of ``runs`` sleeping runs per engine; Ray's overhead per run against the
+    in-process engine, and its start-up."""
+    from tamp.campaign import CampaignSpec, LocalEngine, RayEngine, run_campaign
+    from tamp.campaign.kinds import Kind
+
+    kind = Kind(
+        "bench-sleep",
+        "sim",
+        "bench_sleep",
+        "benchmarks.campaign:sleeper",
+        "benchmarks.campaign:accept",
+        "-",
+    )
+    spec = CampaignSpec(kind, Path(__file__), runs)
+    out = {"runs": runs, "sleep_s": SLEEP}
+    for name, engine in (
+        ("local", LocalEngine()),
+        ("ray1", RayEngine(workers=1)),
+        ("ray2", RayEngine(workers=2)),
+    ):
+        load = os.getloadavg()[0]
+        result = run_campaign(spec, engine, out=None, progress=False)
+        assert result.successes == runs, result.to_json()["causes"]
+        out[name] = {
+            "wall_time": round(result.wall_time, 3),
+            "init_time": round(result.init_time, 3),
+            "load_avg": round(load, 2),
+        }
+    ideal = runs * SLEEP
+    for name, workers in (("local", 1), ("ray1", 1), ("ray2", 2)):
+        out[name]["overhead_per_run_s"] = round(
+            (out[name]["wall_time"] - ideal / workers) / runs * workers, 4
+        )
+    out["ray_overhead_per_run_s"] = round(
+        (out["ray1"]["wall_time"] - out["local"]["wall_time"]) / runs, 4
+    )
+    return out
 
 
 def campaign(scenario: str, runs: int, workers: int, out: Path, *extra: str) -> dict:
@@ -79,11 +141,17 @@ def main() -> int:
     ap.add_argument("--lots-scenario", default="tower.yaml")
     ap.add_argument("--throughput-scenario", default="case1.yaml")
     ap.add_argument("--workers", type=int, default=2, help="Ray workers of smp and lots")
-    ap.add_argument("--only", nargs="+", choices=("smp", "lots", "throughput"))
+    ap.add_argument("--overhead-runs", type=int, default=20)
+    ap.add_argument("--only", nargs="+", choices=("smp", "lots", "overhead", "throughput"))
     ap.add_argument("--out", default="build/bench_campaign", help="campaign folders")
     args = ap.parse_args()
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
-    only = set(args.only or ("smp", "lots", "throughput"))
+    # `benchmarks.campaign` (the sleeping runner) importable here and in Ray's workers
+    sys.path.insert(0, str(ROOT))
+    os.environ["PYTHONPATH"] = os.pathsep.join(
+        p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p
+    )
+    only = set(args.only or ("smp", "lots", "overhead", "throughput"))
     out = Path(args.out)
     rows = []
     if "smp" in only:
@@ -92,7 +160,8 @@ def main() -> int:
     if "lots" in only:
         n = args.runs or args.lots_runs
         rows.append(row("lots", campaign(args.lots_scenario, n, args.workers, out / "lots")))
-    overhead = None
+    engine_cost = overhead(args.runs or args.overhead_runs) if "overhead" in only else None
+    scaling = None
     if "throughput" in only:
         n = args.runs or args.throughput_runs
         sc = args.throughput_scenario
@@ -102,7 +171,7 @@ def main() -> int:
             by_workers[workers] = row("throughput", doc)
             rows.append(by_workers[workers])
         local, ray1, ray2 = by_workers[0], by_workers[1], by_workers[2]
-        overhead = {
+        scaling = {
             "runs": n,
             "ray_overhead_per_run_s": round((ray1["wall_time"] - local["wall_time"]) / n, 3),
             "ray_init_s": ray1["init_time"],
@@ -125,11 +194,20 @@ def main() -> int:
         )
         for c in r["causes"]:
             print(f"{'':<10} {c['status']} x{c['count']} seeds {c['seeds']}: {c['cause']}")
-    if overhead:
+    if scaling:
         print(
-            f"Ray overhead per run {overhead['ray_overhead_per_run_s']:+.2f} s "
-            f"(Ray start-up {overhead['ray_init_s']:.1f} s not included); "
-            f"1 -> 2 workers: {overhead['scaling_1_to_2_workers']:.2f}x runs/min"
+            f"simulations: Ray 1 worker - in-process {scaling['ray_overhead_per_run_s']:+.2f} s "
+            f"per run (Ray start-up {scaling['ray_init_s']:.1f} s not included); "
+            f"1 -> 2 workers: {scaling['scaling_1_to_2_workers']:.2f}x runs/min"
+        )
+    if engine_cost:
+        e = engine_cost
+        print(
+            f"engine cost ({e['runs']} runs sleeping {e['sleep_s']:g} s): in-process "
+            f"{e['local']['wall_time']:.2f} s, Ray 1 worker {e['ray1']['wall_time']:.2f} s, "
+            f"2 workers {e['ray2']['wall_time']:.2f} s; Ray overhead per run "
+            f"{e['ray_overhead_per_run_s'] * 1000:.0f} ms; Ray start-up "
+            f"{e['ray1']['init_time']:.1f} s"
         )
     print(
         json.dumps(
@@ -138,7 +216,8 @@ def main() -> int:
                 "machine": f"{platform.machine()} {os.cpu_count()} cpus",
                 "targets": TARGETS,
                 "rows": rows,
-                "throughput": overhead,
+                "throughput": scaling,
+                "engine_cost": engine_cost,
             }
         )
     )

@@ -65,12 +65,17 @@ def test_in_process_campaign_of_case1(tmp_path, capsys):
     doc = json.loads(capsys.readouterr().out)
     assert (doc["engine"], doc["address"], doc["n_runs"], doc["successes"]) == ("local", None, 2, 0)
     assert [(r["seed"], r["status"], r["task_time"]) for r in doc["runs"]] == [
-        (5, "timeout", 2.0), (6, "timeout", 2.0)
-    ]  # fmt: skip
+        (5, "timeout", 2.0),
+        (6, "timeout", 2.0),
+    ]
     assert doc["causes"] == [
-        {"status": "timeout", "cause": "no result within 2 s of sim time", "count": 2,
-         "seeds": [5, 6]}
-    ]  # fmt: skip
+        {
+            "status": "timeout",
+            "cause": "no result within 2 s of sim time",
+            "count": 2,
+            "seeds": [5, 6],
+        }
+    ]
     assert sorted(p.name for p in (out / "recordings").iterdir()) == ["seed_5.html", "seed_6.html"]
     run = json.loads((out / "runs" / "seed_5.json").read_text())
     assert (
@@ -79,8 +84,9 @@ def test_in_process_campaign_of_case1(tmp_path, capsys):
     )
     assert run["result"]["sim"]["final_poses"]  # the simulation's own JSON is kept
     # --min-success turns the measurement into a gate (exit 1), and says so
-    code = main([*argv, "--max-sim-time", "2", "--out", str(out), "--no-record",
-                 "--min-success", "0.5"])  # fmt: skip
+    code = main(
+        [*argv, "--max-sim-time", "2", "--out", str(out), "--no-record", "--min-success", "0.5"]
+    )
     assert code == 1
     text = capsys.readouterr().out
     assert "success 0/2 = 0.0%" in text and "below --min-success 0.5" in text

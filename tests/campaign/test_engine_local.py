@@ -47,8 +47,9 @@ def test_files_under_out(fake_kind, fake_file, tmp_path):
     (out / "runs" / "notes.txt").write_text("mine")  # not ours: kept
     result = _campaign(fake_kind, fake_file, out, runs=5, plots=True)
     assert sorted(p.name for p in (out / "runs").iterdir()) == [
-        "notes.txt", *(f"seed_{s}.json" for s in range(5))
-    ]  # fmt: skip
+        "notes.txt",
+        *(f"seed_{s}.json" for s in range(5)),
+    ]
     run3 = json.loads((out / "runs" / "seed_3.json").read_text())
     assert run3["status"] == "failure" and run3["replay"] == f"fake {fake_file} --seed 3"
     assert run3["result"]["cause"] == "dropped O1"

@@ -19,8 +19,12 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def local_ray():
     """One local Ray (2 CPUs) for the module; every engine below uses it as it is."""
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
-             object_store_memory=128 * 1024 * 1024)  # fmt: skip
+    ray.init(
+        num_cpus=2,
+        include_dashboard=False,
+        log_to_driver=False,
+        object_store_memory=128 * 1024 * 1024,
+    )
     yield ray.get_runtime_context().gcs_address
     ray.shutdown()
 
@@ -59,9 +63,13 @@ def test_drake_campaign_reproducible_per_seed(local_ray, tmp_path, capsys):
         assert (doc["engine"], doc["address"], doc["workers"]) == ("ray", local_ray, 2)
         docs.append([(r["seed"], r["status"], r["cause"], r["task_time"]) for r in doc["runs"]])
         poses.append(
-            [json.loads((out / "runs" / f"seed_{s}.json").read_text())["result"]["sim"][
-                "final_poses"] for s in (7, 8, 9)]
-        )  # fmt: skip
+            [
+                json.loads((out / "runs" / f"seed_{s}.json").read_text())["result"]["sim"][
+                    "final_poses"
+                ]
+                for s in (7, 8, 9)
+            ]
+        )
     assert docs[0] == docs[1]
     assert [s for s, *_ in docs[0]] == [7, 8, 9]
     assert poses[0] == poses[1]

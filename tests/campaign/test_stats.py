@@ -58,8 +58,13 @@ def test_distribution():
     assert (d.n, d.mean, d.median, d.min, d.max) == (4, 25.0, 25.0, 10.0, 40.0)
     assert d.p90 == pytest.approx(37.0)
     assert Distribution.of([]).to_json() == {
-        "n": 0, "mean": None, "median": None, "p90": None, "min": None, "max": None
-    }  # fmt: skip
+        "n": 0,
+        "mean": None,
+        "median": None,
+        "p90": None,
+        "min": None,
+        "max": None,
+    }
 
 
 def test_group_causes_most_frequent_first_with_seeds():
@@ -86,8 +91,11 @@ def test_success_by_size_bins():
     runs = [(0.0, True), (0.1, True), (0.2, False), (0.9, False), (1.0, False), (0.5, True)]
     bins = success_by_size(runs, bins=5)
     assert [(round(b.lo, 2), b.n, b.successes) for b in bins] == [
-        (0.0, 2, 2), (0.2, 1, 0), (0.4, 1, 1), (0.8, 2, 0)
-    ]  # fmt: skip
+        (0.0, 2, 2),
+        (0.2, 1, 0),
+        (0.4, 1, 1),
+        (0.8, 2, 0),
+    ]
     assert sum(b.n for b in bins) == len(runs)
     one = success_by_size([(0.0, True), (0.0, False)])
     assert len(one) == 1 and one[0].rate == 0.5
