@@ -152,10 +152,7 @@ def run_campaign(
     from tqdm import tqdm
 
     check_scenario(spec)
-    if out is not None:
-        _clear_runs(out)
     records: list[RunRecord] = []
-    bar = tqdm(total=spec.runs, desc="campaign", unit="run", disable=None if progress else True)
 
     def done(rec: RunRecord) -> None:
         records.append(rec)
@@ -167,7 +164,10 @@ def run_campaign(
         if on_record is not None:
             on_record(rec)
 
-    with engine:
+    with engine:  # a local Ray starts here, or the cluster is reached (or refused)
+        if out is not None:
+            _clear_runs(out)
+        bar = tqdm(total=spec.runs, desc="campaign", unit="run", disable=None if progress else True)
         t0 = time.perf_counter()
         try:
             engine.run(spec.jobs(), spec.time_limit, done)

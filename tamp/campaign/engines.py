@@ -85,6 +85,24 @@ def import_ray():
     return ray
 
 
+def check_reachable(address: str, timeout: float = 5.0) -> None:
+    """Refuse (`InputError` naming ``--address``) a ``host:port`` / ``ray://host:port`` that
+    nothing answers on: Ray itself would retry for minutes. ``auto`` and other forms are
+    left to Ray."""
+    import socket
+
+    text = address.removeprefix("ray://")
+    host, sep, port = text.rpartition(":")
+    if not sep or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise InputError(
+            f"no Ray cluster answers at {address} ({exc})", field="--address"
+        ) from None
+
+
 class RayEngine:
     """Runs jobs as Ray tasks, at most ``workers`` at a time.
 
@@ -113,6 +131,7 @@ class RayEngine:
         if not ray.is_initialized():
             opts = {"logging_level": logging.WARNING, "log_to_driver": False}
             if self.requested_address:
+                check_reachable(self.requested_address)
                 ray.init(address=self.requested_address, **opts)
             else:
                 ray.init(

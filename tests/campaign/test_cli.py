@@ -52,6 +52,16 @@ def test_missing_ray_exits_2_with_the_install_hint(monkeypatch, capsys, tmp_path
     assert "--runs" in capsys.readouterr().err
 
 
+def test_unreachable_address_exits_2(tmp_path, capsys):
+    pytest.importorskip("ray")
+    out = tmp_path / "out"
+    argv = ["campaign", "case1.yaml", "--runs", "1", "--address", "127.0.0.1:1", "--json"]
+    assert main([*argv, "--out", str(out)]) == 2
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["field"] == "--address" and "no Ray cluster answers at 127.0.0.1:1" in doc["error"]
+    assert not (out / "runs").exists()
+
+
 def test_runs_is_required(capsys):
     assert main(["campaign", "case1.yaml"]) == 2
 
