@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -145,7 +144,6 @@ def run_campaign(
     out: Path | None = None,
     progress: bool = True,
     plots: bool = True,
-    on_record: Callable[[RunRecord], None] | None = None,
 ) -> CampaignResult:
     """Run the campaign on ``engine`` (`tamp.campaign.engines`), entered here; with ``out``,
     write the files (the plots too unless ``plots`` is False)."""
@@ -161,8 +159,6 @@ def run_campaign(
         rec.recording_html = None  # written (or not wanted): do not keep megabytes around
         bar.update(1)
         bar.set_postfix_str(f"{sum(r.ok for r in records)}/{len(records)} ok")
-        if on_record is not None:
-            on_record(rec)
 
     with engine:  # a local Ray starts here, or the cluster is reached (or refused)
         if out is not None:

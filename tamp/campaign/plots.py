@@ -19,14 +19,22 @@ def _pyplot():
     return plt
 
 
-def _save(fig, out: Path, stem: str) -> list[str]:
-    out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for ext in ("png", "svg"):
-        p = out / f"{stem}.{ext}"
-        fig.savefig(p, dpi=120 if ext == "png" else None, bbox_inches="tight")
-        paths.append(str(p))
-    return paths
+def _finish(plt, fig, ax, labels: tuple[str, str, str], out: Path, stem: str) -> list[str]:
+    """Label the axes and title, write ``out/stem.png`` and ``.svg``, close the figure."""
+    xlabel, ylabel, title = labels
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        paths = []
+        for ext in ("png", "svg"):
+            p = out / f"{stem}.{ext}"
+            fig.savefig(p, dpi=120 if ext == "png" else None, bbox_inches="tight")
+            paths.append(str(p))
+        return paths
+    finally:
+        plt.close(fig)
 
 
 def task_time_histogram(times: Sequence[float], out: Path, title: str) -> list[str]:
@@ -37,13 +45,7 @@ def task_time_histogram(times: Sequence[float], out: Path, title: str) -> list[s
         ax.hist(times, bins=min(20, max(5, len(times) // 2)), color="#4878a8", edgecolor="white")
     else:
         ax.text(0.5, 0.5, "no successful run", ha="center", va="center", transform=ax.transAxes)
-    ax.set_xlabel("task time (sim s)")
-    ax.set_ylabel("runs")
-    ax.set_title(title, fontsize=10)
-    try:
-        return _save(fig, out, "task_time")
-    finally:
-        plt.close(fig)
+    return _finish(plt, fig, ax, ("task time (sim s)", "runs", title), out, "task_time")
 
 
 def success_by_perturbation(bins: Sequence[Bin], out: Path, title: str) -> list[str]:
@@ -64,10 +66,5 @@ def success_by_perturbation(bins: Sequence[Bin], out: Path, title: str) -> list[
             fontsize=8,
         )
     ax.set_ylim(-0.02, 1.05)
-    ax.set_xlabel("perturbation size")
-    ax.set_ylabel("success rate")
-    ax.set_title(title, fontsize=10)
-    try:
-        return _save(fig, out, "success_by_perturbation")
-    finally:
-        plt.close(fig)
+    labels = ("perturbation size", "success rate", title)
+    return _finish(plt, fig, ax, labels, out, "success_by_perturbation")
