@@ -62,23 +62,36 @@ def _lots_inputs(scenario: str):
     return task, load_cell_scenario(task.name)
 
 
-def check_lots(scenario: str) -> None:
+def check_lots(scenario: str, interference: str | None = None) -> None:
+    from tamp.errors import InputError
+    from tamp.lots.task import load_events
     from tamp.sim.lots.simulate import check_matches
 
-    check_matches(*_lots_inputs(scenario))
+    task, cell = _lots_inputs(scenario)
+    check_matches(task, cell)
+    if interference:  # as `tamp simulate lots --interference` today
+        load_events(interference, task)
+        raise InputError("not yet simulated in the Drake workcell", field="--interference")
 
 
 def run_lots(
-    scenario: str, seed: int, *, record: str | None = None, max_sim_time: float | None = None
+    scenario: str,
+    seed: int,
+    *,
+    record: str | None = None,
+    max_sim_time: float | None = None,
+    interference: str | None = None,
 ) -> dict[str, Any]:
     """One LOTS workcell run of the task ``scenario`` in its packaged cell; ``seed`` seeds
     the controller's tree update (what ``tamp simulate lots --seed`` does today)."""
+    from tamp.lots.task import load_events
     from tamp.sim.lots.simulate import simulate_lots
     from verification import gate
 
     task, cell = _lots_inputs(scenario)
+    events = load_events(interference, task) if interference else None
     result = simulate_lots(
-        cell, task, seed=seed, record=record, max_sim_time=max_sim_time, check=gate
+        cell, task, events, seed=seed, record=record, max_sim_time=max_sim_time, check=gate
     )
     if result.satisfied:
         status, cause = "SUCCESS", None

@@ -34,8 +34,12 @@ class CampaignSpec:
     time_limit: float = 600.0  # wall s per run
     max_sim_time: float | None = None
     record: bool = True
+    options: tuple[tuple[str, str], ...] = ()  # (name, value) of the kind's own options
 
     def __post_init__(self) -> None:
+        for name, _ in self.options:
+            if name not in self.kind.options:
+                raise InputError(f"not an option of kind {self.kind.name}", field=f"--{name}")
         if self.runs < 1:
             raise InputError(f"must be at least 1, got {self.runs}", field="--runs")
         if self.seed < 0:
@@ -59,13 +63,21 @@ class CampaignSpec:
 
     def jobs(self) -> list[Job]:
         return [
-            Job(self.kind.runner, str(self.scenario), s, self.max_sim_time, self.record)
+            Job(
+                self.kind.runner,
+                str(self.scenario),
+                s,
+                self.max_sim_time,
+                self.record,
+                self.options,
+            )
             for s in self.seeds
         ]
 
     def replay(self, seed: int) -> str:
         """The command that reruns one seed of this campaign."""
-        return self.kind.replay.format(scenario=self.scenario, seed=seed)
+        extra = "".join(f" --{name} {value}" for name, value in self.options)
+        return self.kind.replay.format(scenario=self.scenario, seed=seed) + extra
 
 
 @dataclass
@@ -123,6 +135,7 @@ class CampaignResult:
             "causes": [c.to_json() for c in group_causes(runs)],
             "by_perturbation": [b.to_json() for b in success_by_size(sizes)],
             "runs": [r.summary_json() for r in self.records],
+            "options": dict(self.spec.options),
             "time_limit": self.spec.time_limit,
             "wall_time": round(self.wall_time, 3),
             "init_time": round(self.init_time, 3),
@@ -134,7 +147,7 @@ class CampaignResult:
 
 def check_scenario(spec: CampaignSpec) -> None:
     """Load and validate the scenario here, before any run (`InputError`: exit 2)."""
-    import_target(spec.kind.check)(str(spec.scenario))
+    import_target(spec.kind.check)(str(spec.scenario), **dict(spec.options))
 
 
 def run_campaign(

@@ -6,7 +6,8 @@ run (a Ray worker, or this process for the in-process engine), so importing this
 imports neither Drake nor Ray, and nothing Drake-made is ever pickled.
 
 Runner contract: ``runner(scenario: str, seed: int, *, record: str | None,
-max_sim_time: float | None) -> dict`` with at least ``status`` (``SUCCESS`` | ``FAILURE`` |
+max_sim_time: float | None, **options) -> dict`` (``options``: the kind's own, e.g. a LOTS
+run's ``interference`` file) with at least ``status`` (``SUCCESS`` | ``FAILURE`` |
 ``TIMEOUT``, the simulation's verdict), ``cause`` (None on success, else why), ``task_time``
 (sim s), ``seed`` and ``perturbation`` (its size, a number, or a mapping with ``size``).
 A runner may raise `tamp.errors.TampError` for a run that cannot be planned (a failure with
@@ -35,7 +36,9 @@ class Kind:
     top-level YAML key that only its files have (how ``--kind`` is inferred from a user
     file); ``runner`` and ``check``: ``"module:function"`` of the one-run function and of
     the loader that validates the file (raises `InputError`) before anything starts;
-    ``replay``: the command that reruns one seed (``{scenario}`` and ``{seed}`` filled in).
+    ``replay``: the command that reruns one seed (``{scenario}`` and ``{seed}`` filled in);
+    ``options``: the runner's (and the check's) extra keyword options, each a CLI flag of the
+    same name (``interference`` -> ``--interference``), passed on as strings.
     """
 
     name: str
@@ -44,6 +47,7 @@ class Kind:
     runner: str
     check: str
     replay: str
+    options: tuple[str, ...] = ()
 
 
 # ADAPTER (issue 18): the three runners below are `tamp.campaign.adapters`, thin wrappers of
@@ -68,6 +72,7 @@ KINDS: dict[str, Kind] = {
             runner="tamp.campaign.adapters:run_lots",
             check="tamp.campaign.adapters:check_lots",
             replay="tamp simulate lots --task {scenario} --seed {seed}",
+            options=("interference",),
         ),
         Kind(
             "refine",

@@ -35,6 +35,7 @@ class Job:
     seed: int
     max_sim_time: float | None = None
     record: bool = True  # keep the recording when the run does not succeed
+    options: tuple[tuple[str, str], ...] = ()  # the kind's own runner options
 
 
 @dataclass
@@ -125,7 +126,13 @@ def execute(job: Job) -> RunRecord:
         record = str(Path(tmp) / f"seed_{job.seed}.html") if job.record else None
         try:
             runner = import_target(job.runner)
-            out = runner(job.scenario, job.seed, record=record, max_sim_time=job.max_sim_time)
+            out = runner(
+                job.scenario,
+                job.seed,
+                record=record,
+                max_sim_time=job.max_sim_time,
+                **dict(job.options),
+            )
             rec = from_runner(job.seed, out, time.perf_counter() - t0)
         except TampError as exc:
             wall = time.perf_counter() - t0

@@ -2,7 +2,8 @@
 
     tamp campaign SCENARIO [--kind smp-mro|lots|refine] --runs N [--seed S]
                   [--address ADDRESS] [--workers K] [--engine ray|local] [--time-limit S]
-                  [--max-sim-time S] [--out DIR] [--no-record] [--min-success RATE] [--json]
+                  [--max-sim-time S] [--interference EVENTS.yaml] [--out DIR] [--no-record]
+                  [--min-success RATE] [--json]
 
 SCENARIO is a file or a packaged name (``case3.yaml``, ``tower.yaml``, ``task4``); the kind is
 inferred from it when ``--kind`` is left out. Seeds ``S .. S+N-1`` run on a local Ray with K
@@ -44,6 +45,9 @@ def register(subparsers) -> None:
         "--time-limit", type=float, default=600.0, help="wall s per run before it is killed"
     )
     p.add_argument("--max-sim-time", type=float, help="override the scenario's sim-time limit")
+    p.add_argument(
+        "--interference", metavar="EVENTS.yaml", help="lots: the person's interference script"
+    )
     p.add_argument("--out", metavar="DIR", help="output folder (default build/campaign/NAME)")
     p.add_argument("--no-record", action="store_true", help="no recordings of failed runs")
     p.add_argument(
@@ -78,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
     from tamp.campaign import CampaignSpec, resolve_scenario, run_campaign
     from tamp.commands.output import output_file
     from tamp.errors import InputError
+    from tamp.scenarios import resolve
 
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
     if args.min_success is not None and not (
@@ -85,6 +90,9 @@ def run(args: argparse.Namespace) -> int:
     ):
         raise InputError(f"must be in [0, 1], got {args.min_success}", field="--min-success")
     kind, path = resolve_scenario(args.scenario, args.kind)
+    options = ()
+    if args.interference is not None:
+        options = (("interference", str(resolve(args.interference, "lots"))),)
     spec = CampaignSpec(
         kind,
         path,
@@ -93,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
         time_limit=args.time_limit,
         max_sim_time=args.max_sim_time,
         record=not args.no_record,
+        options=options,
     )
     out = Path(args.out or Path("build") / "campaign" / path.stem)
     if out.exists() and not out.is_dir():

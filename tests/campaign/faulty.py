@@ -13,7 +13,7 @@ from tamp.campaign.kinds import Kind
 CRASH, HANG, DIE = 13, 15, 21
 
 
-def check(scenario: str) -> None:
+def check(scenario: str, note: str | None = None) -> None:
     """The driver-side validation: the scenario file must exist."""
     from tamp.errors import InputError
 
@@ -30,7 +30,7 @@ def outcome(seed: int) -> tuple[str, str | None]:
     return "SUCCESS", None
 
 
-def run(scenario: str, seed: int, *, record=None, max_sim_time=None) -> dict:
+def run(scenario: str, seed: int, *, record=None, max_sim_time=None, note=None) -> dict:
     """Deterministic per seed; raises at `CRASH`, dies at `DIE`, hangs at `HANG`."""
     if seed == CRASH:
         raise RuntimeError(f"boom at seed {seed}")
@@ -47,6 +47,7 @@ def run(scenario: str, seed: int, *, record=None, max_sim_time=None) -> dict:
         "task_time": 30.0 + 0.5 * seed,
         "seed": seed,
         "perturbation": {"size": 0.01 * seed},
+        "note": note,  # the kind's own option, echoed
     }
 
 
@@ -57,4 +58,5 @@ FAKE = Kind(
     runner="tests.campaign.faulty:run",
     check="tests.campaign.faulty:check",
     replay="fake {scenario} --seed {seed}",
+    options=("note",),
 )

@@ -24,6 +24,7 @@ from tamp.commands.main import main
         (["case1.yaml", "--runs", "2", "--max-sim-time", "inf"], "--max-sim-time"),
         (["case1.yaml", "--runs", "2", "--min-success", "1.5"], "--min-success"),
         (["no_such_scenario", "--runs", "2"], "SCENARIO"),
+        (["case1.yaml", "--runs", "2", "--interference", "tower_interference"], "--interference"),
     ],
 )
 def test_bad_input_exits_2_naming_the_field(argv, field, capsys, tmp_path):

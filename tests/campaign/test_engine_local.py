@@ -108,3 +108,13 @@ def test_bad_spec_and_bad_file(fake_kind, fake_file, tmp_path):
     with pytest.raises(InputError, match="no such file"):  # validated before any run
         _campaign(fake_kind, tmp_path / "missing.yaml", tmp_path / "out")
     assert not (tmp_path / "out").exists()
+
+
+def test_kind_options_reach_the_runner_and_the_replay(fake_kind, fake_file):
+    result = _campaign(fake_kind, fake_file, None, runs=1, options=(("note", "hi"),))
+    assert result.records[0].result["note"] == "hi"
+    assert result.spec.replay(0) == f"fake {fake_file} --seed 0 --note hi"
+    assert result.to_json()["options"] == {"note": "hi"}
+    with pytest.raises(InputError, match="not an option of kind test-fake") as e:
+        CampaignSpec(fake_kind, fake_file, 1, options=(("interference", "x.yaml"),))
+    assert e.value.field == "--interference"
