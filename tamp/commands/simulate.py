@@ -147,10 +147,15 @@ def run_lots(args: argparse.Namespace) -> int:
     print(f"final (plant): W^A {c['A']}  W^B {c['B']}  waste {c['waste']}")
     if result.elsewhere:
         print(f"elsewhere: {', '.join(result.elsewhere)}")
+    for stop in result.safety_stops:
+        print(
+            f"safety stop at {stop.time:.2f} s: {stop.cause} ({stop.detail}), "
+            f"held {stop.duration:.2f} s"
+        )
     g = result.grasps
     print(
         f"replans {result.replans}, grasps {g['successes']}/{g['attempts']}, "
-        f"frames {result.frames_rendered}"
+        f"frames {result.frames_rendered}, safety stops {len(result.safety_stops)}"
     )
     verdict = "task satisfied" if result.satisfied else f"task NOT satisfied: {result.reason}"
     print(

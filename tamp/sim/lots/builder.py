@@ -3,9 +3,11 @@ idiom: one function, one named Diagram, exported ports).
 
     MultibodyPlant + SceneGraph (tamp.sim.lots.plant: table, arm, baskets, objects)
       wrist RgbdSensor (CameraConfig, VTK over EGL) ─► color/depth/label ─► Perception
-      Perception.observation ─► SkillController ─► desired_state (the arm's PD actuators)
+      Perception.observation ─► SkillController ─► ArmCommandStream (1 kHz) ─► SafetyMonitor
+        ─► desired_state (the arm's PD actuators); SafetyMonitor.stopped ─► SkillController.hold
       SkillController.view_request ─► Perception
-    exported: skill_command (in); skill_status, observation, view_request, arm_state (out)
+    exported: skill_command, person_present (in); skill_status, observation, view_request,
+      arm_state, safety_stopped (out)
     MeshcatVisualizer (optional)
 
 The camera is configured through Drake's `CameraConfig` (D435 colour intrinsics at a reduced
@@ -33,10 +35,12 @@ from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.lots.catalogue import ARM
+from tamp.sim.lots.command import ArmCommandStream
 from tamp.sim.lots.grasping import GraspPlanner
 from tamp.sim.lots.kinematics import ArmKinematics
 from tamp.sim.lots.perception import Perception
 from tamp.sim.lots.plant import CellPlant, add_cell_plant
+from tamp.sim.lots.safety import HAND_LABEL, SafetyMonitor
 from tamp.sim.lots.scenario import CellScenario
 from tamp.sim.lots.skills import SkillController
 
@@ -57,6 +61,8 @@ class LotsCell:
     planner: GraspPlanner
     visualizer: object = None
     meshcat: Any = None
+    command: ArmCommandStream | None = None
+    safety: SafetyMonitor | None = None
 
     @property
     def plant(self) -> MultibodyPlant:
@@ -88,17 +94,12 @@ def camera_config(scenario: CellScenario) -> CameraConfig:
     )
 
 
-def build_diagram(scenario: CellScenario, *, meshcat: Any = None) -> LotsCell:
-    """The named Diagram of ``scenario``; drive it through ``skill_command`` (see `CellDriver`)."""
-    builder = DiagramBuilder()
-    cell = add_cell_plant(builder, scenario)
-    plant, scene_graph = cell.plant, cell.scene_graph
-    scene_graph.AddRenderer(RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL")))
-
-    config = camera_config(scenario)
+def add_wrist_camera(builder, plant, scene_graph, arm, config: CameraConfig):
+    """A plain `RgbdSensor` (no zero-order hold: it renders only when a port is evaluated)
+    at the arm's ``camera`` frame, configured by ``config``; (sensor, (fx, fy, cx, cy))."""
     color_cam, depth_cam = config.MakeCameras()
-    hand = plant.GetBodyByName(ARM.hand_body, cell.arm)
-    X_HC = plant.GetFrameByName(ARM.camera_frame, cell.arm).GetFixedPoseInBodyFrame()
+    hand = plant.GetBodyByName(ARM.hand_body, arm)
+    X_HC = plant.GetFrameByName(ARM.camera_frame, arm).GetFixedPoseInBodyFrame()
     camera = builder.AddSystem(
         RgbdSensor(
             plant.GetBodyFrameIdOrThrow(hand.index()), RigidTransform(X_HC), color_cam, depth_cam
@@ -106,9 +107,22 @@ def build_diagram(scenario: CellScenario, *, meshcat: Any = None) -> LotsCell:
     )
     camera.set_name("wrist_camera")
     builder.Connect(scene_graph.get_query_output_port(), camera.query_object_input_port())
-
     K = color_cam.core().intrinsics()
-    intrinsics = (K.focal_x(), K.focal_y(), K.center_x(), K.center_y())
+    return camera, (K.focal_x(), K.focal_y(), K.center_x(), K.center_y())
+
+
+def build_diagram(
+    scenario: CellScenario, *, meshcat: Any = None, hand_labels=frozenset({HAND_LABEL})
+) -> LotsCell:
+    """The named Diagram of ``scenario``; drive it through ``skill_command`` (see `CellDriver`).
+    ``hand_labels``: the render labels the safety monitor takes for a person's hand."""
+    builder = DiagramBuilder()
+    cell = add_cell_plant(builder, scenario)
+    plant, scene_graph = cell.plant, cell.scene_graph
+    scene_graph.AddRenderer(RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL")))
+
+    config = camera_config(scenario)
+    camera, intrinsics = add_wrist_camera(builder, plant, scene_graph, cell.arm, config)
     labels = {int(body.index()): cell.classes[uid] for uid, body in cell.bodies.items()}
     perception = builder.AddSystem(
         Perception(
@@ -130,13 +144,18 @@ def build_diagram(scenario: CellScenario, *, meshcat: Any = None) -> LotsCell:
     builder.Connect(plant.get_state_output_port(cell.arm), skills.arm_state_port)
     builder.Connect(perception.observation_port, skills.observation_port)
     builder.Connect(skills.view_request_port, perception.request_port)
-    builder.Connect(skills.desired_state_port, plant.get_desired_state_input_port(cell.arm))
+    command, safety = _add_safety(
+        builder, scenario, cell, camera, perception, skills, intrinsics, hand_labels
+    )
 
     builder.ExportInput(skills.command_port, "skill_command")
     builder.ExportOutput(skills.status_port, "skill_status")
     builder.ExportOutput(perception.observation_port, "observation")
     builder.ExportOutput(skills.view_request_port, "view_request")
     builder.ExportOutput(plant.get_state_output_port(cell.arm), "arm_state")
+    if safety is not None:
+        builder.ExportInput(safety.present_port, "person_present")
+        builder.ExportOutput(safety.stopped_port, "safety_stopped")
 
     visualizer = None
     if meshcat is not None:
@@ -144,8 +163,58 @@ def build_diagram(scenario: CellScenario, *, meshcat: Any = None) -> LotsCell:
     diagram = builder.Build()
     diagram.set_name(f"lots_cell_{scenario.name}")
     return LotsCell(
-        diagram, scenario, cell, camera, config, perception, skills, planner, visualizer, meshcat
+        diagram,
+        scenario,
+        cell,
+        camera,
+        config,
+        perception,
+        skills,
+        planner,
+        visualizer,
+        meshcat,
+        command,
+        safety,
     )
+
+
+def _add_safety(builder, scenario, cell, camera, perception, skills, intrinsics, hand_labels):
+    """The arm command path: skills ─► 1 kHz command stream ─► safety monitor ─► plant
+    (`tamp.sim.lots.command`, `tamp.sim.lots.safety`); without the monitor when the
+    scenario's ``safety.enabled`` is false."""
+    plant = cell.plant
+    arm_slots = [k < len(ARM.arm_joints) for k in cell.actuator_order]
+    q0_actuators = cell.q0[cell.actuator_order]
+    command = builder.AddSystem(
+        ArmCommandStream(
+            scenario.control.command_period, scenario.control.period, arm_slots, q0_actuators
+        )
+    )
+    builder.Connect(skills.desired_state_port, command.target_port)
+    if not scenario.safety.enabled:
+        builder.Connect(command.desired_state_port, plant.get_desired_state_input_port(cell.arm))
+        return command, None
+    safety = builder.AddSystem(
+        SafetyMonitor(
+            scenario.safety,
+            intrinsics=intrinsics,
+            width=scenario.camera.width,
+            height=scenario.camera.height,
+            perception_period=scenario.control.perception_period,
+            actuator_order=cell.actuator_order,
+            hand_labels=hand_labels,
+        )
+    )
+    builder.Connect(command.desired_state_port, safety.command_port)
+    builder.Connect(command.count_port, safety.count_port)
+    builder.Connect(plant.get_state_output_port(cell.arm), safety.arm_state_port)
+    builder.Connect(camera.label_image_output_port(), safety.label_port)
+    builder.Connect(camera.depth_image_32F_output_port(), safety.depth_port)
+    builder.Connect(skills.view_request_port, safety.request_port)
+    builder.Connect(perception.observation_port, safety.observation_port)
+    builder.Connect(safety.desired_state_port, plant.get_desired_state_input_port(cell.arm))
+    builder.Connect(safety.stopped_port, skills.hold_port)
+    return command, safety
 
 
 def fov_deg(intrinsics: tuple[float, float, float, float], width: int, height: int):

@@ -10,6 +10,7 @@ import here. Example (``tamp/scenarios/lots_sim/model_building.yaml``)::
     plant: {time_step: 0.002, contact_model: hydroelastic_with_fallback}
     camera: {width: 320, height: 180, fov_y_deg: 42.5}
     control: {period: 0.01, perception_period: 0.02, speed: 0.35, look_height: 0.45}
+    safety: {hand_distance: 0.05, min_command_rate: 1000}   # optional; defaults shown
     grasp: {network: hrgnet, view_heights: [0.34, 0.27, 0.2], attempts: 3}
     workspaces:
       A: {center: [0.5, 0.23], size: [0.3, 0.3]}
@@ -87,6 +88,23 @@ class ControlSettings:
     perception_period: float = 0.02
     speed: float = 0.35
     look_height: float = 0.45
+    command_period: float = 0.001  # the arm command stream (`tamp.sim.lots.command`)
+
+
+@dataclass(frozen=True)
+class SafetySettings:
+    """The safety monitor (Zhou et al. §IV-C, `tamp.sim.lots.safety`): stop while a hand is
+    closer than ``hand_distance`` to the end effector; emergency stop when the arm command
+    stream falls below ``min_command_rate`` or a joint speed/acceleration limit is exceeded,
+    held at least ``recovery`` seconds. Limits are checked every ``check_period``; while a
+    hand may be near, the camera is rendered every ``image_period`` for the monitor."""
+
+    enabled: bool = True
+    hand_distance: float = 0.05
+    min_command_rate: float = 1000.0
+    check_period: float = 0.01
+    image_period: float = 0.1
+    recovery: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -115,6 +133,7 @@ class CellScenario:
     waste_basket: tuple[float, float]
     objects: tuple[CellObject, ...]
     max_sim_time: float = 600.0
+    safety: SafetySettings = field(default_factory=SafetySettings)
     extra: dict = field(default_factory=dict)
 
     def object(self, uid: str) -> CellObject:
@@ -137,6 +156,7 @@ def load_cell_scenario(path: str | Path) -> CellScenario:
             "plant",
             "camera",
             "control",
+            "safety",
             "grasp",
             "workspaces",
             "waste_basket",
@@ -164,14 +184,16 @@ def load_cell_scenario(path: str | Path) -> CellScenario:
     )
 
     k = f.sub("control", {})
-    k.check_keys({"period", "perception_period", "speed", "look_height"})
+    k.check_keys({"period", "perception_period", "speed", "look_height", "command_period"})
     period = k.float("period", 0.01, min=time_step, max=0.05)
     control = ControlSettings(
         period=period,
         perception_period=k.float("perception_period", 0.02, min=period, max=0.5),
         speed=k.float("speed", 0.35, min=0.0, max=1.0, strict_min=True),
         look_height=k.float("look_height", 0.45, min=0.3, max=0.6),
+        command_period=k.float("command_period", 0.001, min=0.0001, max=period),
     )
+    safety = _safety(f.sub("safety", {}), control)
 
     g = f.sub("grasp", {})
     g.check_keys({"network", "weights", "view_heights", "attempts"})
@@ -234,6 +256,28 @@ def load_cell_scenario(path: str | Path) -> CellScenario:
         waste_basket=basket,
         objects=objects,
         max_sim_time=max_sim_time,
+        safety=safety,
+    )
+
+
+def _safety(s: Fields, control: ControlSettings) -> SafetySettings:
+    s.check_keys(
+        {"enabled", "hand_distance", "min_command_rate", "check_period", "image_period", "recovery"}
+    )
+    check = s.float("check_period", 0.01, min=control.command_period, max=0.1)
+    ticks = control.perception_period / check
+    if abs(ticks - round(ticks)) > 1e-6:  # the monitor reads perception's frames at its ticks
+        raise s.error(
+            "check_period",
+            f"must divide control.perception_period ({control.perception_period:g} s)",
+        )
+    return SafetySettings(
+        enabled=s.bool("enabled", True),
+        hand_distance=s.float("hand_distance", 0.05, min=0.0, max=0.5, strict_min=True),
+        min_command_rate=s.float("min_command_rate", 1000.0, min=0.0, max=1e5),
+        check_period=check,
+        image_period=s.float("image_period", 0.1, min=control.perception_period, max=2.0),
+        recovery=s.float("recovery", 1.0, min=0.0, max=60.0),
     )
 
 

@@ -30,6 +30,7 @@ from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
 from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.lots.builder import LotsCell, build_diagram
 from tamp.sim.lots.controller_system import PERIOD, LotsControllerSystem
+from tamp.sim.lots.safety import SafetyStop
 from tamp.sim.lots.scenario import BASKET_HALF, DEFAULT_WEIGHTS, NETWORKS, CellScenario
 from tamp.world.interface import Status
 
@@ -85,6 +86,7 @@ class LotsSimResult:
     elsewhere: list[str] = field(default_factory=list)  # objects in no workspace nor basket
     network: str = "hrgnet"
     recording: str | None = None
+    safety_stops: list[SafetyStop] = field(default_factory=list)
 
     @property
     def rtf(self) -> float:
@@ -105,6 +107,7 @@ class LotsSimResult:
             "actions": [a.to_json() for a in self.actions],
             "robot_actions": [a.to_json() for a in self.robot_actions],
             "replans": self.replans,
+            "safety_stops": [stop.to_json() for stop in self.safety_stops],
             "frames_rendered": self.frames_rendered,
             "grasps": dict(self.grasps),
             "sim_time": round(self.sim_time, 3),
@@ -234,6 +237,10 @@ def simulate_lots(
     skills = cell.skills.state(cell.skills.GetMyContextFromRoot(context))
     perception = cell.perception.state(cell.perception.GetMyContextFromRoot(context))
     recording = save_recording(cell.visualizer, meshcat, record) if record else None
+    frames, stops = perception.frames, []
+    if cell.safety is not None:  # the monitor's own renders count too (none without a hand)
+        safety = cell.safety.state(cell.safety.GetMyContextFromRoot(context))
+        frames, stops = frames + safety.frames, safety.all_stops(context.get_time())
     return LotsSimResult(
         task=task.name,
         scenario=scenario.name,
@@ -243,7 +250,7 @@ def simulate_lots(
         actions=list(s.log),
         robot_actions=list(c.actions),
         replans=c.replans,
-        frames_rendered=perception.frames,
+        frames_rendered=frames,
         grasps={"attempts": skills.grasp_attempts, "successes": skills.grasp_successes},
         sim_time=run.sim_time,
         wall_time=wall,
@@ -251,4 +258,5 @@ def simulate_lots(
         elsewhere=elsewhere,
         network=scenario.grasp.network,
         recording=recording,
+        safety_stops=stops,
     )

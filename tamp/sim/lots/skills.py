@@ -149,6 +149,8 @@ class SkillController(LeafSystem):
         self.observation_port = self.DeclareAbstractInputPort(
             "observation", AbstractValue.Make(Observation())
         )
+        #: 1.0 while the safety monitor holds the arm: the skill's clock stands still
+        self.hold_port = self.DeclareVectorInputPort("hold", 1)
         init = SkillState(q=np.array(q0[:7], float), finger=float(q0[7]))
         self._state = self.DeclareAbstractState(AbstractValue.Make(init))
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.dt, 0.0, self._update)
@@ -197,7 +199,17 @@ class SkillController(LeafSystem):
             self._start(s, cmd, t)
         elif cmd.cancel and cmd.id == s.command.id and s.status.status is Status.RUNNING:
             self._finish(s, t, Status.FAILURE, "cancelled")
-        if s.steps and s.status.status is Status.RUNNING:
+        held = self.hold_port.HasValue(context) and self.hold_port.Eval(context)[0] > 0.5
+        if held and s.steps and s.status.status is Status.RUNNING:
+            # stopped by the safety monitor: the targets follow the held arm; a move starts
+            # afresh from rest where the arm stands when it resumes (a new minimum-jerk
+            # profile), any other step's clock stands still
+            if s.steps[0].kind == "move":
+                s.step_t0, s.move_from = None, None
+            elif s.step_t0 is not None:
+                s.step_t0 += self.dt
+            s.q, s.v = np.array(q_meas[:7], float), np.zeros(7)
+        elif s.steps and s.status.status is Status.RUNNING:
             obs: Observation = self.observation_port.Eval(context)
             self._advance(s, t, q_meas, v_meas, obs)
         state.get_mutable_abstract_state(self._state).set_value(s)

@@ -36,12 +36,14 @@ def test_diagram_is_named_and_exports_its_ports(building):
     d = building.diagram
     assert d.get_name() == "lots_cell_model_building"
     assert d.get_input_port(0).get_name() == "skill_command"
-    for name in ("skill_status", "observation", "view_request", "arm_state"):
+    assert d.GetInputPort("person_present").get_index() == 1
+    for name in ("skill_status", "observation", "view_request", "arm_state", "safety_stopped"):
         assert d.HasOutputPort(name)
 
 
 def test_controller_side_never_reads_object_poses(building):
-    """Skills and perception are fed by the camera, the arm's own state and each other."""
+    """Skills, perception and the safety monitor are fed by the camera, the arm's own state,
+    the arm command stream and each other."""
     plant = building.plant
     allowed = {
         (building.camera.get_name(), p.get_name())
@@ -53,17 +55,30 @@ def test_controller_side_never_reads_object_poses(building):
     } | {
         (plant.get_name(), plant.get_state_output_port(building.cell.arm).get_name()),
         ("skills", "view_request"),
+        ("skills", "desired_state"),
         ("perception", "observation"),
+        ("safety", "stopped"),
+        ("arm_command", "desired_state"),
+        ("arm_command", "count"),
     }
-    consumers = {building.skills.get_name(), building.perception.get_name()}
+    consumers = {
+        building.skills.get_name(),
+        building.perception.get_name(),
+        building.safety.get_name(),
+        building.command.get_name(),
+    }
     fed = []
     for (sys_in, _), (sys_out, out_index) in building.diagram.connection_map().items():
         if sys_in.get_name() in consumers:
             fed.append((sys_out.get_name(), sys_out.get_output_port(out_index).get_name()))
     assert fed and set(fed) <= allowed
-    # the camera's images go to perception only
+    # the camera's images go to perception and the safety monitor only
     cams = [k for k, v in building.diagram.connection_map().items() if v[0] is building.camera]
-    assert {k[0].get_name() for k in cams} == {"perception"}
+    assert {k[0].get_name() for k in cams} == {"perception", "safety"}
+    # the arm's PD actuators get their targets through the safety monitor
+    desired = plant.get_desired_state_input_port(building.cell.arm)
+    src, _ = building.diagram.connection_map()[(plant, desired.get_index())]
+    assert src is building.safety
 
 
 def test_looks_count_one_workspace_at_a_time(building):

@@ -75,3 +75,4 @@ def test_tower_in_drake_through_the_cli(tmp_path):
     assert all(a["end"] > a["start"] for a in out["actions"])
     assert out["grasps"]["successes"] == 3 and out["grasps"]["attempts"] >= 3
     assert out["frames_rendered"] > 0 and out["sim_time"] > 20 and out["wall_time"] > 0
+    assert out["safety_stops"] == []  # no hand in this cell; limits and command rate kept
