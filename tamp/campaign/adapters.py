@@ -44,14 +44,7 @@ def run_smp_mro(
         load_scenario(scenario), record=record, max_sim_time=max_sim_time
     )
     cause = None if result.ok else result.reason
-    return _result(
-        result.status,
-        cause,
-        result.sim_time,
-        seed,
-        recording=result.recording,
-        sim=result.to_json(),
-    )
+    return {**result.to_json(), **_result(result.status, cause, result.sim_time, seed)}
 
 
 def _lots_inputs(scenario: str):
@@ -98,9 +91,7 @@ def run_lots(
     else:  # the controller's SUCCESS with a plant that disagrees is a FAILURE
         status = "FAILURE" if result.status == "SUCCESS" else result.status
         cause = result.reason
-    return _result(
-        status, cause, result.sim_time, seed, recording=result.recording, sim=result.to_json()
-    )
+    return {**result.to_json(), **_result(status, cause, result.sim_time, seed)}
 
 
 def _refine_inputs(scenario: str):

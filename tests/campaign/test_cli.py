@@ -93,7 +93,7 @@ def test_in_process_campaign_of_case1(tmp_path, capsys):
         run["replay"].startswith("tamp simulate smp-mro --scenario ")
         and "--seed 5" in run["replay"]
     )
-    assert run["result"]["sim"]["final_poses"]  # the simulation's own JSON is kept
+    assert run["result"]["final_poses"]  # the simulation's own JSON is kept
     # --min-success turns the measurement into a gate (exit 1), and says so
     code = main(
         [*argv, "--max-sim-time", "2", "--out", str(out), "--no-record", "--min-success", "0.5"]

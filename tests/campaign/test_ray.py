@@ -64,9 +64,7 @@ def test_drake_campaign_reproducible_per_seed(local_ray, tmp_path, capsys):
         docs.append([(r["seed"], r["status"], r["cause"], r["task_time"]) for r in doc["runs"]])
         poses.append(
             [
-                json.loads((out / "runs" / f"seed_{s}.json").read_text())["result"]["sim"][
-                    "final_poses"
-                ]
+                json.loads((out / "runs" / f"seed_{s}.json").read_text())["result"]["final_poses"]
                 for s in (7, 8, 9)
             ]
         )
