@@ -139,6 +139,7 @@ def main() -> int:
     ap.add_argument("--throughput-runs", type=int, default=8)
     ap.add_argument("--smp-scenario", default="case3.yaml")
     ap.add_argument("--lots-scenario", default="tower.yaml")
+    ap.add_argument("--lots-interference", help="the person's script (tower_interference)")
     ap.add_argument("--throughput-scenario", default="case1.yaml")
     ap.add_argument("--workers", type=int, default=2, help="Ray workers of smp and lots")
     ap.add_argument("--overhead-runs", type=int, default=20)
@@ -159,7 +160,9 @@ def main() -> int:
         rows.append(row("smp", campaign(args.smp_scenario, n, args.workers, out / "smp")))
     if "lots" in only:
         n = args.runs or args.lots_runs
-        rows.append(row("lots", campaign(args.lots_scenario, n, args.workers, out / "lots")))
+        extra = ("--interference", args.lots_interference) if args.lots_interference else ()
+        doc = campaign(args.lots_scenario, n, args.workers, out / "lots", *extra)
+        rows.append(row("lots", doc))
     engine_cost = overhead(args.runs or args.overhead_runs) if "overhead" in only else None
     scaling = None
     if "throughput" in only:

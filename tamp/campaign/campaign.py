@@ -22,6 +22,8 @@ from tamp.campaign.run import STATUSES, Job, RunRecord
 from tamp.campaign.stats import Distribution, group_causes, success_by_size, wilson_interval
 from tamp.errors import InputError
 
+MAX_SEED = 2**63 - 1  # the simulations' seed range (`numpy` seed sequences)
+
 
 @dataclass(frozen=True)
 class CampaignSpec:
@@ -42,8 +44,11 @@ class CampaignSpec:
                 raise InputError(f"not an option of kind {self.kind.name}", field=f"--{name}")
         if self.runs < 1:
             raise InputError(f"must be at least 1, got {self.runs}", field="--runs")
-        if self.seed < 0:
-            raise InputError(f"must be >= 0, got {self.seed}", field="--seed")
+        if self.seed < 0 or self.seed + self.runs - 1 > MAX_SEED:
+            raise InputError(
+                f"seeds {self.seed}..{self.seed + self.runs - 1} must lie within [0, 2^63 - 1]",
+                field="--seed",
+            )
         if not (math.isfinite(self.time_limit) and self.time_limit > 0):
             raise InputError(
                 f"must be a positive number of seconds, got {self.time_limit}",

@@ -120,12 +120,13 @@ def execute(job: Job) -> RunRecord:
 
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
     os.environ.setdefault("MPLBACKEND", "Agg")
-    logging.getLogger("drake").setLevel(logging.WARNING)  # one Meshcat URL line per run
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="tamp-run-") as tmp:
         record = str(Path(tmp) / f"seed_{job.seed}.html") if job.record else None
         try:
             runner = import_target(job.runner)
+            # pydrake (imported by now) sets its logger up on import: one Meshcat URL per run
+            logging.getLogger("drake").setLevel(logging.WARNING)
             out = runner(
                 job.scenario,
                 job.seed,

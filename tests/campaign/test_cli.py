@@ -16,6 +16,7 @@ from tamp.commands.main import main
     [
         (["case1.yaml", "--runs", "0"], "--runs"),
         (["case1.yaml", "--runs", "2", "--seed", "-1"], "--seed"),
+        (["case1.yaml", "--runs", "2", "--seed", str(2**63 - 1)], "--seed"),
         (["case1.yaml", "--runs", "2", "--workers", "-1"], "--workers"),
         (["case1.yaml", "--runs", "2", "--engine", "local", "--workers", "2"], "--workers"),
         (["case1.yaml", "--runs", "2", "--engine", "ray", "--workers", "0"], "--workers"),
