@@ -1,14 +1,15 @@
 """``tamp refine TASK.yaml``: refine a two-robot program in the Drake simulation (seed 002).
 
     tamp refine TASK.yaml [--category I|II|III] [--json] [--gantt out.svg]
-                          [--record out.html] [--out refined.yaml] [--no-verify]
+                          [--record out.html] [--out refined.yaml] [--no-verify] [--seed N]
 
 Simulates the original program, then the program after each refinement phase
 (parallelized, speed-adjusted, rate-refined; `tamp.sim.refine.refinement`), and prints
 the measured task time of each, the rate found, the reduction and the refined program.
-Every program passes the LTL ordering gate before it is simulated. Exit 0 on success, 1
-when a program cannot finish or a refinement breaks the ordering property (with the
-counterexample), 2 on a bad file or option.
+Every program passes the LTL ordering gate before it is simulated. ``--seed N`` draws the
+program file's ``perturbation`` section (robot start poses; `tamp.sim.refine.seeded`).
+Exit 0 on success, 1 when a program cannot finish or a refinement breaks the ordering
+property (with the counterexample), 2 on a bad file or option.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from __future__ import annotations
 import argparse
 
 from tamp.commands.output import add_no_verify, output_file, print_json, progress, warn_unverified
+from tamp.commands.simulate import add_seed
 
 
 def register(subparsers) -> None:
@@ -30,6 +32,7 @@ def register(subparsers) -> None:
     p.add_argument("--record", metavar="HTML", help="Meshcat animation of the refined run")
     p.add_argument("--out", metavar="YAML", help="write the refined program")
     add_no_verify(p)
+    add_seed(p)
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=run)
 
@@ -50,7 +53,12 @@ def run(args: argparse.Namespace) -> int:
     ):
         if value:
             output_file(value, option, make_parents=parents)
-    program = load_program(args.task)
+    from tamp.sim.core.perturbation import check_seed
+    from tamp.sim.refine.seeded import perturbed_program, program_perturbation
+
+    check_seed(args.seed)
+    nominal = load_program(args.task)
+    program, applied = perturbed_program(nominal, program_perturbation(nominal), args.seed)
     arch = (
         load_architecture(program.architecture) if program.architecture else default_architecture()
     )
@@ -84,6 +92,8 @@ def run(args: argparse.Namespace) -> int:
         payload["refined_program"] = None if args.out else dump_program(result.program)
         payload["gantt"] = args.gantt
         payload["recording"] = result.phases[-1].run.recording
+        payload["seed"] = applied.seed
+        payload["perturbation"] = applied.to_json()
         print_json(payload)
         return 0
     cat = result.program.communication.category

@@ -49,6 +49,7 @@ def register(subparsers) -> None:
         type=float,
         help="target real-time rate (default: as fast as possible; 1.0 with --meshcat)",
     )
+    add_seed(s)
     add_event_arguments(s)
     add_no_verify(s)
     s.add_argument("--max-sim-time", type=float, help="override the scenario's time limit (s)")
@@ -79,11 +80,24 @@ def register_lots(sub) -> None:
         help="human interference script (not simulated yet)",
     )
     s.add_argument("--grasp", choices=("hrgnet", "grconvnet", "ggcnn"), help="grasp network")
-    s.add_argument("--seed", type=int, default=0, help="seed of the controller's tree update")
+    add_seed(s, "and of the LOTS controller's tree update")
     s.add_argument("--record", metavar="HTML", help="write a Meshcat animation (static HTML)")
     s.add_argument("--max-sim-time", type=float, help="override the scenario's time limit (s)")
     s.add_argument("--json", action="store_true", help="machine-readable output")
     s.set_defaults(func=run_lots)
+
+
+def add_seed(parser, also: str = "") -> None:
+    """``--seed N``: the run's draw of the scenario's ``perturbation`` section (same seed,
+    same run, bit for bit on one machine)."""
+    parser.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help=" ".join(["seed of the scenario's perturbation draw", also, "(default 0)"]).replace(
+            "  ", " "
+        ),
+    )
 
 
 def check_common(args: argparse.Namespace) -> None:
@@ -94,6 +108,9 @@ def check_common(args: argparse.Namespace) -> None:
     from tamp.errors import InputError
 
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
+    from tamp.sim.core.perturbation import check_seed
+
+    check_seed(args.seed)
     if args.max_sim_time is not None and not (
         math.isfinite(args.max_sim_time) and args.max_sim_time > 0
     ):
@@ -157,6 +174,10 @@ def run_lots(args: argparse.Namespace) -> int:
         f"replans {result.replans}, grasps {g['successes']}/{g['attempts']}, "
         f"frames {result.frames_rendered}, safety stops {len(result.safety_stops)}"
     )
+    if scenario.perturbation.fields():
+        print(f"seed {result.seed}: perturbation size {result.perturbation['size']:.3f} m")
+    if result.cause is not None:
+        print(f"cause: {result.cause}")
     verdict = "task satisfied" if result.satisfied else f"task NOT satisfied: {result.reason}"
     print(
         f"{result.status}: {verdict}; sim {result.sim_time:.2f} s, wall {result.wall_time:.2f} s, "
@@ -172,7 +193,7 @@ def run(args: argparse.Namespace) -> int:
 
     from tamp.errors import InputError
     from tamp.sim.smp.scenario import load_scenario, scenario_path
-    from tamp.sim.smp.simulate import simulate_smp_mro
+    from tamp.sim.smp.simulate import run_json, simulate_smp_mro
 
     check_common(args)
     if args.rate is not None and not (math.isfinite(args.rate) and args.rate >= 0):
@@ -199,6 +220,7 @@ def run(args: argparse.Namespace) -> int:
         progress(f"meshcat: {meshcat.web_url()}", quiet=args.json)
     result, prepared, _ = simulate_smp_mro(
         scenario,
+        seed=args.seed,
         verify=not args.no_verify,
         meshcat=meshcat,
         record=args.record,
@@ -206,10 +228,7 @@ def run(args: argparse.Namespace) -> int:
         realtime_rate=args.rate if args.rate is not None else (1.0 if args.meshcat else 0.0),
     )
     if args.json:
-        payload = result.to_json()
-        payload["order"] = list(prepared.plan.order)
-        payload["verified"] = {k: r.holds for k, r in prepared.reports.items()}
-        print_json(payload)
+        print_json(run_json(result, prepared))
         return result.exit_code
     print(f"scenario {scenario.name}: order {' -> '.join(prepared.plan.order)}", end="")
     if prepared.reports:
@@ -227,6 +246,18 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {goal}: {'inside' if inside else 'NOT inside'}")
     for w in result.warnings:
         print(f"warning: {w}")
+    for t, action, cause, detail in result.failures:
+        print(f"skill failure: t={t:.2f} s {action}: {cause} ({detail})")
+    if scenario.perturbation.fields():
+        p = result.perturbation
+        mu = "as modelled" if p["friction"] is None else f"{p['friction']:.3f}"
+        print(
+            f"seed {result.seed}: perturbation size {p['size']:.3f} m (largest object "
+            f"displacement), robot moved {p['robot_displacement']:.3f} m, friction "
+            f"{mu}, grasp {result.grasp}, perception {result.perception}"
+        )
+    if result.cause is not None:
+        print(f"cause: {result.cause}")
     print(
         f"{result.status}: {result.reason}; sim {result.sim_time:.2f} s, "
         f"wall {result.wall_time:.2f} s, real-time factor {result.realtime_factor:.1f}x "

@@ -71,6 +71,7 @@ _KEYS = (
     "communication",
     "ordering",
     "robots",
+    "perturbation",  # seeded runs only: read by tamp.sim.core.perturbation (the sim layer)
 )
 _BEHAVIOR_KEYS = (
     "name",

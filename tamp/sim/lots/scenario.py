@@ -22,15 +22,18 @@ import here. Example (``tamp/scenarios/lots_sim/model_building.yaml``)::
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from tamp import scenarios
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
+from tamp.sim.core.perturbation import NONE, Applied, Perturbation, check_seed, parse_perturbation
 from tamp.sim.lots.catalogue import CLASSES
 
 CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
@@ -41,6 +44,11 @@ DEFAULT_WEIGHTS = {"hrgnet": "weights/hrgnet_synth_rgbd.pt"}
 #: The arm's comfortable reach on the table (Franka: 0.855 m from joint 2; keep a margin).
 REACH = (0.25, 0.75)
 BASKET_HALF = 0.12  # lots_waste_basket.sdf: 0.24 x 0.24 m
+#: the ``perturbation`` fields this workcell simulates (`perturbed`); the person's timing
+#: jitter is drawn by ``CellScenario.sample.jitter(key)`` once the person is in the diagram
+PERTURBED = ("objects",)
+#: how often a start offset that leaves the workspace or overlaps is redrawn
+REDRAWS = 20
 
 
 @dataclass(frozen=True)
@@ -135,6 +143,8 @@ class CellScenario:
     max_sim_time: float = 600.0
     safety: SafetySettings = field(default_factory=SafetySettings)
     extra: dict = field(default_factory=dict)
+    perturbation: Perturbation = NONE
+    sample: Any = None  # the run's `PerturbationSample` (set by `perturbed`), else None
 
     def object(self, uid: str) -> CellObject:
         for o in self.objects:
@@ -162,6 +172,7 @@ def load_cell_scenario(path: str | Path) -> CellScenario:
             "waste_basket",
             "objects",
             "max_sim_time",
+            "perturbation",
         }
     )
     name = f.str("name")
@@ -244,6 +255,8 @@ def load_cell_scenario(path: str | Path) -> CellScenario:
 
     objects = _objects(f, workspaces)
     max_sim_time = f.float("max_sim_time", 600.0, min=0.0, strict_min=True)
+    perturbation = parse_perturbation(f)
+    perturbation.require(PERTURBED, "LOTS")
     return CellScenario(
         name=name,
         source=file,
@@ -257,6 +270,7 @@ def load_cell_scenario(path: str | Path) -> CellScenario:
         objects=objects,
         max_sim_time=max_sim_time,
         safety=safety,
+        perturbation=perturbation,
     )
 
 
@@ -279,6 +293,42 @@ def _safety(s: Fields, control: ControlSettings) -> SafetySettings:
         image_period=s.float("image_period", 0.1, min=control.perception_period, max=2.0),
         recovery=s.float("recovery", 1.0, min=0.0, max=60.0),
     )
+
+
+def perturbed(scenario: CellScenario, seed: int) -> tuple[CellScenario, Applied]:
+    """``scenario`` as run ``seed`` sees it (`tamp.sim.core.perturbation`): each object moved
+    by its drawn offset inside its workspace (redrawn up to `REDRAWS` times when it would
+    stick out or overlap another object, moved or still nominal, else kept nominal with a
+    note: so the start stays valid), and the
+    sample kept for what the diagram draws later. Nothing is mutated."""
+    seed = check_seed(seed)
+    sample = scenario.perturbation.sample(seed)
+    applied = Applied(seed=seed)
+    placed: list[CellObject] = []
+    for i, o in enumerate(scenario.objects):
+        others = placed + list(scenario.objects[i + 1 :])  # moved ones and nominal ones
+        moved, offset = o, (0.0, 0.0, 0.0)
+        if scenario.perturbation.objects.active:
+            w = scenario.workspaces[o.workspace]
+            for attempt in range(REDRAWS):
+                dx, dy, dyaw = sample.object_offset(o.id, attempt)
+                c = dataclasses.replace(o, xy=(o.xy[0] + dx, o.xy[1] + dy), yaw=o.yaw + dyaw)
+                corners = CLASSES[c.cls].footprint.corners(*c.xy, c.yaw)
+                inside = all(w.contains(*p) for p in corners)
+                if inside and not any(
+                    rectangles_overlap(
+                        corners, CLASSES[p.cls].footprint.corners(*p.xy, p.yaw), 0.01
+                    )
+                    for p in others
+                ):
+                    moved, offset = c, (dx, dy, dyaw)
+                    break
+            else:
+                applied.notes.append(f"{o.id}: no free start in {REDRAWS} draws; nominal kept")
+        applied.objects[o.id] = offset
+        placed.append(moved)
+    out = dataclasses.replace(scenario, objects=tuple(placed), sample=sample)
+    return out, applied
 
 
 def _pixels(f: Fields, key: str, default: int) -> int:

@@ -31,7 +31,13 @@ from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.lots.builder import LotsCell, build_diagram
 from tamp.sim.lots.controller_system import PERIOD, LotsControllerSystem
 from tamp.sim.lots.safety import SafetyStop
-from tamp.sim.lots.scenario import BASKET_HALF, DEFAULT_WEIGHTS, NETWORKS, CellScenario
+from tamp.sim.lots.scenario import (
+    BASKET_HALF,
+    DEFAULT_WEIGHTS,
+    NETWORKS,
+    CellScenario,
+    perturbed,
+)
 from tamp.world.interface import Status
 
 #: how far the simulator runs between checks of the controller's result (sim s)
@@ -87,6 +93,13 @@ class LotsSimResult:
     network: str = "hrgnet"
     recording: str | None = None
     safety_stops: list[SafetyStop] = field(default_factory=list)
+    seed: int = 0
+    perturbation: dict | None = None  # `tamp.sim.core.perturbation.Applied.to_json()`
+
+    @property
+    def cause(self) -> str | None:
+        """Why the run failed, one of `tamp.sim.core.outcome.CAUSES` (None when satisfied)."""
+        return lots_cause(self)
 
     @property
     def rtf(self) -> float:
@@ -116,6 +129,10 @@ class LotsSimResult:
             "final_counts": self.final_counts,
             "elsewhere": self.elsewhere,
             "recording": self.recording,
+            "cause": self.cause,
+            "task_time": round(self.sim_time, 3),
+            "seed": self.seed,
+            "perturbation": self.perturbation,
         }
 
 
@@ -200,6 +217,7 @@ def simulate_lots(
     """
     if interference:
         raise InputError("not yet simulated in the Drake workcell", field="--interference")
+    scenario, applied = perturbed(scenario, seed)  # the run's draw of its perturbation
     scenario = with_network(scenario, grasp)
     check_matches(task, scenario)
     controller = LotsController(task, seed=seed, check=check)  # the gate runs here
@@ -259,4 +277,70 @@ def simulate_lots(
         network=scenario.grasp.network,
         recording=recording,
         safety_stops=stops,
+        seed=applied.seed,
+        perturbation=applied.to_json(),
     )
+
+
+#: words of the cell's skill failures (`tamp.sim.lots.skills`) -> run cause
+_SKILL_CAUSES = (
+    ("missed", "grasp_missed"),
+    ("slipped", "grasp_slipped"),
+    ("not lifted", "grasp_slipped"),
+    ("dropped", "grasp_slipped"),
+    ("no grasp", "object_not_found"),
+    (" in W^", "object_not_found"),
+)
+
+
+def lots_cause(result: LotsSimResult) -> str | None:
+    """The run's cause (`tamp.sim.core.outcome.run_cause`): the last failed skill's words
+    mapped to a cause, ``placement_off`` when the controller finished but the plant's W^B
+    ends no round."""
+    from tamp.sim.core.outcome import run_cause
+
+    if result.satisfied:
+        return None
+    causes = []
+    for a in result.actions:
+        if a.status == "FAILURE":
+            causes.append(next((c for w, c in _SKILL_CAUSES if w in a.detail), "task_failed"))
+    status = "FAILURE" if result.status == "SUCCESS" else result.status
+    return run_cause(status, causes, plant_disagrees=result.status == "SUCCESS")
+
+
+def run_seeded(
+    task: str,
+    seed: int,
+    *,
+    scenario: str | None = None,
+    interference: str | None = None,
+    grasp: str | None = None,
+    max_sim_time: float | None = None,
+    record: str | None = None,
+) -> dict[str, Any]:
+    """ONE seeded run of LOTS task ``task`` (file or packaged name) in the workcell
+    ``scenario`` (default: the packaged one named like the task), with the person's
+    ``interference`` file (events, as ``--interference``) if given, as the JSON of
+    ``tamp simulate lots --task T --seed N --json``: ``status``, ``cause``, ``task_time``
+    (sim s), ``seed``, ``perturbation``, ``satisfied``, ... The entry point of
+    ``tamp campaign --kind lots``; ``seed`` drives the perturbation draw and the
+    controller's tree update."""
+    from tamp.lots.task import load_events, load_task
+    from tamp.sim.lots.scenario import load_cell_scenario
+    from verification import gate
+
+    loaded = load_task(task)
+    cell = load_cell_scenario(scenario or loaded.name)
+    events = load_events(interference, loaded) if interference else None
+    result = simulate_lots(
+        cell,
+        loaded,
+        events,
+        grasp=grasp,
+        seed=seed,
+        record=record,
+        max_sim_time=max_sim_time,
+        check=gate,
+    )
+    return result.to_json()

@@ -12,13 +12,17 @@ are driven by the plant's PD-controlled actuators (`PdControllerGains`, implicit
 tracking the controller's desired state; gravity is switched off for the robot only
 (ideal gravity compensation, as the real youBot's controllers provide), objects fall.
 
-Grasps are weld constraints: two per graspable object (`tamp.sim.smp.ik.grasp_transform`),
-added before `Finalize`, all inactive at the start. They are switched between simulation
-steps by `SimRunner` (see `tamp.sim.smp.runner`), never inside an event.
+Grasps (``grasp:`` of the scenario). ``weld``: weld constraints, two per graspable object
+(`tamp.sim.smp.ik.grasp_transform`), added before `Finalize`, all inactive at the start,
+switched between simulation steps by `SimRunner` (see `tamp.sim.smp.runner`), never inside
+an event. ``friction``: no weld at all; the fingers squeeze the object (their PD force) and
+friction holds it, so a poor grasp slips. A run's drawn friction coefficient
+(`RunConditions.friction`) replaces the objects' SDF coefficients.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import dataclass, field
 from typing import Any
@@ -39,7 +43,7 @@ from tamp.sim.core.recording import add_visualizer
 from tamp.sim.smp.controller import SkillController
 from tamp.sim.smp.estimator import WorldStateEstimator
 from tamp.sim.smp.ik import grasp_transform
-from tamp.sim.smp.robot import HOME_ARM, ROBOT
+from tamp.sim.smp.robot import CAMERA, HOME_ARM, ROBOT, grasped_kinds
 from tamp.sim.smp.scenario import SimScenario
 from tamp.world.geometry import Area
 
@@ -61,6 +65,7 @@ class SimSystem:
     visualizer: Any = None
     meshcat: Any = None  # pydrake.geometry.Meshcat
     q_start: np.ndarray = field(default_factory=lambda: np.zeros(len(ROBOT.joints)))
+    perception: Any = None  # ObjectPoseEstimator (perception: camera), else None
 
 
 def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
@@ -70,6 +75,78 @@ def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
     if free:
         text = text.replace("0.2 0.75 0.3 0.35", "0.6 0.6 0.6 0.35")
     return text
+
+
+def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodies, kinds, palm):
+    """The mast camera, depth noise, the LOTS detector and the pose estimator (wired)."""
+    from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, look_at
+    from tamp.sim.lots.perception import Perception
+    from tamp.sim.smp.perception import ObjectPoseEstimator, prior_poses
+
+    base = plant.GetBodyByName(ROBOT.base_body, robot)
+    X_BC = look_at(CAMERA.position, CAMERA.target)
+    camera, K = add_rgbd_camera(
+        builder,
+        plant,
+        scene_graph,
+        base,
+        X_BC,
+        name="mast_camera",
+        width=CAMERA.width,
+        height=CAMERA.height,
+        fov_y_deg=CAMERA.fov_y_deg,
+    )
+    run = scenario.conditions
+    labels = {int(b.index()): uid for uid, b in bodies.items()}
+    detector = builder.AddSystem(
+        Perception(labels, width=CAMERA.width, height=CAMERA.height, period=CAMERA.period)
+    )
+    depth = camera.depth_image_32F_output_port()
+    if run.depth_noise > 0:
+        noise = builder.AddSystem(
+            DepthNoise(
+                width=CAMERA.width,
+                height=CAMERA.height,
+                sigma=run.depth_noise,
+                seed=run.seed,
+                period=CAMERA.period,
+            )
+        )
+        builder.Connect(depth, noise.depth_in)
+        depth = noise.depth_out
+    builder.Connect(depth, detector.depth_port)
+    builder.Connect(camera.label_image_output_port(), detector.label_port)
+    builder.Connect(camera.color_image_output_port(), detector.color_port)
+    shown = {uid: (x, y, yaw) for uid, x, y, yaw in run.nominal}
+    objects = [
+        dataclasses.replace(o, xy=shown[o.id][:2], yaw=shown[o.id][2]) if o.id in shown else o
+        for o in scenario.objects
+    ]
+    estimator = builder.AddSystem(
+        ObjectPoseEstimator(
+            bodies={k: int(b.index()) for k, b in bodies.items()},
+            kinds=kinds,
+            prior=prior_poses(objects, scenario.parking),
+            camera_body=int(base.index()),
+            X_BC=X_BC,
+            intrinsics=K,
+            palm_body=int(palm.index()),
+            grasp_offset=ROBOT.grasp_offset,
+            period=CAMERA.period,
+            pose_noise=run.pose_noise,
+            seed=run.seed,
+        )
+    )
+    builder.Connect(detector.observation_port, estimator.observation_port)
+    builder.Connect(estimator.view_request_port, detector.request_port)
+    return estimator
+
+
+def with_friction(sdf: str, mu: float) -> str:
+    """An object's SDF with every Coulomb coefficient (static and dynamic) set to ``mu``."""
+    for tag in ("drake:mu_dynamic", "drake:mu_static"):
+        sdf = re.sub(rf"<{tag}>[^<]*</{tag}>", f"<{tag}>{mu:.6f}</{tag}>", sdf)
+    return sdf
 
 
 def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None) -> SimSystem:
@@ -114,6 +191,8 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
     for i, obj in enumerate(scenario.objects):
         text = sdf_path(obj.kind.name).read_text()
         text = text.replace(f'<model name="{obj.kind.name}">', f'<model name="{obj.id}">')
+        if scenario.conditions.friction is not None:  # the run's drawn coefficient
+            text = with_friction(text, scenario.conditions.friction)
         (m,) = parser.AddModelsFromString(text, "sdf")
         body = plant.GetBodyByName(obj.kind.body, m)
         if obj.appear is None:
@@ -124,11 +203,12 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
         plant.SetDefaultFloatingBaseBodyPose(body, X)
         bodies[obj.id] = body
         kinds[obj.id] = obj.kind
-        for variant in (0, 1):
+        for variant in (0, 1) if scenario.grasp == "weld" else ():
             welds[(obj.id, variant)] = plant.AddWeldConstraint(
                 palm, grasp_transform(obj.kind, variant), body, RigidTransform()
             )
 
+    kinds = grasped_kinds(kinds, scenario.grasp)
     plant.mutable_gravity_field().set_enabled(robot, False)
     plant.Finalize()
 
@@ -165,11 +245,20 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
             base_limits=scenario.base,
             workspace=scenario.workspace,
             failures=scenario.failures,
+            chance_failures=scenario.conditions.chance_failures,
+            grasp=scenario.grasp,
+            perception=scenario.perception,
         )
     )
     executor = builder.AddSystem(BtExecutor(policy, period=scenario.bt_period))
 
     poses = plant.get_body_poses_output_port()
+    perception = None
+    if scenario.perception == "camera":  # object poses from images, not from the plant
+        perception = _add_camera(builder, plant, scene_graph, scenario, robot, bodies, kinds, palm)
+        builder.Connect(poses, perception.body_poses_in)
+        builder.Connect(controller.grasp_port, perception.grasp_port)
+        poses = perception.body_poses_port
     builder.Connect(poses, estimator.body_poses_port)
     builder.Connect(poses, controller.body_poses_port)
     builder.Connect(plant.get_state_output_port(robot), controller.robot_state_port)
@@ -199,4 +288,5 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
         visualizer=visualizer,
         meshcat=meshcat,
         q_start=q_start,
+        perception=perception,
     )

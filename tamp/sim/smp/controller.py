@@ -62,6 +62,12 @@ PREGRASP_HEIGHTS = (0.08, 0.06, 0.04)
 LIFT_HEIGHTS = (0.10, 0.08, 0.06)
 PREPLACE_HEIGHTS = (0.08, 0.06, 0.04)
 PLACE_CLEARANCE = 0.004
+#: friction grasps let go a little higher: the object can slip down in the fingers while
+#: lifted, and lowering it onto the floor pushes it askew in the hand (measured)
+FRICTION_PLACE_CLEARANCE = 0.008
+#: finger reference of a friction grasp (m, below the joints' lower limit 0): the fingers'
+#: PD force is kp x (opening - SQUEEZE), ~21 N each on a bottle (weight 2.9 N)
+SQUEEZE = -0.02
 
 PHASES = {
     "MoveTo": ("fold", "drive"),
@@ -101,6 +107,8 @@ class ControllerState:
     attempts: dict = field(default_factory=dict)
     memo: dict = field(default_factory=dict)  # per-skill values: IK solutions, start heights
     found: dict = field(default_factory=dict)  # areas the tree found at run time, by name
+    #: every skill failure so far: (sim time, action, cause, detail), for the run's cause
+    failures: tuple = ()
 
     def __deepcopy__(self, memo: dict) -> ControllerState:
         # Drake deep-copies abstract state on every update. Segments, arrays and messages
@@ -115,11 +123,17 @@ class ControllerState:
             dict(self.attempts),
             dict(self.memo),
             dict(self.found),
+            self.failures,
         )
 
 
 class SkillFailure(Exception):
-    """A phase cannot be carried out; the skill reports FAILURE with this reason."""
+    """A phase cannot be carried out; the skill reports FAILURE with this reason, and the
+    run records ``cause`` (one of `tamp.sim.core.outcome.CAUSES`)."""
+
+    def __init__(self, why: str, cause: str = "skill_failed"):
+        super().__init__(why)
+        self.cause = cause
 
 
 class SkillController(LeafSystem):
@@ -138,6 +152,9 @@ class SkillController(LeafSystem):
         base_limits: BaseLimits,
         workspace: tuple[float, float, float, float],
         failures: tuple[Fail, ...] = (),
+        chance_failures: tuple[tuple[str, tuple[bool, ...]], ...] = (),
+        grasp: str = "weld",
+        perception: str = "truth",
     ):
         super().__init__()
         self.set_name("skill_controller")
@@ -149,6 +166,10 @@ class SkillController(LeafSystem):
         self._limits = base_limits
         self._workspace = workspace
         self._failures = tuple(failures)
+        self._chance = dict(chance_failures)  # action -> does attempt k+1 fail (drawn)
+        self._friction = grasp == "friction"  # fingers hold by friction, no weld
+        #: body poses of objects are the plant's (truth) or the camera's estimates (camera)
+        self._truth = perception == "truth"
         self._ik = ArmIK()
         self._planner = BasePlanner(workspace)
 
@@ -205,7 +226,8 @@ class SkillController(LeafSystem):
         if cmd.id > st.cmd.id and not cmd.cancel:
             self._begin(st, cmd, t, q, poses)
         elif cmd.cancel and cmd.id == st.cmd.id and running:
-            st.segment = Segment(t, 0.0, q.copy(), q.copy())  # stop where it is
+            here = self._here(st, q)
+            st.segment = Segment(t, 0.0, here, here.copy())  # stop where it is
             st.phases, st.phase = (), ""
             st.status = SkillStatus(cmd.id, Status.FAILURE, "cancelled")
             st.cmd = cmd
@@ -235,25 +257,41 @@ class SkillController(LeafSystem):
             self._check_start(st, q, poses)
             self._next_phase(st, t, q, poses)
         except SkillFailure as exc:
-            self._fail(st, t, q, str(exc))
+            self._fail(st, t, q, str(exc), exc.cause)
 
-    def _fail(self, st: ControllerState, t, q, why: str) -> None:
-        st.segment = Segment(t, 0.0, q.copy(), q.copy())
+    def _fail(self, st: ControllerState, t, q, why: str, cause: str) -> None:
+        here = self._here(st, q)
+        st.segment = Segment(t, 0.0, here, here.copy())
         st.status = SkillStatus(st.cmd.id, Status.FAILURE, why)
         st.phases, st.phase = (), ""
+        st.failures = st.failures + ((t, str(st.cmd), cause, why),)
+
+    def _here(self, st: ControllerState, q) -> np.ndarray:
+        """The measured joints with the fingers' reference kept: stopping never loosens a
+        friction grasp (the fingers stand where the object stops them, short of their
+        reference, and the difference is what squeezes it)."""
+        here = q.copy()
+        here[FING] = st.segment.q1[FING]
+        return here
+
+    def failures(self, context) -> tuple[tuple[float, str, str, str], ...]:
+        """Every skill failure of the run in ``context``: (time, action, cause, detail)."""
+        return self._st(context).failures
 
     def _step(self, st: ControllerState, t, q, poses) -> None:
         seg = st.segment
         if t < seg.t_end - 1e-9:
             return
         err = np.abs(seg.q1 - q)
+        if self._friction and seg.q1[8] == SQUEEZE:
+            err[FING] = 0.0  # squeezing: the object stops the fingers short of their target
         settled = err[0:2].max() < 0.02 and err[2] < 0.03 and err[3:].max() < 0.03
         if not settled and t < seg.t_end + SETTLE_TIMEOUT:
             return
         try:
             self._next_phase(st, t, q, poses)
         except SkillFailure as exc:
-            self._fail(st, t, q, str(exc))
+            self._fail(st, t, q, str(exc), exc.cause)
 
     def _next_phase(self, st: ControllerState, t, q, poses) -> None:
         while st.phases:
@@ -300,7 +338,7 @@ class SkillController(LeafSystem):
         area = self._area(st, ref)
         if area is not None:
             return (area.pos.x, area.pos.y)
-        raise SkillFailure(f"unknown object or area {ref!r}")
+        raise SkillFailure(f"unknown object or area {ref!r}", "object_not_found")
 
     def _check_start(self, st: ControllerState, q, poses) -> None:
         name, args = st.cmd.name, st.cmd.args
@@ -314,19 +352,24 @@ class SkillController(LeafSystem):
             if st.grasp.obj is not None or st.grasp.holding is not None:
                 raise SkillFailure(f"hand holds {st.grasp.obj or st.grasp.holding}")
             if not self._visible(args[0], self._X(poses, args[0])):
-                raise SkillFailure(f"{args[0]} is not in the workspace")
+                raise SkillFailure(f"{args[0]} is not in the workspace", "object_not_found")
         elif name == "Place":
             if len(args) != 2 or self._area(st, args[1]) is None:
                 raise SkillFailure(f"cannot place {args}")
             if st.grasp.holding != args[0] or st.grasp.obj != args[0]:
-                raise SkillFailure(f"{args[0]} is not held")
+                raise SkillFailure(f"{args[0]} is not held", "grasp_slipped")
+            if self._friction and not self._in_hand(args[0], q):
+                st.grasp = GraspRequest()  # the hand is empty: the tree sees it and re-picks
+                raise SkillFailure(
+                    f"{args[0]} slipped out of the fingers while carried", "grasp_slipped"
+                )
             area = self._area(st, args[1])
             for uid in self._bodies:
                 if uid == args[0]:
                     continue
                 p = self._X(poses, uid).translation()
                 if math.hypot(p[0] - area.pos.x, p[1] - area.pos.y) <= area.radius:
-                    raise SkillFailure(f"area {args[1]} is occupied by {uid}")
+                    raise SkillFailure(f"area {args[1]} is occupied by {uid}", "area_occupied")
 
     # -- phases (each returns the segment to track, or None when there is nothing to do) -----
     def _phase_fold(self, st, t, q, poses):
@@ -357,10 +400,10 @@ class SkillController(LeafSystem):
         radius = ROBOT.planning_radius
         goal = standoff_pose(target, (q[0], q[1]), obstacles, self._workspace, radius)
         if goal is None:
-            raise SkillFailure(f"no free place to stand near {ref}")
+            raise SkillFailure(f"no free place to stand near {ref}", "unreachable")
         path = self._planner.plan((q[0], q[1]), goal[:2], obstacles, radius)
         if path is None:
-            raise SkillFailure(f"no path to {ref}")
+            raise SkillFailure(f"no path to {ref}", "unreachable")
         hold = st.segment.q1.copy()  # the arm and fingers keep their last reference
         hold[0:3] = q[0:3]
         return base_segment(t, hold, goal, path, self._limits)
@@ -371,7 +414,7 @@ class SkillController(LeafSystem):
         kind = self._kinds[uid]
         res = self._ik.grasp(q, X_WO, kind)
         if res is None:
-            raise SkillFailure(f"{uid} is out of the arm's reach")
+            raise SkillFailure(f"{uid} is out of the arm's reach", "unreachable")
         q_g = q.copy()
         q_g[ARM] = res.q_arm
         yaw = RollPitchYaw(X_WO.rotation()).yaw_angle()
@@ -380,7 +423,7 @@ class SkillController(LeafSystem):
         pre = self._first(q_g, point, PREGRASP_HEIGHTS, R_WG, res.q_arm)
         lift = self._first(q_g, point, LIFT_HEIGHTS, R_WG, res.q_arm)
         if pre is None or lift is None:
-            raise SkillFailure(f"no pre-grasp or lift pose for {uid}")
+            raise SkillFailure(f"no pre-grasp or lift pose for {uid}", "unreachable")
         st.memo.update(
             grasp=res.q_arm,
             pre=pre[0],
@@ -409,16 +452,23 @@ class SkillController(LeafSystem):
         return joint_segment(t, q, q1, 0.8, 0.6)
 
     def _phase_close(self, st, t, q, poses):
+        # whether this attempt fails by script (``fail``) or by the drawn chance (``skills``)
+        st.memo["lost"] = self._scripted_failure(st) or self._chance_failure(st)
+        kind = self._kinds[st.cmd.args[0]]
         q1 = q.copy()
         q1[ARM] = st.memo["grasp"]
-        q1[FING] = self._kinds[st.cmd.args[0]].half_width + 0.002
+        if not self._friction:
+            q1[FING] = kind.half_width + 0.002  # around the object; the weld holds it
+        elif st.memo["lost"]:
+            q1[FING] = ROBOT.finger_open  # an injected failure: the hand does not close
+        else:
+            q1[FING] = SQUEEZE  # the PD force on the fingers holds it by friction
         return joint_segment(t, q, q1, 0.2, 0.3)
 
     def _phase_weld(self, st, t, q, poses):
-        lost = self._scripted_failure(st)
-        if not lost:
+        if not st.memo["lost"]:  # friction grasps ask for no weld (the system has none)
             st.grasp = GraspRequest(st.cmd.args[0], st.memo["variant"], st.grasp.holding)
-        return Segment(t, 0.1, q.copy(), st.segment.q1.copy())
+        return Segment(t, 0.1, self._here(st, q), st.segment.q1.copy())
 
     def _scripted_failure(self, st: ControllerState) -> bool:
         """Whether this attempt is one of the first ``times`` attempts a `Fail` names."""
@@ -430,6 +480,20 @@ class SkillController(LeafSystem):
                     return True
         return False
 
+    def _chance_failure(self, st: ControllerState) -> bool:
+        """Whether this attempt of the action (all arguments counted) fails by the drawn
+        chance of the run's perturbation (`RunConditions.chance_failures`)."""
+        draws = self._chance.get(st.cmd.name, ())
+        n = sum(k for (a, _), k in st.attempts.items() if a == st.cmd.name)
+        return 0 < n <= len(draws) and draws[n - 1]
+
+    def _in_hand(self, uid: str, q) -> bool:
+        """The gripper's own sensor (friction grasps): the fingers have closed (they stand
+        1 cm short of fully open at least) and stand apart by at least the object's half
+        width, so something is between them."""
+        gap = float(q[8] + q[9])
+        return self._kinds[uid].half_width < gap < 2 * ROBOT.finger_open - 0.01
+
     def _phase_lift(self, st, t, q, poses):
         q1 = st.segment.q1.copy()
         q1[ARM] = st.memo["lift"]
@@ -438,9 +502,23 @@ class SkillController(LeafSystem):
     def _phase_check_pick(self, st, t, q, poses):
         uid = st.cmd.args[0]
         z = self._X(poses, uid).translation()[2]
-        if st.grasp.obj != uid or z < st.memo["z0"] + 0.5 * st.memo["lift_height"]:
+        # Did it come up with the hand? Friction grasps ask the gripper (the fingers stand
+        # apart); weld grasps look at the object's height on the plant, or, with the camera
+        # (which cannot see under the gripper), trust the weld they switched on.
+        if self._truth:
+            risen = z >= st.memo["z0"] + 0.5 * st.memo["lift_height"]
+        else:
+            risen = self._friction or not st.memo["lost"]
+        held = not self._friction or self._in_hand(uid, q)
+        if st.grasp.obj != uid or not risen or not held:
             st.grasp = GraspRequest()
-            raise SkillFailure(f"grasp of {uid} lost (it stayed at z = {z:.3f} m)")
+            if st.memo.get("lost"):
+                cause = "injected_failure"
+            elif not held:
+                cause = "grasp_missed"
+            else:
+                cause = "grasp_slipped"
+            raise SkillFailure(f"grasp of {uid} lost (it stayed at z = {z:.3f} m)", cause)
         st.grasp = GraspRequest(st.grasp.obj, st.grasp.variant, holding=uid)
         return None
 
@@ -448,32 +526,39 @@ class SkillController(LeafSystem):
         uid, area = st.cmd.args
         a = self._area(st, area).pos
         kind = self._kinds[uid]
-        z = kind.half_height + PLACE_CLEARANCE + kind.grasp_height + height
+        clearance = FRICTION_PLACE_CLEARANCE if self._friction else PLACE_CLEARANCE
+        z = kind.half_height + clearance + kind.grasp_height + height
         return np.array([a.x, a.y, z])
 
     def _phase_preplace(self, st, t, q, poses):
         found = self._first(q, self._place_point(st, 0.0), PREPLACE_HEIGHTS)
         if found is None:
-            raise SkillFailure(f"area {st.cmd.args[1]} is out of the arm's reach")
+            raise SkillFailure(f"area {st.cmd.args[1]} is out of the arm's reach", "unreachable")
         pre = found[0]
         q_pre = q.copy()
         q_pre[ARM] = pre
         down = self._ik.solve(q_pre, self._place_point(st, 0.0), nominal_arm=pre)
         if down is None:
-            raise SkillFailure(f"cannot lower {st.cmd.args[0]} into {st.cmd.args[1]}")
+            raise SkillFailure(
+                f"cannot lower {st.cmd.args[0]} into {st.cmd.args[1]}", "unreachable"
+            )
         st.memo.update(pre=pre, down=down)
         q1 = st.segment.q1.copy()
         q1[ARM] = pre
         return joint_segment(t, q, q1, ARM_SPEED, 0.6)
 
     def _phase_lower(self, st, t, q, poses):
+        uid = st.cmd.args[0]
+        if self._friction and not self._in_hand(uid, q):
+            st.grasp = GraspRequest()
+            raise SkillFailure(f"{uid} slipped out of the fingers above the area", "grasp_slipped")
         q1 = st.segment.q1.copy()
         q1[ARM] = st.memo["down"]
         return joint_segment(t, q, q1, 0.8, 0.6)
 
     def _phase_release(self, st, t, q, poses):
         st.grasp = GraspRequest(holding=st.grasp.holding)
-        return Segment(t, 0.1, q.copy(), st.segment.q1.copy())
+        return Segment(t, 0.1, self._here(st, q), st.segment.q1.copy())
 
     def _phase_open(self, st, t, q, poses):
         q1 = st.segment.q1.copy()
@@ -489,7 +574,8 @@ class SkillController(LeafSystem):
         uid, area = st.cmd.args
         why = why_not_in(self._body(poses, uid), self._area(st, area), self._bodies_now(poses))
         if why is not None:
-            raise SkillFailure(why)
+            st.grasp = GraspRequest()  # the hand let go: it holds nothing, whatever happened
+            raise SkillFailure(why, "placement_off")
         st.grasp = GraspRequest()
         return None
 

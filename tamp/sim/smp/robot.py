@@ -7,6 +7,7 @@ grasp heights), next to the SDFs they describe (``models/sdf/youbot.sdf``, ``bot
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -33,6 +34,21 @@ class ObjectKind:
     @property
     def url(self) -> str:
         return model_url(self.name)
+
+
+#: friction grasps hold an object this much lower than welds (m): both finger pads
+#: (``youbot.sdf``) then press on its side, and the palm still clears its top by 5 mm
+FRICTION_GRASP_DROP = 0.005
+
+
+def grasped_kinds(kinds: dict[str, ObjectKind], grasp: str) -> dict[str, ObjectKind]:
+    """The object kinds as the skills grasp them: friction grasps hold them lower."""
+    if grasp != "friction":
+        return dict(kinds)
+    return {
+        k: dataclasses.replace(v, grasp_height=v.grasp_height - FRICTION_GRASP_DROP)
+        for k, v in kinds.items()
+    }
 
 
 OBJECT_KINDS: dict[str, ObjectKind] = {
@@ -86,3 +102,21 @@ ROBOT = RobotSpec()
 #: The ready pose the robot drives in: palm down, grasp point 0.36 m ahead of the base
 #: centre and 0.27 m up (from `ArmIK.solve`), a short move from any pre-grasp pose.
 HOME_ARM = (0.0, 0.342, 1.111, 1.689, 0.0)
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    """The youBot's RGB-D camera (``perception: camera``): on a mast at the back of the base,
+    looking ahead and down over the arm, wide enough to see an area it drives to from
+    1-2 m away and the object below the gripper at the stand-off distance. Renders one label
+    + depth view per ``period`` (the budget: ~10 ms per image kind at this size)."""
+
+    position: tuple[float, float, float] = (-0.20, 0.0, 1.10)  # in base_link's frame, m
+    target: tuple[float, float, float] = (1.0, 0.0, 0.0)  # the point it looks at, base frame
+    width: int = 256
+    height: int = 192
+    fov_y_deg: float = 70.0
+    period: float = 0.2
+
+
+CAMERA = CameraSpec()

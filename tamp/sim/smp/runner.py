@@ -42,6 +42,7 @@ from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialVelocity
 
 from tamp.sim.core.executor import ActionLog
+from tamp.sim.core.outcome import run_cause
 from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.smp.builder import SimSystem
 from tamp.sim.smp.ik import grasp_transform
@@ -99,6 +100,13 @@ class SimResult:
     goals: dict[str, bool] = field(default_factory=dict)
     recording: str | None = None
     warnings: list[str] = field(default_factory=list)
+    cause: str | None = None  # tamp.sim.core.outcome.CAUSES; None on SUCCESS
+    #: every skill failure: (sim time, action, cause, detail), recovered ones included
+    failures: list[tuple[float, str, str, str]] = field(default_factory=list)
+    grasp: str = "weld"
+    perception: str = "truth"
+    seed: int | None = None  # set by a seeded run (`simulate.run_seeded`, ``--seed``)
+    perturbation: dict | None = None  # `tamp.sim.core.perturbation.Applied.to_json()`
 
     @property
     def ok(self) -> bool:
@@ -139,6 +147,16 @@ class SimResult:
             "cpu_realtime_factor": round(self.cpu_realtime_factor, 2),
             "recording": self.recording,
             "warnings": list(self.warnings),
+            "cause": self.cause,
+            "task_time": round(self.sim_time, 3),
+            "failures": [
+                {"time": round(t, 3), "action": a, "cause": c, "detail": d}
+                for t, a, c, d in self.failures
+            ],
+            "grasp": self.grasp,
+            "perception": self.perception,
+            "seed": self.seed,
+            "perturbation": self.perturbation,
         }
 
 
@@ -169,7 +187,7 @@ class SimRunner:
         ctl_context = s.controller.GetMyContextFromRoot(self.root)
         req = s.controller.grasp_port.Eval(ctl_context)
         want = None if req.obj is None else (req.obj, req.variant)
-        if want == self.active:
+        if want == self.active or not s.welds:  # friction grasps: nothing to switch
             return
         if self.active is not None:
             s.plant.SetConstraintActiveStatus(self.plant_context, s.welds[self.active], False)
@@ -313,6 +331,12 @@ class SimRunner:
         why = self.goal_check(poses)
         failures = [w for w in why.values() if w is not None]
         status, reason = judge(ex.result, tree_reason, failures, limit)
+        skill_failures = list(s.controller.failures(s.controller.GetMyContextFromRoot(self.root)))
+        cause = run_cause(
+            status,
+            [c for _, _, c, _ in skill_failures],
+            plant_disagrees=ex.result is Status.SUCCESS and bool(failures),
+        )
         return SimResult(
             scenario=s.scenario.name,
             status=status,
@@ -326,6 +350,10 @@ class SimRunner:
             appeared=dict(self.appeared),
             goals={k: w is None for k, w in why.items()},
             warnings=list(self.warnings),
+            cause=cause,
+            failures=skill_failures,
+            grasp=s.scenario.grasp,
+            perception=s.scenario.perception,
         )
 
     def goal_check(self, poses: dict[str, ObjectPose] | None = None) -> dict[str, str | None]:

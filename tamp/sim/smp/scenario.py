@@ -23,6 +23,9 @@ same entries from flags. Example (``tamp/scenarios/sim/case3.yaml``)::
       - {id: Oa, model: obstacle}      # no pose: it appears (below)
     appear: ["Oa@L1@after:Pick(O1)"]   # as --appear; an object not listed is a bottle
     fail: []                           # as --fail, e.g. "Pick(O2)" or "Pick(O2)x2"
+    grasp: weld                        # weld | friction (the fingers hold it, SAP contact)
+    perception: truth                  # truth (plant poses) | camera (RGB-D on the robot)
+    perturbation: {objects: {xy: 0.02}}   # tamp.sim.core.perturbation, drawn per --seed
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ from tamp import scenarios
 from tamp.demo import Demonstration, load_demonstration
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
+from tamp.sim.core.perturbation import NONE, Perturbation, parse_perturbation
 from tamp.sim.smp.placement import Body, blocker
 from tamp.sim.smp.robot import OBJECT_KINDS, ROBOT, ObjectKind
 from tamp.world.events import AfterAction, Appear, AtTick, AtTime, Fail, parse_appear, parse_fail
@@ -47,6 +51,10 @@ CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
 SIM_DIR = scenarios.ROOT / "sim"
 #: The skills whose failure the simulation can script: a Pick whose weld is not switched on.
 SIMULATED_FAILURES = ("Pick",)
+GRASPS = ("weld", "friction")
+PERCEPTIONS = ("truth", "camera")
+#: the perturbation fields the SMP-MRO workcell simulates (`tamp.sim.smp.perturb`)
+PERTURBED = ("objects", "robot", "friction", "sensor", "timing", "skills")
 
 
 @dataclass(frozen=True)
@@ -75,6 +83,22 @@ class BaseLimits:
 
 
 @dataclass(frozen=True)
+class RunConditions:
+    """What one seeded run draws beyond poses (`tamp.sim.smp.perturb.perturb`): the seed,
+    the objects' friction coefficient (None: the SDFs'), the camera's depth noise and the
+    perceived pose noise (m, sigma), and per action the attempts that fail by chance."""
+
+    seed: int = 0
+    friction: float | None = None
+    depth_noise: float = 0.0
+    pose_noise: float = 0.0
+    chance_failures: tuple[tuple[str, tuple[bool, ...]], ...] = ()
+    #: (id, x, y, yaw) where the robot was shown each object (its camera prior), when the run
+    #: moved them; empty: the scenario's own poses
+    nominal: tuple[tuple[str, float, float, float], ...] = ()
+
+
+@dataclass(frozen=True)
 class SimScenario:
     """A loaded, validated simulation scenario."""
 
@@ -92,6 +116,10 @@ class SimScenario:
     robot_start: tuple[float, float, float]
     objects: tuple[SimObject, ...]
     failures: tuple[Fail, ...] = ()
+    grasp: str = "weld"  # weld | friction
+    perception: str = "truth"  # truth | camera
+    perturbation: Perturbation = NONE
+    conditions: RunConditions = RunConditions()
 
     def object(self, uid: str) -> SimObject:
         for o in self.objects:
@@ -170,6 +198,9 @@ def load_scenario(path: str | Path) -> SimScenario:
             "objects",
             "appear",
             "fail",
+            "grasp",
+            "perception",
+            "perturbation",
         }
     )
     name = f.str("name")
@@ -210,6 +241,14 @@ def load_scenario(path: str | Path) -> SimScenario:
         robot_start = (rs.pos.x, rs.pos.y, rs.orientation.yaw())
 
     objects = _objects(f, demo, workspace)
+    perturbation = parse_perturbation(f)
+    perturbation.require(PERTURBED, "SMP-MRO")
+    for action in perturbation.skill_failure:
+        if action not in SIMULATED_FAILURES:
+            raise f.error(
+                f"perturbation.skills.{action}",
+                f"only {', '.join(SIMULATED_FAILURES)} failures (lost grasps) are simulated",
+            )
     scenario = SimScenario(
         name=name,
         source=file,
@@ -224,6 +263,9 @@ def load_scenario(path: str | Path) -> SimScenario:
         workspace=workspace,
         robot_start=robot_start,
         objects=objects,
+        grasp=f.str("grasp", "weld", choices=GRASPS),
+        perception=f.str("perception", "truth", choices=PERCEPTIONS),
+        perturbation=perturbation,
     )
     scenario = _appearances(scenario, f)
     scenario = dataclasses.replace(scenario, failures=_failures(scenario, f))

@@ -70,6 +70,7 @@ def prepare(scenario: SimScenario, *, verify: bool = True) -> Prepared:
 def simulate_smp_mro(
     scenario: SimScenario,
     *,
+    seed: int = 0,
     verify: bool = True,
     meshcat: Any = None,
     record: str | Path | None = None,
@@ -78,14 +79,19 @@ def simulate_smp_mro(
 ):
     """Plan, verify, build and run; returns (`SimResult`, `Prepared`, `SimSystem`).
 
+    ``seed``: the run's draw of the scenario's perturbation (`tamp.sim.smp.perturb`); the
+    same seed gives the same run, bit for bit on one machine (sim times, poses, actions).
+    The plan and its verification use the nominal scenario (what the robot was shown).
     ``record``: write a self-contained Meshcat animation (HTML) of the run there
     (a local Meshcat server is started when ``meshcat`` is None).
     """
     from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
     from tamp.sim.smp.builder import build_diagram
+    from tamp.sim.smp.perturb import perturb
     from tamp.sim.smp.runner import SimRunner
 
     prepared = prepare(scenario, verify=verify)
+    scenario, applied = perturb(scenario, seed)
     if record is not None and meshcat is None:
         meshcat = new_meshcat()
     system = build_diagram(scenario, prepared.policy, meshcat=meshcat)
@@ -93,6 +99,38 @@ def simulate_smp_mro(
     if record is not None:
         start_recording(system.visualizer)
     result = runner.run(max_sim_time=max_sim_time)
+    result.seed = applied.seed
+    result.perturbation = applied.to_json()
     if record is not None:
         result.recording = save_recording(system.visualizer, meshcat, record)
     return result, prepared, system
+
+
+def run_seeded(
+    scenario: str | Path,
+    seed: int,
+    *,
+    verify: bool = True,
+    max_sim_time: float | None = None,
+    record: str | Path | None = None,
+) -> dict[str, Any]:
+    """ONE seeded run of the scenario file (or packaged name) ``scenario``, as the JSON of
+    ``tamp simulate smp-mro --scenario S --seed N --json``: ``status``, ``cause`` (None on
+    success, else `tamp.sim.core.outcome.CAUSES`), ``task_time`` (sim s), ``seed``,
+    ``perturbation`` (the sample applied, its ``size``), ``wall_time``, ... The entry point
+    of ``tamp campaign --kind smp-mro`` (picklable arguments, builds everything inside)."""
+    from tamp.sim.smp.scenario import load_scenario, scenario_path
+
+    loaded = load_scenario(scenario_path(scenario))
+    result, prepared, _ = simulate_smp_mro(
+        loaded, seed=seed, verify=verify, max_sim_time=max_sim_time, record=record
+    )
+    return run_json(result, prepared)
+
+
+def run_json(result, prepared: Prepared) -> dict[str, Any]:
+    """A run's JSON (``tamp simulate smp-mro --json``): the result, the order, the checks."""
+    payload = result.to_json()
+    payload["order"] = list(prepared.plan.order)
+    payload["verified"] = {k: r.holds for k, r in prepared.reports.items()}
+    return payload

@@ -10,6 +10,11 @@ Changed on purpose by issue 17 (nothing a run does changed, only how it is repor
 "goal reached: IsRobotCloseTo(x)"`` (was ``CANCELLED``, ``""``), and every output has a
 ``warnings`` list (empty here: no appearance met an occupied place). ``ok`` now comes from
 `SimResult.to_json` (``status == "SUCCESS"``), the same value as before.
+
+Added by issue 18 (nothing a run does changed; every other value was compared equal before
+the files were rewritten): ``cause`` (None on success), ``task_time``, ``failures`` (the
+lost grasp's ``injected_failure``), ``grasp`` (weld), ``perception`` (truth), ``seed`` (0)
+and ``perturbation`` (nothing drawn: the packaged cases have no section).
 """
 
 from __future__ import annotations

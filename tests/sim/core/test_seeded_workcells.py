@@ -1,0 +1,166 @@
+"""Seeds and perturbation sections of the LOTS and refinement workcells (no simulation)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+import yaml
+
+from tamp.errors import InputError
+from tamp.refine.loader import load_program
+from tamp.scenarios import resolve
+from tamp.sim.core.perturbation import Perturbation, PoseSpread
+from tamp.sim.lots.catalogue import CLASSES
+from tamp.sim.lots.scenario import load_cell_scenario, perturbed, rectangles_overlap
+from tamp.sim.refine.seeded import perturbed_program, program_perturbation
+
+
+def lots_file(tmp_path, section) -> str:
+    data = yaml.safe_load(resolve("tower", "lots_sim").read_text())
+    data["perturbation"] = section
+    f = tmp_path / "tower.yaml"
+    f.write_text(yaml.safe_dump(data))
+    return str(f)
+
+
+def test_lots_objects_move_inside_their_workspace_and_apart(tmp_path):
+    s = load_cell_scenario(lots_file(tmp_path, {"objects": {"xy": 0.03, "yaw": 0.4}}))
+    assert s.perturbation.objects == PoseSpread("normal", 0.03, 0.4)
+    for seed in range(20):
+        out, applied = perturbed(s, seed)
+        assert out.sample.seed == seed and s.sample is None  # nothing mutated
+        assert out == perturbed(s, seed)[0]  # same seed, same scene
+        for i, o in enumerate(out.objects):
+            w = out.workspaces[o.workspace]
+            corners = CLASSES[o.cls].footprint.corners(*o.xy, o.yaw)
+            assert all(w.contains(*c) for c in corners)
+            for p in out.objects[:i]:
+                other = CLASSES[p.cls].footprint.corners(*p.xy, p.yaw)
+                assert not rectangles_overlap(corners, other, 0.01)
+            dx, dy, dyaw = applied.objects[o.id]
+            n = s.object(o.id)
+            assert o.xy == pytest.approx((n.xy[0] + dx, n.xy[1] + dy))
+    assert perturbed(s, 1)[0].objects != perturbed(s, 2)[0].objects
+
+
+def test_lots_refuses_what_it_does_not_simulate(tmp_path):
+    with pytest.raises(InputError) as e:
+        load_cell_scenario(lots_file(tmp_path, {"friction": [0.4, 0.6]}))
+    assert e.value.field == "perturbation.friction"
+    assert "not simulated by the LOTS workcell" in str(e.value)
+
+
+def test_lots_without_a_section_keeps_its_scene():
+    s = load_cell_scenario("tower")
+    out, applied = perturbed(s, 9)
+    assert out.objects == s.objects and applied.size == 0.0
+
+
+def program_file(tmp_path, section) -> str:
+    data = yaml.safe_load(resolve("task4", "refine").read_text())
+    data["perturbation"] = section
+    arch = data.get("architecture")
+    if arch:
+        data["architecture"] = str(resolve("task4", "refine").parent / arch)
+    f = tmp_path / "task4.yaml"
+    f.write_text(yaml.safe_dump(data))
+    return str(f)
+
+
+def test_refine_robot_starts_move_per_robot_and_seed(tmp_path):
+    program = load_program(program_file(tmp_path, {"robot": {"xy": 0.02, "yaw": 0.05}}))
+    p = program_perturbation(program)
+    assert p.robot == PoseSpread("normal", 0.02, 0.05)
+    moved, applied = perturbed_program(program, p, 3)
+    assert set(applied.robots) == {r.name for r in program.robots}
+    for r, m in zip(program.robots, moved.robots, strict=True):
+        dx, dy, dyaw = applied.robots[r.name]
+        assert m.start == pytest.approx((r.start[0] + dx, r.start[1] + dy, r.start[2] + dyaw))
+        assert m.behaviors == r.behaviors
+    assert applied.robots["R1"] != applied.robots["R2"]
+    assert perturbed_program(program, p, 3)[0] == moved
+    assert perturbed_program(program, p, 4)[0] != moved
+    assert applied.to_json()["robot_displacement"] > 0
+
+
+def test_refine_refuses_what_it_does_not_simulate(tmp_path):
+    program = load_program(program_file(tmp_path, {"objects": {"xy": 0.02}}))
+    with pytest.raises(InputError) as e:
+        program_perturbation(program)
+    assert e.value.field == "perturbation.objects"
+
+
+def test_a_packaged_program_has_no_perturbation():
+    program = load_program("task4")
+    assert program_perturbation(program).fields() == set()
+    moved, _ = perturbed_program(program, Perturbation(), 1)
+    assert moved == dataclasses.replace(program)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["simulate", "smp-mro", "--case", "1", "--seed", "-1"],
+        ["simulate", "lots", "--task", "tower", "--seed", "-1"],
+        ["refine", "task4", "--seed", "-1"],
+    ],
+)
+def test_a_negative_seed_exits_2_before_any_work(argv, capsys):
+    from tamp.commands.main import main
+
+    assert main([*argv, "--json"]) == 2
+    assert '"field": "--seed"' in capsys.readouterr().out
+
+
+@pytest.mark.slow  # two short Drake simulations of the refinement workcell
+def test_refine_seeded_runs_repeat_per_seed(tmp_path):
+    from tamp.sim.refine.seeded import run_seeded
+    from tests.sim.refine.helpers import SHORT
+
+    data = yaml.safe_load(SHORT.read_text())
+    data["perturbation"] = {"robot": {"xy": 0.01, "yaw": 0.02}}
+    arch = data.get("architecture")
+    if arch:
+        data["architecture"] = str(SHORT.parent / arch)
+    f = tmp_path / "short.yaml"
+    f.write_text(yaml.safe_dump(data))
+    a, b = run_seeded(str(f), 5), run_seeded(str(f), 5)
+    for r in (a, b):
+        assert r.pop("wall_time") > 0
+    assert a == b
+    assert a["status"] == "SUCCESS" and a["cause"] is None and a["task_time"] > 0
+    assert a["seed"] == 5 and set(a["perturbation"]["robots"]) == {"R1", "R2"}
+
+
+def _lots_result(status, satisfied, details):
+    from tamp.sim.core.executor import ActionLog
+    from tamp.sim.lots.simulate import LotsSimResult
+
+    actions = [
+        ActionLog(i + 1, "Pick(peak)", 1.0, 2.0, "FAILURE" if d else "SUCCESS", d)
+        for i, d in enumerate(details)
+    ]
+    return LotsSimResult(
+        "tower", "tower", status, "", satisfied, actions, [], 0, 0, {}, 10.0, 1.0, {}
+    )
+
+
+@pytest.mark.parametrize(
+    ("status", "satisfied", "details", "cause"),
+    [
+        ("SUCCESS", True, ["slipped: the fingers closed after the lift"], None),
+        ("SUCCESS", False, [], "placement_off"),
+        ("TIMEOUT", False, ["missed: the fingers closed on nothing"], "timeout"),
+        ("FAILURE", False, ["missed: the fingers closed on nothing (3 attempts)"], "grasp_missed"),
+        ("FAILURE", False, ["dropped the peak while carrying it"], "grasp_slipped"),
+        ("FAILURE", False, ["no grasp found on the saw (3 attempts)"], "object_not_found"),
+        ("FAILURE", False, ["no peak in W^A"], "object_not_found"),
+        ("FAILURE", False, ["already holding peak"], "task_failed"),
+    ],
+)
+def test_lots_runs_name_their_cause(status, satisfied, details, cause):
+    r = _lots_result(status, satisfied, details)
+    assert r.cause == cause
+    out = r.to_json()
+    assert out["cause"] == cause and out["task_time"] == 10.0 and out["seed"] == 0
