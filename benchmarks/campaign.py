@@ -5,7 +5,7 @@ Sections (``--only``):
 
 - ``smp``: SMP-MRO Case 3 over 50 seeds on Ray (target: success >= 95 %, every failure
   with its cause). ``--smp-scenario`` picks the scenario: the perturbed Case 3 with friction
-  grasps and camera perception when that lands; the packaged ``case3.yaml`` by default.
+  grasps and camera perception (``case3_camera.yaml``, the default).
 - ``lots``: the LOTS tower over 20 seeds (target >= 90 %); ``--lots-scenario`` likewise.
 - ``overhead``: Ray's own cost per run, without a simulation's noise: runs that only sleep
   ``--sleep`` s, in this process and on a local Ray with 1 and 2 workers (scheduling, the
@@ -137,7 +137,7 @@ def main() -> int:
     ap.add_argument("--smp-runs", type=int, default=50)
     ap.add_argument("--lots-runs", type=int, default=20)
     ap.add_argument("--throughput-runs", type=int, default=8)
-    ap.add_argument("--smp-scenario", default="case3.yaml")
+    ap.add_argument("--smp-scenario", default="case3_camera.yaml")
     ap.add_argument("--lots-scenario", default="tower.yaml")
     ap.add_argument("--lots-interference", help="the person's script (tower_interference)")
     ap.add_argument("--throughput-scenario", default="case1.yaml")

@@ -50,10 +50,6 @@ class Kind:
     options: tuple[str, ...] = ()
 
 
-# ADAPTER (issue 18): the three runners below are `tamp.campaign.adapters`, thin wrappers of
-# today's simulate functions. When the perturbation work lands on main (per kind
-# ``run_seeded(scenario, seed, **options) -> dict`` in tamp/sim/<kind>/simulate.py), switch
-# each ``runner`` to it, e.g. "tamp.sim.smp.simulate:run_seeded", and delete the adapter.
 KINDS: dict[str, Kind] = {
     k.name: k
     for k in (
@@ -61,16 +57,16 @@ KINDS: dict[str, Kind] = {
             "smp-mro",
             folder="sim",
             key="demonstration",
-            runner="tamp.campaign.adapters:run_smp_mro",
-            check="tamp.campaign.adapters:check_smp_mro",
+            runner="tamp.sim.smp.simulate:run_seeded",
+            check="tamp.campaign.checks:check_smp_mro",
             replay="tamp simulate smp-mro --scenario {scenario} --seed {seed}",
         ),
         Kind(
             "lots",
             folder="lots",
             key="formula",
-            runner="tamp.campaign.adapters:run_lots",
-            check="tamp.campaign.adapters:check_lots",
+            runner="tamp.sim.lots.simulate:run_seeded",
+            check="tamp.campaign.checks:check_lots",
             replay="tamp simulate lots --task {scenario} --seed {seed}",
             options=("interference",),
         ),
@@ -78,8 +74,8 @@ KINDS: dict[str, Kind] = {
             "refine",
             folder="refine",
             key="robots",
-            runner="tamp.campaign.adapters:run_refine",
-            check="tamp.campaign.adapters:check_refine",
+            runner="tamp.sim.refine.seeded:run_seeded",
+            check="tamp.campaign.checks:check_refine",
             replay="tamp refine {scenario} --seed {seed}",
         ),
     )
