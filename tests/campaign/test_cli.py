@@ -83,7 +83,7 @@ def test_in_process_campaign_of_case1(tmp_path, capsys):
     assert doc["causes"] == [
         {
             "status": "timeout",
-            "cause": "no result within 2 s of sim time",
+            "cause": "timeout",
             "count": 2,
             "seeds": [5, 6],
         }
