@@ -15,7 +15,7 @@ $(BIN)/python:
 # pyproject.toml declares ranges; constraints.txt pins the versions the project is tested with.
 $(STAMP): pyproject.toml constraints.txt | $(BIN)/python system-deps
 	$(BIN)/pip install -q --upgrade pip
-	$(BIN)/pip install -q -c constraints.txt -e '.[dev]'
+	$(BIN)/pip install -q -c constraints.txt -e '.[dev,campaign]'
 	touch $(STAMP)
 
 # Graphviz (for rendering DOT exports) and EGL (headless Drake cameras) come from Debian.
@@ -47,7 +47,7 @@ test-fast: $(STAMP)
 # Every benchmark, each side by side with its peer (the Fast Downward comparison alone takes
 # about 20 minutes because the peer runs into its 300 s limit at n >= 10).
 bench: $(STAMP)
-	$(BIN)/pip install -q -c constraints.txt -e '.[dev,bench]'
+	$(BIN)/pip install -q -c constraints.txt -e '.[dev,campaign,bench]'
 	$(BIN)/python benchmarks/rg_vs_planner.py
 	$(BIN)/python benchmarks/bt_tick.py
 	$(BIN)/python benchmarks/lots_vs_product.py
@@ -55,6 +55,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/sim_smp.py
 	$(BIN)/python benchmarks/grasp.py
 	$(BIN)/python benchmarks/refine.py
+	$(BIN)/python benchmarks/campaign.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check tamp verification tests benchmarks

@@ -3,12 +3,15 @@
 "The arrows go one way: world ← ltl, demo, rg, bt, lots, refine, grasp ← verification ←
 sim ← campaign ← commands." Function-level imports count too (a lazy import is still a
 dependency). Drake is imported only under `tamp/sim/` and by the grasp data renderer,
-Spot only under `tamp/ltl/`, Meshcat only in `tamp/sim/core/recording.py`.
+Spot only under `tamp/ltl/`, Meshcat only in `tamp/sim/core/recording.py`, Ray only under
+`tamp/campaign/` (an optional extra: everything imports without it).
 """
 
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -87,6 +90,7 @@ def test_heavy_libraries_stay_in_their_layer():
         "pydrake": ("tamp/sim/", "tamp/grasp/synthetic.py"),
         "spot": ("tamp/ltl/",),
         "buddy": ("tamp/ltl/",),
+        "ray": ("tamp/campaign/",),
     }
     bad = []
     for _, path in _modules():
@@ -107,3 +111,21 @@ def test_spot_translate_is_called_in_one_file():
         if "spot.translate(" in p.read_text(encoding="utf-8")
     ]
     assert users == ["tamp/ltl/translate.py"]
+
+
+def test_tamp_imports_without_ray():
+    """Ray is the `campaign` extra: with `import ray` failing, the campaign package and every
+    command module still import (Ray is imported only when a Ray engine is made), and
+    `tamp --help` works."""
+    code = (
+        "import sys; sys.modules['ray'] = None\n"
+        "import importlib, pkgutil, tamp.campaign, tamp.commands\n"
+        "for pkg in (tamp.campaign, tamp.commands):\n"
+        "    for m in pkgutil.walk_packages(pkg.__path__, pkg.__name__ + '.'):\n"
+        "        importlib.import_module(m.name)\n"
+        "from tamp.commands.main import main\n"
+        "sys.exit(main(['--help']))\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr
+    assert "campaign" in proc.stdout
