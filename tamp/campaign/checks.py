@@ -15,7 +15,6 @@ def check_smp_mro(scenario: str) -> None:
 def check_lots(scenario: str, interference: str | None = None) -> None:
     """The task, its packaged workcell (perturbation included), that they match, and the
     person's interference file."""
-    from tamp.errors import InputError
     from tamp.lots.task import load_events, load_task
     from tamp.sim.lots.scenario import load_cell_scenario
     from tamp.sim.lots.simulate import check_matches
@@ -23,10 +22,9 @@ def check_lots(scenario: str, interference: str | None = None) -> None:
     task = load_task(scenario)
     check_matches(task, load_cell_scenario(task.name))
     if interference:
-        load_events(interference, task)
-        # as `tamp simulate lots --interference` until the workcell simulates the person:
-        # delete these two lines when `simulate_lots` takes interference events
-        raise InputError("not yet simulated in the Drake workcell", field="--interference")
+        from tamp.sim.lots.simulate import check_person_classes
+
+        check_person_classes(load_events(interference, task))
 
 
 def check_refine(scenario: str) -> None:
