@@ -413,7 +413,8 @@ def astar(problem: OrderProblem) -> SearchResult | None:
             prev = parent[state][0]
             here = enabled[mask] = index.enabled_after(enabled[prev], prev, last)
         choice = b.assign.get(-1) if b is not None and b.assign is not None else None
-        if not deferred and choice is not None and len(here) > 1:
+        # the relaxation ignores the ordering constraints, so its choice may not be enabled yet
+        if not deferred and choice is not None and len(here) > 1 and choice in here:
             here = (choice,)  # partial expansion: the rest waits in one deferred entry
             heapq.heappush(heap, (f, True, neg_g, next(tie), mask, last, h, True))
         for g in here:

@@ -171,3 +171,25 @@ def test_infeasible_when_no_order_exists() -> None:
     bad = type(d)(**{**d.__dict__, "constraints": d.constraints | {("G2", "G0")}})
     with pytest.raises(InfeasibleError):
         plan(bad)
+
+
+def test_partial_expansion_never_takes_a_goal_its_constraints_still_block() -> None:
+    """Found by hypothesis: the assignment relaxation ignores ordering constraints, so its own
+    next goal (G3: O0's second goal) may not be enabled yet (G2 must come first); the search
+    then expands the enabled goals instead of taking the relaxation's choice."""
+    from tamp.demo import make_demonstration
+    from tamp.world import Point
+
+    objects = {"O0": Point(-1.5, -1.5), "O1": Point(-1.5, -1.0), "O2": Point(-1.5, -0.5)}
+    steps = [
+        ("O0", Point(-1.5, 0.0)),
+        ("O1", Point(-1.5, -1.5)),
+        ("O2", Point(-1.5, 0.5)),
+        ("O0", Point(-1.5, -0.5)),
+    ]
+    demo = make_demonstration(objects, steps, 0.15)
+    assert demo.constraints == {("G0", "G1"), ("G0", "G3"), ("G2", "G3")}
+    orders = [o for o in itertools.permutations(demo.goal_ids) if _respects(o, demo.constraints)]
+    r = plan(demo)
+    assert _respects(r.order, demo.constraints)
+    assert r.cost == pytest.approx(min(_independent_cost(demo, o) for o in orders), abs=1e-9)
