@@ -56,9 +56,10 @@ class Placement:
 
 #: Scene name -> its objects (the names the loader accepts, `tamp.refine.loader.SCENES`).
 SCENES: dict[str, tuple[Placement, ...]] = {
-    # briefcase lying flat, its 0.35 m side along the robots' line
+    # briefcase lying flat, its 0.35 m side along the robots' line, its handle towards Robot 1
     "flip_briefcase": (Placement("briefcase", 0.0, 0.0, 0.06, math.pi / 2),),
-    "flip_scale": (Placement("scale", 0.0, 0.0, 0.025),),
+    # the scale's carrying grip towards Robot 1
+    "flip_scale": (Placement("scale", 0.0, 0.0, 0.025, math.pi / 2),),
     # the table is fixed; the scale lies on its top (0.28 m), overhanging its -x edge by
     # 0.10 m on Robot 1's side (the fork gets under it there)
     "lift_scale": (
@@ -90,8 +91,10 @@ class Goal:
 
 #: Scene name -> its goals (all must hold for the task to succeed).
 GOALS: dict[str, tuple[Goal, ...]] = {
-    "flip_briefcase": (Goal("briefcase.tilt", 1.0, "the briefcase turned up"),),
-    "flip_scale": (Goal("scale.tilt", 1.0, "the scale turned up"),),
+    # a flip: turned about a horizontal axis past its balance point over the far edge
+    # (briefcase 1.24 rad, scale 1.41 rad): standing on its side (pi / 2) or on its other face
+    "flip_briefcase": (Goal("briefcase.tilt", 1.45, "the briefcase turned over"),),
+    "flip_scale": (Goal("scale.tilt", 1.45, "the scale turned over"),),
     "lift_scale": (
         Goal("scale.tilt", 0.15, "the scale tilted up off the table"),
         Goal("scale.rise", 0.02, "the scale's centre rose"),
