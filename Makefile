@@ -34,15 +34,18 @@ demo: $(STAMP)
 	$(BIN)/tamp simulate smp-mro --case 3 --record build/case3.html
 	@echo "recording: build/case3.html (open it in a browser)"
 
-# Everything, as CI runs it: lint, then every test (simulations, notebooks, training, the wheel).
+# Everything, as CI runs it: lint, then every test (simulations, notebooks, training, the wheel),
+# one pytest worker per core; a test file stays on one worker (its fixtures, e.g. a local Ray,
+# start once).
+PYTEST_WORKERS ?= auto
 test: $(STAMP)
 	$(BIN)/ruff check tamp verification tests benchmarks
 	$(BIN)/ruff format --check tamp verification tests benchmarks
-	$(BIN)/pytest -q
+	$(BIN)/pytest -q -n $(PYTEST_WORKERS) --dist loadfile
 
 # The quick loop while editing: every test not marked slow (under a minute on 2 cores).
 test-fast: $(STAMP)
-	$(BIN)/pytest -q -m "not slow"
+	$(BIN)/pytest -q -m "not slow" -n $(PYTEST_WORKERS) --dist loadfile
 
 # Every benchmark, each side by side with its peer (the Fast Downward comparison alone takes
 # about 20 minutes because the peer runs into its 300 s limit at n >= 10).
