@@ -63,6 +63,7 @@ class ActionLog:
     end: float | None = None
     status: str | None = None  # SUCCESS | FAILURE | HALTED (goal reached) | CANCELLED
     detail: str = ""
+    cause: str | None = None  # a FAILURE's `tamp.sim.core.outcome.CAUSES` code (the skill's)
 
     @property
     def outcome(self) -> str:
@@ -80,6 +81,7 @@ class ActionLog:
             "end": None if self.end is None else round(self.end, 3),
             "status": self.status,
             "detail": self.detail,
+            "cause": self.cause,
         }
 
 
@@ -152,7 +154,12 @@ class PortWorld:
         if st.id == handle and st.status is not Status.RUNNING:
             for rec in reversed(self._s.log):
                 if rec.id == handle:
-                    rec.end, rec.status, rec.detail = self._t, st.status.value, st.detail
+                    rec.end, rec.status, rec.detail, rec.cause = (
+                        self._t,
+                        st.status.value,
+                        st.detail,
+                        st.cause,
+                    )
             return st.status
         return Status.RUNNING
 
@@ -163,7 +170,12 @@ class PortWorld:
             # the skill had already ended (the tree saw its effect before polling it)
             for rec in reversed(s.log):
                 if rec.id == handle and rec.status is None:
-                    rec.end, rec.status, rec.detail = self._t, st.status.value, st.detail
+                    rec.end, rec.status, rec.detail, rec.cause = (
+                        self._t,
+                        st.status.value,
+                        st.detail,
+                        st.cause,
+                    )
             return
         reached = self._goal_reached(handle)
         if s.command.id == handle:

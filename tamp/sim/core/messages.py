@@ -38,11 +38,15 @@ class SkillCommand:
 
 @dataclass(frozen=True)
 class SkillStatus:
-    """What the controller reports for command ``id`` (RUNNING until it ends, then sticky)."""
+    """What the controller reports for command ``id`` (RUNNING until it ends, then sticky).
+
+    ``cause``: on FAILURE, why, as one of `tamp.sim.core.outcome.CAUSES`, set by the skill
+    where it fails (a run's cause is read from it, never parsed from ``detail``)."""
 
     id: int = 0
     status: Status = Status.SUCCESS
     detail: str = ""
+    cause: str | None = None
 
     def __deepcopy__(self, memo: dict) -> SkillStatus:
         return self

@@ -313,29 +313,15 @@ def simulate_lots(
     )
 
 
-#: words of the cell's skill failures (`tamp.sim.lots.skills`) -> run cause
-_SKILL_CAUSES = (
-    ("missed", "grasp_missed"),
-    ("slipped", "grasp_slipped"),
-    ("not lifted", "grasp_slipped"),
-    ("dropped", "grasp_slipped"),
-    ("no grasp", "object_not_found"),
-    (" in W^", "object_not_found"),
-)
-
-
 def lots_cause(result: LotsSimResult) -> str | None:
-    """The run's cause (`tamp.sim.core.outcome.run_cause`): the last failed skill's words
-    mapped to a cause, ``placement_off`` when the controller finished but the plant's W^B
-    ends no round."""
+    """The run's cause (`tamp.sim.core.outcome.run_cause`): the cause the last failed skill
+    reported (`SkillStatus.cause`), ``placement_off`` when the controller finished but the
+    plant's W^B ends no round."""
     from tamp.sim.core.outcome import run_cause
 
     if result.satisfied:
         return None
-    causes = []
-    for a in result.actions:
-        if a.status == "FAILURE":
-            causes.append(next((c for w, c in _SKILL_CAUSES if w in a.detail), "task_failed"))
+    causes = [a.cause or "task_failed" for a in result.actions if a.status == "FAILURE"]
     status = "FAILURE" if result.status == "SUCCESS" else result.status
     return run_cause(status, causes, plant_disagrees=result.status == "SUCCESS")
 

@@ -80,6 +80,7 @@ class Step:
     duration: float = 0.0
     status: Status = Status.SUCCESS
     detail: str = ""
+    cause: str | None = None  # a failing finish's `tamp.sim.core.outcome.CAUSES` code
 
 
 @dataclass
@@ -281,9 +282,15 @@ class SkillController(LeafSystem):
         else:
             self._finish(s, t, Status.FAILURE, f"unknown skill {cmd} (known: {', '.join(SKILLS)})")
 
-    def _finish(self, s: SkillState, t: float, status: Status, detail: str = "") -> None:
+    def _finish(
+        self, s: SkillState, t: float, status: Status, detail: str = "", cause: str | None = None
+    ) -> None:
+        """End the running skill; a FAILURE carries its ``cause`` (`tamp.sim.core.outcome.
+        CAUSES`; the skill layer's misuse, e.g. nothing held, is ``task_failed``)."""
+        if status is Status.FAILURE and cause is None:
+            cause = "task_failed"
         s.v = np.zeros(7)
-        s.status = SkillStatus(s.command.id, status, detail)
+        s.status = SkillStatus(s.command.id, status, detail, cause)
         s.steps, s.step_t0, s.move_from = (), None, None
         s.log.append((t, f"{status.value} {s.command}{': ' + detail if detail else ''}"))
 
@@ -337,7 +344,7 @@ class SkillController(LeafSystem):
         elif step.kind == "check_fingers":
             if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
                 s.steps, s.step_t0 = s.steps[1:], None
-                return self._retry(s, t, "missed: the fingers closed on nothing")
+                return self._retry(s, t, "missed: the fingers closed on nothing", "grasp_missed")
             done = True
         elif step.kind == "check_held":
             if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
@@ -351,6 +358,7 @@ class SkillController(LeafSystem):
                             "finish",
                             status=Status.FAILURE,
                             detail=f"dropped the {lost} while carrying it",
+                            cause="grasp_slipped",
                         ),
                     ),
                     None,
@@ -361,7 +369,7 @@ class SkillController(LeafSystem):
         elif step.kind == "finish":
             if step.handler == "released":
                 s.held = None
-            return self._finish(s, t, step.status, step.detail)
+            return self._finish(s, t, step.status, step.detail, step.cause)
         if done:
             s.steps, s.step_t0, s.move_from = s.steps[1:], None, None
             s.v = np.zeros(7)
@@ -420,8 +428,12 @@ class SkillController(LeafSystem):
         heights = self.scenario.grasp.view_heights
         if crop is None:
             if s.views_done == 0:
-                return self._finish(s, t, Status.FAILURE, f"no {s.target_cls} in W^{s.side}")
-            return self._retry(s, t, f"lost the {s.target_cls} during the descent")
+                return self._finish(
+                    s, t, Status.FAILURE, f"no {s.target_cls} in W^{s.side}", "object_not_found"
+                )
+            return self._retry(
+                s, t, f"lost the {s.target_cls} during the descent", "object_not_found"
+            )
         det = crop.detection
         s.track = det.label
         X_WC = self.kin.camera_pose(q_meas[:7])
@@ -454,7 +466,7 @@ class SkillController(LeafSystem):
             )
             return
         if not s.candidates:
-            return self._retry(s, t, f"no grasp found on the {s.target_cls}")
+            return self._retry(s, t, f"no grasp found on the {s.target_cls}", "object_not_found")
         g = max(s.candidates, key=lambda c: c.quality)
         s.chosen = g
         z = max(g.z - GRASP_DEPTH, MIN_GRASP_Z)
@@ -485,17 +497,21 @@ class SkillController(LeafSystem):
 
     def _on_lifted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
-            return self._retry(s, t, "slipped: the fingers closed after the lift")
+            return self._retry(s, t, "slipped: the fingers closed after the lift", "grasp_slipped")
         if any(d.label == s.track for d in obs.detections):
-            return self._retry(s, t, f"not lifted: the {s.target_cls} is still on the table")
+            return self._retry(
+                s, t, f"not lifted: the {s.target_cls} is still on the table", "grasp_slipped"
+            )
         s.held = s.target_cls
         s.grasp_successes += 1
         self._finish(s, t, Status.SUCCESS, f"holding {s.held}")
 
-    def _retry(self, s: SkillState, t: float, why: str) -> None:
+    def _retry(self, s: SkillState, t: float, why: str, cause: str) -> None:
+        """A failed grasp attempt (``cause``: `tamp.sim.core.outcome.CAUSES`): try again from
+        the look pose, or fail the skill with that cause after the last attempt."""
         s.log.append((t, f"grasp attempt {s.attempt} failed: {why}"))
         if s.attempt >= self.scenario.grasp.attempts or s.command.name == "PickAt":
-            return self._finish(s, t, Status.FAILURE, f"{why} ({s.attempt} attempts)")
+            return self._finish(s, t, Status.FAILURE, f"{why} ({s.attempt} attempts)", cause)
         s.attempt += 1
         x, y, z, _ = self.kin_pose(s)
         s.candidates, s.chosen, s.views_done = (), None, 0

@@ -262,7 +262,7 @@ class SkillController(LeafSystem):
     def _fail(self, st: ControllerState, t, q, why: str, cause: str) -> None:
         here = self._here(st, q)
         st.segment = Segment(t, 0.0, here, here.copy())
-        st.status = SkillStatus(st.cmd.id, Status.FAILURE, why)
+        st.status = SkillStatus(st.cmd.id, Status.FAILURE, why, cause)
         st.phases, st.phase = (), ""
         st.failures = st.failures + ((t, str(st.cmd), cause, why),)
 

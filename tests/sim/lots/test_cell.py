@@ -142,7 +142,7 @@ def test_offset_grasp_misses(block_cell, offset):
     body = block_cell.cell.bodies["body_0"]
     st = d.run(f"PickAt(A, {0.5 + offset[0]}, {0.25 + offset[1]}, 0)")
     assert st.status is Status.FAILURE
-    assert "missed" in st.detail
+    assert "missed" in st.detail and st.cause == "grasp_missed"  # the skill names its cause
     z = body.EvalPoseInWorld(d.plant_context()).translation()[2]
     assert z < 0.005  # still on the table
 
@@ -182,7 +182,8 @@ def test_start_poll_cancel(building):
     v = building.plant.GetVelocities(d.plant_context(), building.cell.arm)[:7]
     assert np.max(np.abs(v)) < 0.02  # stopped where it was
     assert d.run("Discard()").detail == "nothing held"
-    assert d.run("Fly(A)").status is Status.FAILURE
+    fly = d.run("Fly(A)")
+    assert fly.status is Status.FAILURE and fly.cause == "task_failed"
 
 
 def test_skills_speak_the_lots_arm_domain(building):
