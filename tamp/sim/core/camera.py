@@ -1,9 +1,11 @@
 """RGB-D cameras on a robot body, their pinhole geometry, and seeded depth noise.
 
-`add_rgbd_camera` adds a plain `RgbdSensor` (it renders only when one of its image ports is
-evaluated: no zero-order hold rendering at a fixed rate) at a pose on a body, with a VTK
-renderer over EGL (headless; FIELD_NOTES). `backproject` turns a pixel and its depth into a
-world point (Drake's camera frame: +z along the optical axis, +x right, +y down).
+`camera_config` describes a camera as Drake's `CameraConfig`; `add_rgbd_camera` adds a plain
+`RgbdSensor` of that config (it renders only when one of its image ports is evaluated: no
+zero-order hold rendering at a fixed rate) at a pose on a body, with a VTK renderer over EGL
+(headless; FIELD_NOTES). Every camera of every workcell is made by these two.
+`backproject` turns a pixel and its depth into a world point (Drake's camera frame: +z
+along the optical axis, +x right, +y down).
 `DepthNoise` adds per-pixel Gaussian noise to a depth image, drawn from the run's seed and
 the frame's time only (`tamp.sim.core.perturbation.stream`), so a seeded run renders the same
 noisy images every time.
@@ -23,24 +25,12 @@ from tamp.sim.core.perturbation import stream
 RENDERER = "vtk"
 
 
-def add_rgbd_camera(
-    builder,
-    plant,
-    scene_graph,
-    body,
-    X_BC: RigidTransform,
-    *,
-    name: str,
-    width: int,
-    height: int,
-    fov_y_deg: float,
-    near: float = 0.05,
-    far: float = 10.0,
-) -> tuple[RgbdSensor, tuple[float, float, float, float]]:
-    """An `RgbdSensor` at ``X_BC`` on ``body``; returns it and (fx, fy, cx, cy)."""
-    if not scene_graph.HasRenderer(RENDERER):
-        scene_graph.AddRenderer(RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL")))
-    config = CameraConfig(
+def camera_config(
+    *, name: str, width: int, height: int, fov_y_deg: float, near: float = 0.05, far: float = 10.0
+) -> CameraConfig:
+    """Drake's `CameraConfig` of one of our cameras: colour, depth and label images of
+    ``width`` x ``height`` with a vertical field of view ``fov_y_deg``, rendered by VTK."""
+    return CameraConfig(
         width=width,
         height=height,
         focal=CameraConfig.FovDegrees(y=fov_y_deg),
@@ -55,11 +45,25 @@ def add_rgbd_camera(
         depth=True,
         label=True,
     )
+
+
+def add_rgbd_camera(
+    builder, plant, scene_graph, body, X_BC: RigidTransform, config: CameraConfig
+) -> tuple[RgbdSensor, tuple[float, float, float, float]]:
+    """A plain `RgbdSensor` configured by ``config`` at ``X_BC`` on ``body`` (and the VTK
+    renderer, once per scene graph); returns it and its intrinsics (fx, fy, cx, cy).
+
+    Not `ApplyCameraConfig`: that adds an `RgbdSensorDiscrete` whose zero-order hold renders
+    at the config's fps all the time; ours renders only when an image port is evaluated."""
+    if not scene_graph.HasRenderer(config.renderer_name):
+        scene_graph.AddRenderer(
+            config.renderer_name, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL"))
+        )
     color_cam, depth_cam = config.MakeCameras()
     camera = builder.AddSystem(
         RgbdSensor(plant.GetBodyFrameIdOrThrow(body.index()), X_BC, color_cam, depth_cam)
     )
-    camera.set_name(name)
+    camera.set_name(config.name)
     builder.Connect(scene_graph.get_query_output_port(), camera.query_object_input_port())
     K = depth_cam.core().intrinsics()
     return camera, (K.focal_x(), K.focal_y(), K.center_x(), K.center_y())

@@ -26,16 +26,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from pydrake.geometry import (
-    MakeRenderEngineVtk,
-    RenderEngineVtkParams,
-)
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
 from tamp.lots.task import Event
+from tamp.sim.core.camera import add_rgbd_camera, camera_config
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.lots.catalogue import ARM, HAND_LABEL
 from tamp.sim.lots.command import ArmCommandStream
@@ -47,8 +44,6 @@ from tamp.sim.lots.plant import CellPlant, add_cell_plant
 from tamp.sim.lots.safety import SafetyMonitor
 from tamp.sim.lots.scenario import CellScenario
 from tamp.sim.lots.skills import SkillController
-
-RENDERER = "vtk"
 
 
 @dataclass
@@ -78,42 +73,26 @@ class LotsCell:
         return self.planner.intrinsics
 
 
-def camera_config(scenario: CellScenario) -> CameraConfig:
+def wrist_camera_config(scenario: CellScenario) -> CameraConfig:
     """The wrist camera as a `CameraConfig`: colour, depth and label at the scenario's size and
-    vertical field of view, mounted at the arm's ``camera`` frame."""
+    vertical field of view (`tamp.sim.core.camera.camera_config`)."""
     cam = scenario.camera
-    return CameraConfig(
+    return camera_config(
+        name="wrist_camera",
         width=cam.width,
         height=cam.height,
-        focal=CameraConfig.FovDegrees(y=cam.fov_y_deg),
-        clipping_near=cam.near,
-        clipping_far=cam.far,
-        z_near=cam.near,
-        z_far=cam.far,
-        renderer_name=RENDERER,
-        renderer_class="RenderEngineVtk",
-        name="wrist_camera",
-        rgb=True,
-        depth=True,
-        label=True,
+        fov_y_deg=cam.fov_y_deg,
+        near=cam.near,
+        far=cam.far,
     )
 
 
 def add_wrist_camera(builder, plant, scene_graph, arm, config: CameraConfig):
-    """A plain `RgbdSensor` (no zero-order hold: it renders only when a port is evaluated)
-    at the arm's ``camera`` frame, configured by ``config``; (sensor, (fx, fy, cx, cy))."""
-    color_cam, depth_cam = config.MakeCameras()
+    """The wrist camera (`tamp.sim.core.camera.add_rgbd_camera`) at the arm's ``camera``
+    frame on the hand; (sensor, (fx, fy, cx, cy))."""
     hand = plant.GetBodyByName(ARM.hand_body, arm)
     X_HC = plant.GetFrameByName(ARM.camera_frame, arm).GetFixedPoseInBodyFrame()
-    camera = builder.AddSystem(
-        RgbdSensor(
-            plant.GetBodyFrameIdOrThrow(hand.index()), RigidTransform(X_HC), color_cam, depth_cam
-        )
-    )
-    camera.set_name("wrist_camera")
-    builder.Connect(scene_graph.get_query_output_port(), camera.query_object_input_port())
-    K = color_cam.core().intrinsics()
-    return camera, (K.focal_x(), K.focal_y(), K.center_x(), K.center_y())
+    return add_rgbd_camera(builder, plant, scene_graph, hand, RigidTransform(X_HC), config)
 
 
 def build_diagram(
@@ -133,9 +112,7 @@ def build_diagram(
     staged = None if person is None else staged_objects(person)
     cell = add_cell_plant(builder, scenario, staged)
     plant, scene_graph = cell.plant, cell.scene_graph
-    scene_graph.AddRenderer(RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL")))
-
-    config = camera_config(scenario)
+    config = wrist_camera_config(scenario)
     camera, intrinsics = add_wrist_camera(builder, plant, scene_graph, cell.arm, config)
     labels = {int(body.index()): cell.classes[uid] for uid, body in cell.bodies.items()}
     perception = builder.AddSystem(

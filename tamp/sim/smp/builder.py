@@ -79,23 +79,16 @@ def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
 
 def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodies, kinds, palm):
     """The mast camera, depth noise, the LOTS detector and the pose estimator (wired)."""
-    from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, look_at
+    from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config, look_at
     from tamp.sim.lots.perception import Perception
     from tamp.sim.smp.perception import ObjectPoseEstimator, prior_poses
 
     base = plant.GetBodyByName(ROBOT.base_body, robot)
     X_BC = look_at(CAMERA.position, CAMERA.target)
-    camera, K = add_rgbd_camera(
-        builder,
-        plant,
-        scene_graph,
-        base,
-        X_BC,
-        name="mast_camera",
-        width=CAMERA.width,
-        height=CAMERA.height,
-        fov_y_deg=CAMERA.fov_y_deg,
+    config = camera_config(
+        name="mast_camera", width=CAMERA.width, height=CAMERA.height, fov_y_deg=CAMERA.fov_y_deg
     )
+    camera, K = add_rgbd_camera(builder, plant, scene_graph, base, X_BC, config)
     run = scenario.conditions
     labels = {int(b.index()): uid for uid, b in bodies.items()}
     detector = builder.AddSystem(

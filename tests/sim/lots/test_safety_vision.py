@@ -21,8 +21,9 @@ from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, CoulombFriction
 from pydrake.multibody.tree import SpatialInertia
 from pydrake.systems.framework import DiagramBuilder
 
+from tamp.sim.core.camera import RENDERER
 from tamp.sim.core.parsing import make_parser
-from tamp.sim.lots.builder import RENDERER, add_wrist_camera, camera_config
+from tamp.sim.lots.builder import add_wrist_camera, wrist_camera_config
 from tamp.sim.lots.catalogue import ARM, HAND_LABEL, READY
 from tamp.sim.lots.safety import EE_BODIES, GripperModel, distance_to_boxes, hand_points
 from tamp.sim.lots.scenario import load_cell_scenario
@@ -58,7 +59,7 @@ class Scene:
         plant.RegisterVisualGeometry(hand, visual)
         plant.Finalize()
         sg.AddRenderer(RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL")))
-        config = camera_config(load_cell_scenario("tower"))
+        config = wrist_camera_config(load_cell_scenario("tower"))
         self.camera, self.intrinsics = add_wrist_camera(b, plant, sg, arm, config)
         self.diagram = b.Build()
         self.context = self.diagram.CreateDefaultContext()
