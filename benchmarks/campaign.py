@@ -6,7 +6,9 @@ Sections (``--only``):
 - ``smp``: SMP-MRO Case 3 over 50 seeds on Ray (target: success >= 95 %, every failure
   with its cause). ``--smp-scenario`` picks the scenario: the perturbed Case 3 with friction
   grasps and camera perception (``case3_camera.yaml``, the default).
-- ``lots``: the LOTS tower over 20 seeds (target >= 90 %); ``--lots-scenario`` likewise.
+- ``lots``: the LOTS tower with the person's interference (``tower_interference``) in the
+  perturbed cell ``tower_perturbed`` over 20 seeds (target >= 90 %); ``--lots-scenario``,
+  ``--lots-cell`` and ``--lots-interference`` change them.
 - ``overhead``: Ray's own cost per run, without a simulation's noise: runs that only sleep
   ``--sleep`` s, in this process and on a local Ray with 1 and 2 workers (scheduling, the
   worker's start-up, pickling the job and the record both ways).
@@ -139,7 +141,17 @@ def main() -> int:
     ap.add_argument("--throughput-runs", type=int, default=8)
     ap.add_argument("--smp-scenario", default="case3_camera.yaml")
     ap.add_argument("--lots-scenario", default="tower.yaml")
-    ap.add_argument("--lots-interference", help="the person's script (tower_interference)")
+    ap.add_argument(
+        "--lots-interference",
+        default="tower_interference",
+        help="the person's script (default tower_interference; 'none' for no person)",
+    )
+    ap.add_argument(
+        "--lots-cell",
+        default="tower_perturbed",
+        help="the workcell the tower runs in (default tower_perturbed: poses, friction, "
+        "depth noise, reaction jitter, chance grasp failures)",
+    )
     ap.add_argument("--throughput-scenario", default="case1.yaml")
     ap.add_argument("--workers", type=int, default=2, help="Ray workers of smp and lots")
     ap.add_argument("--overhead-runs", type=int, default=20)
@@ -160,7 +172,9 @@ def main() -> int:
         rows.append(row("smp", campaign(args.smp_scenario, n, args.workers, out / "smp")))
     if "lots" in only:
         n = args.runs or args.lots_runs
-        extra = ("--interference", args.lots_interference) if args.lots_interference else ()
+        extra: tuple[str, ...] = ("--scenario", args.lots_cell)
+        if args.lots_interference != "none":
+            extra += ("--interference", args.lots_interference)
         doc = campaign(args.lots_scenario, n, args.workers, out / "lots", *extra)
         rows.append(row("lots", doc))
     engine_cost = overhead(args.runs or args.overhead_runs) if "overhead" in only else None

@@ -12,19 +12,19 @@ def check_smp_mro(scenario: str) -> None:
     load_scenario(scenario_path(scenario))
 
 
-def check_lots(scenario: str, interference: str | None = None) -> None:
-    """The task, its packaged workcell (perturbation included), that they match, and the
-    person's interference file."""
+def check_lots(task: str, interference: str | None = None, scenario: str | None = None) -> None:
+    """The task, its workcell (``scenario``, default the packaged one named like the task;
+    perturbation included), that they match, and the person's interference file."""
     from tamp.lots.task import load_events, load_task
     from tamp.sim.lots.scenario import load_cell_scenario
     from tamp.sim.lots.simulate import check_matches
 
-    task = load_task(scenario)
-    check_matches(task, load_cell_scenario(task.name))
+    loaded = load_task(task)
+    check_matches(loaded, load_cell_scenario(scenario or loaded.name))
     if interference:
         from tamp.sim.lots.simulate import check_person_classes
 
-        check_person_classes(load_events(interference, task))
+        check_person_classes(load_events(interference, loaded))
 
 
 def check_refine(scenario: str) -> None:

@@ -38,7 +38,8 @@ class Kind:
     the loader that validates the file (raises `InputError`) before anything starts;
     ``replay``: the command that reruns one seed (``{scenario}`` and ``{seed}`` filled in);
     ``options``: the runner's (and the check's) extra keyword options, each a CLI flag of the
-    same name (``interference`` -> ``--interference``), passed on as strings.
+    same name (``interference`` -> ``--interference``; LOTS's ``scenario`` -> ``--scenario``,
+    its workcell file, as in ``tamp simulate lots``), passed on as strings.
     """
 
     name: str
@@ -68,7 +69,7 @@ KINDS: dict[str, Kind] = {
             runner="tamp.sim.lots.simulate:run_seeded",
             check="tamp.campaign.checks:check_lots",
             replay="tamp simulate lots --task {scenario} --seed {seed}",
-            options=("interference",),
+            options=("interference", "scenario"),
         ),
         Kind(
             "refine",

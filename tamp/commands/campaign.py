@@ -2,7 +2,8 @@
 
     tamp campaign SCENARIO [--kind smp-mro|lots|refine] --runs N [--seed S]
                   [--address ADDRESS] [--workers K] [--engine ray|local] [--time-limit S]
-                  [--max-sim-time S] [--interference EVENTS.yaml] [--out DIR] [--no-record]
+                  [--max-sim-time S] [--interference EVENTS.yaml] [--scenario CELL.yaml]
+                  [--out DIR] [--no-record]
                   [--min-success RATE] [--json]
 
 SCENARIO is a file or a packaged name (``case3.yaml``, ``tower.yaml``, ``task4``); the kind is
@@ -48,6 +49,12 @@ def register(subparsers) -> None:
     p.add_argument(
         "--interference", metavar="EVENTS.yaml", help="lots: the person's interference script"
     )
+    p.add_argument(
+        "--scenario",
+        dest="cell",
+        metavar="CELL.yaml",
+        help="lots: the workcell scenario (default: the packaged one named like the task)",
+    )
     p.add_argument("--out", metavar="DIR", help="output folder (default build/campaign/NAME)")
     p.add_argument("--no-record", action="store_true", help="no recordings of failed runs")
     p.add_argument(
@@ -90,9 +97,11 @@ def run(args: argparse.Namespace) -> int:
     ):
         raise InputError(f"must be in [0, 1], got {args.min_success}", field="--min-success")
     kind, path = resolve_scenario(args.scenario, args.kind)
-    options = ()
+    options: tuple[tuple[str, str], ...] = ()
     if args.interference is not None:
-        options = (("interference", str(resolve(args.interference, "lots"))),)
+        options += (("interference", str(resolve(args.interference, "lots"))),)
+    if args.cell is not None:
+        options += (("scenario", str(resolve(args.cell, "lots_sim"))),)
     spec = CampaignSpec(
         kind,
         path,

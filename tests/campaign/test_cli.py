@@ -26,6 +26,8 @@ from tamp.commands.main import main
         (["case1.yaml", "--runs", "2", "--min-success", "1.5"], "--min-success"),
         (["no_such_scenario", "--runs", "2"], "SCENARIO"),
         (["case1.yaml", "--runs", "2", "--interference", "tower_interference"], "--interference"),
+        (["case1.yaml", "--runs", "2", "--scenario", "tower_perturbed"], "--scenario"),
+        (["tower.yaml", "--runs", "2", "--scenario", "model_building"], "objects"),
     ],
 )
 def test_bad_input_exits_2_naming_the_field(argv, field, capsys, tmp_path):
@@ -34,6 +36,20 @@ def test_bad_input_exits_2_naming_the_field(argv, field, capsys, tmp_path):
     doc = json.loads(capsys.readouterr().out)
     assert doc["exit"] == 2 and doc["field"] == field
     assert not (tmp_path / "out").exists()  # nothing half-done
+
+
+def test_a_lots_campaign_runs_in_the_workcell_it_names():
+    """``--scenario CELL`` reaches the check, every run and the replay command."""
+    from tamp.campaign import CampaignSpec, resolve_scenario
+    from tamp.campaign.checks import check_lots
+    from tamp.scenarios import resolve
+
+    kind, task = resolve_scenario("tower.yaml", None)
+    cell = str(resolve("tower_perturbed", "lots_sim"))
+    check_lots(str(task), scenario=cell)  # the perturbed cell matches the task
+    spec = CampaignSpec(kind, task, 2, seed=4, options=(("scenario", cell),))
+    assert spec.replay(5) == f"tamp simulate lots --task {task} --seed 5 --scenario {cell}"
+    assert all(dict(job.options)["scenario"] == cell for job in spec.jobs())
 
 
 def test_out_must_be_a_folder(tmp_path, capsys):

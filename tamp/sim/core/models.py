@@ -10,6 +10,7 @@ No Drake import here, so scenario validation and the grasp CLI run without Drake
 
 from __future__ import annotations
 
+import re
 from importlib import resources
 from pathlib import Path
 
@@ -50,3 +51,11 @@ def sdf_path(name: str) -> Path:
 def model_url(name: str) -> str:
     """``package://tamp_models/sdf/<name>.sdf``."""
     return f"package://{PACKAGE}/sdf/{name}.sdf"
+
+
+def with_friction(sdf: str, mu: float) -> str:
+    """A model's SDF text with every Coulomb coefficient (static and dynamic) set to ``mu``:
+    how a run's drawn friction (`tamp.sim.core.perturbation`) reaches the objects."""
+    for tag in ("drake:mu_dynamic", "drake:mu_static"):
+        sdf = re.sub(rf"<{tag}>[^<]*</{tag}>", f"<{tag}>{mu:.6f}</{tag}>", sdf)
+    return sdf

@@ -32,7 +32,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
 from tamp.lots.task import Event
-from tamp.sim.core.camera import add_rgbd_camera, camera_config
+from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.lots.catalogue import ARM, HAND_LABEL
 from tamp.sim.lots.command import ArmCommandStream
@@ -95,6 +95,25 @@ def add_wrist_camera(builder, plant, scene_graph, arm, config: CameraConfig):
     return add_rgbd_camera(builder, plant, scene_graph, hand, RigidTransform(X_HC), config)
 
 
+def noisy_depth(builder, scenario: CellScenario, depth_port):
+    """The depth image every consumer reads: the camera's own, or with the run's drawn
+    Gaussian noise (``perturbation.sensor.depth_noise``, `DepthNoise`, seeded per frame)."""
+    sigma = scenario.perturbation.depth_noise
+    if sigma <= 0 or scenario.sample is None:
+        return depth_port
+    noise = builder.AddSystem(
+        DepthNoise(
+            width=scenario.camera.width,
+            height=scenario.camera.height,
+            sigma=sigma,
+            seed=scenario.sample.seed,
+            period=scenario.control.perception_period,
+        )
+    )
+    builder.Connect(depth_port, noise.depth_in)
+    return noise.depth_out
+
+
 def build_diagram(
     scenario: CellScenario,
     *,
@@ -123,8 +142,9 @@ def build_diagram(
             period=scenario.control.perception_period,
         )
     )
+    depth = noisy_depth(builder, scenario, camera.depth_image_32F_output_port())
     builder.Connect(camera.color_image_output_port(), perception.color_port)
-    builder.Connect(camera.depth_image_32F_output_port(), perception.depth_port)
+    builder.Connect(depth, perception.depth_port)
     builder.Connect(camera.label_image_output_port(), perception.label_port)
 
     kin = ArmKinematics(scenario.control.period)
@@ -136,7 +156,7 @@ def build_diagram(
     builder.Connect(perception.observation_port, skills.observation_port)
     builder.Connect(skills.view_request_port, perception.request_port)
     command, safety = _add_safety(
-        builder, scenario, cell, camera, perception, skills, intrinsics, hand_labels
+        builder, scenario, cell, camera, depth, perception, skills, intrinsics, hand_labels
     )
 
     builder.ExportInput(skills.command_port, "skill_command")
@@ -174,7 +194,9 @@ def build_diagram(
     )
 
 
-def _add_safety(builder, scenario, cell, camera, perception, skills, intrinsics, hand_labels):
+def _add_safety(
+    builder, scenario, cell, camera, depth, perception, skills, intrinsics, hand_labels
+):
     """The arm command path: skills ─► 1 kHz command stream ─► safety monitor ─► plant
     (`tamp.sim.lots.command`, `tamp.sim.lots.safety`); without the monitor when the
     scenario's ``safety.enabled`` is false."""
@@ -205,7 +227,7 @@ def _add_safety(builder, scenario, cell, camera, perception, skills, intrinsics,
     builder.Connect(command.count_port, safety.count_port)
     builder.Connect(plant.get_state_output_port(cell.arm), safety.arm_state_port)
     builder.Connect(camera.label_image_output_port(), safety.label_port)
-    builder.Connect(camera.depth_image_32F_output_port(), safety.depth_port)
+    builder.Connect(depth, safety.depth_port)
     builder.Connect(skills.view_request_port, safety.request_port)
     builder.Connect(perception.observation_port, safety.observation_port)
     builder.Connect(safety.desired_state_port, plant.get_desired_state_input_port(cell.arm))

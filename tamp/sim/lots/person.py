@@ -73,6 +73,21 @@ STAGING = "staging"
 #: how long the person takes to start once its slot has begun (s): a person's reaction time,
 #: which also lets the robot's hand leave the workspace it has just placed in
 REACTION = 0.5
+
+
+def slot_key(n: int, phase: str) -> str:
+    """The name of a script slot (after ``n`` robot actions, ``phase`` idle or holding) among a
+    run's draws (`tamp.sim.core.perturbation.PerturbationSample.jitter`)."""
+    return f"after {n} {phase}"
+
+
+def reaction_time(sample, n: int, phase: str) -> float:
+    """How long the person takes to start slot ``(n, phase)``: `REACTION` shifted by the run's
+    drawn jitter (``perturbation.timing.jitter``: sigma, clipped at 3 sigma), never below 0."""
+    shift = 0.0 if sample is None else sample.jitter(slot_key(n, phase))
+    return max(0.0, REACTION + shift)
+
+
 #: the robot's skills that end one action (the script counts them); Discard is Place(waste)
 _ENDS_ACTION = ACTION_SKILLS | {"Discard"}
 
@@ -306,7 +321,9 @@ class PersonSystem(LeafSystem):
         for n, phase, e in s.script.due(s.done, s.holding):
             s.queue = (*s.queue, *(PersonAction(e, n, phase) for _ in range(e.count)))
             if not s.steps:  # the person reacts: the robot has a moment to move on
-                s.steps = (HandStep("wait", duration=REACTION),)
+                s.steps = (
+                    HandStep("wait", duration=reaction_time(self.scenario.sample, n, phase)),
+                )
         if s.idle and s.move is None and s.last_status == old.last_status and not s.queue:
             if s.script.progress() == old.script.progress():
                 return EventStatus.DidNothing()  # parked, nothing new: keep the state

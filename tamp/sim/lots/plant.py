@@ -34,7 +34,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import PdControllerGains
 
-from tamp.sim.core.models import sdf_path
+from tamp.sim.core.models import sdf_path, with_friction
 from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.lots.catalogue import (
     ARM,
@@ -67,11 +67,17 @@ class CellPlant:
     staged: tuple[str, ...] = ()  # ids of the objects waiting on the person's staging shelf
 
 
-def object_sdf(cls: str, uid: str, rgb: tuple[float, float, float]) -> str:
-    """The class's SDF text with the model renamed to ``uid`` and its primary colour ``rgb``."""
+def object_sdf(
+    cls: str, uid: str, rgb: tuple[float, float, float], friction: float | None = None
+) -> str:
+    """The class's SDF text with the model renamed to ``uid``, its primary colour ``rgb`` and,
+    for a run with a drawn ``friction`` coefficient (``perturbation.friction``), that
+    coefficient on every contact surface."""
     c = CLASSES[cls]
     text = sdf_path(f"lots_{cls}").read_text()
     text = text.replace(f'<model name="{cls}">', f'<model name="{uid}">')
+    if friction is not None:
+        text = with_friction(text, friction)
     colour = f"<diffuse>{rgb[0]:.3f} {rgb[1]:.3f} {rgb[2]:.3f} 1</diffuse>"
     return re.sub(rf"<diffuse>{re.escape(c.colour)}</diffuse>", colour, text)
 
@@ -121,8 +127,9 @@ def add_cell_plant(
 
     bodies, classes = {}, {}
     hand = None if staged is None else _add_person(plant, parser)
+    friction = None if scenario.sample is None else scenario.sample.friction
     for o in (*scenario.objects, *(staged or ())):
-        (m,) = parser.AddModelsFromString(object_sdf(o.cls, o.id, o.rgb), "sdf")
+        (m,) = parser.AddModelsFromString(object_sdf(o.cls, o.id, o.rgb, friction), "sdf")
         body = plant.GetBodyByName(CLASSES[o.cls].body, m)
         w = scenario.workspaces.get(o.workspace)
         z = 0.01 if w is not None and w.tray else 0.0

@@ -48,9 +48,13 @@ DEFAULT_WEIGHTS = {
 #: The arm's comfortable reach on the table (Franka: 0.855 m from joint 2; keep a margin).
 REACH = (0.25, 0.75)
 BASKET_HALF = 0.12  # lots_waste_basket.sdf: 0.24 x 0.24 m
-#: the ``perturbation`` fields this workcell simulates (`perturbed`); the person's timing
-#: jitter is drawn by ``CellScenario.sample.jitter(key)`` once the person is in the diagram
-PERTURBED = ("objects",)
+#: the ``perturbation`` fields this workcell simulates: start poses of the objects and their
+#: friction (`perturbed`, `tamp.sim.lots.plant`), the camera's depth noise
+#: (`tamp.sim.core.camera.DepthNoise`), the person's reaction times (`tamp.sim.lots.person`)
+#: and chance failures of grasp attempts (`tamp.sim.lots.skills`)
+PERTURBED = ("objects", "friction", "sensor", "timing", "skills")
+#: the skills whose attempts ``perturbation.skills`` may make fail
+CHANCE_SKILLS = ("Pick",)
 #: how often a start offset that leaves the workspace or overlaps is redrawn
 REDRAWS = 20
 
@@ -261,6 +265,17 @@ def load_cell_scenario(path: str | Path) -> CellScenario:
     max_sim_time = f.float("max_sim_time", 600.0, min=0.0, strict_min=True)
     perturbation = parse_perturbation(f)
     perturbation.require(PERTURBED, "LOTS")
+    if perturbation.pose_noise > 0:  # nothing estimates poses here: the camera sees counts
+        raise f.error(
+            "perturbation.sensor.pose_noise",
+            "the LOTS workcell estimates no object poses (use sensor.depth_noise)",
+        )
+    for name in perturbation.skill_failure:
+        if name not in CHANCE_SKILLS:
+            raise f.error(
+                f"perturbation.skills.{name}",
+                f"only {', '.join(CHANCE_SKILLS)} attempts can fail by chance in the LOTS workcell",
+            )
     return CellScenario(
         name=name,
         source=file,
@@ -303,8 +318,10 @@ def perturbed(scenario: CellScenario, seed: int) -> tuple[CellScenario, Applied]
     """``scenario`` as run ``seed`` sees it (`tamp.sim.core.perturbation`): each object moved
     by its drawn offset inside its workspace (redrawn up to `REDRAWS` times when it would
     stick out or overlap another object, moved or still nominal, else kept nominal with a
-    note: so the start stays valid), and the
-    sample kept for what the diagram draws later. Nothing is mutated."""
+    note: so the start stays valid), and the sample kept for what the diagram applies
+    (friction, depth noise, the person's reaction times, grasp attempts that fail). The
+    `Applied` record lists all of it but the person's times (`simulate_lots` adds those).
+    Nothing is mutated."""
     seed = check_seed(seed)
     sample = scenario.perturbation.sample(seed)
     applied = Applied(seed=seed)
@@ -331,6 +348,11 @@ def perturbed(scenario: CellScenario, seed: int) -> tuple[CellScenario, Applied]
                 applied.notes.append(f"{o.id}: no free start in {REDRAWS} draws; nominal kept")
         applied.objects[o.id] = offset
         placed.append(moved)
+    applied.friction = sample.friction
+    applied.depth_noise = scenario.perturbation.depth_noise
+    for name in scenario.perturbation.skill_failure:
+        draws = sample.skill_failures(name)
+        applied.skill_failures[name] = [i + 1 for i, fails in enumerate(draws) if fails]
     out = dataclasses.replace(scenario, objects=tuple(placed), sample=sample)
     return out, applied
 

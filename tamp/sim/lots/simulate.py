@@ -32,7 +32,15 @@ from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.lots.builder import LotsCell, build_diagram
 from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.controller_system import PERIOD, LotsControllerSystem
-from tamp.sim.lots.person import RESTING_Z, STAGING, PersonAction, on_shelf
+from tamp.sim.lots.person import (
+    REACTION,
+    RESTING_Z,
+    STAGING,
+    PersonAction,
+    on_shelf,
+    reaction_time,
+    slot_key,
+)
 from tamp.sim.lots.safety import SafetyStop
 from tamp.sim.lots.scenario import (
     BASKET_HALF,
@@ -240,6 +248,10 @@ def simulate_lots(
     events = list(interference) if interference else None
     if events:
         check_person_classes(events)
+        for n, phase in sorted({(e.after, e.phase) for e in events}):  # the drawn reactions
+            if scenario.perturbation.timing_jitter > 0:
+                shift = reaction_time(scenario.sample, n, phase) - REACTION
+                applied.timing[slot_key(n, phase)] = shift
     controller = LotsController(task, seed=seed, check=check)  # the gate runs here
     if record and meshcat is None:
         meshcat = new_meshcat()

@@ -111,6 +111,8 @@ class SkillState:
     hold_z: float = MIN_GRASP_Z  # TCP height above the object's bottom when it was picked
     grasp_attempts: int = 0
     grasp_successes: int = 0
+    picks_tried: int = 0  # grasp attempts of network picks (the chance failures' index)
+    injected: bool = False  # this attempt fails by the run's drawn chance: the hand stays open
     log: list[tuple[float, str]] = field(default_factory=list)
 
     def __deepcopy__(self, memo: dict) -> SkillState:
@@ -148,6 +150,9 @@ class SkillController(LeafSystem):
         #: they make: `GraspPlanner.network` times those); measurement only
         self.control = Stopwatch()
         self._zeros9 = np.zeros(9)
+        #: whether pick attempt k+1 of the run fails by the drawn chance (``perturbation.
+        #: skills.Pick``): the hand does not close, like the SMP-MRO workcell's injected losses
+        self._chance = () if scenario.sample is None else scenario.sample.skill_failures("Pick")
         self.command_port = self.DeclareAbstractInputPort(
             "skill_command", AbstractValue.Make(SkillCommand())
         )
@@ -473,22 +478,29 @@ class SkillController(LeafSystem):
         yaw = hand_yaw_for_closing(g.yaw)
         s.hold_z = z
         s.grasp_attempts += 1
+        s.picks_tried += 1
+        k = s.picks_tried
+        s.injected = k <= len(self._chance) and self._chance[k - 1]
         s.log.append(
             (
                 t,
                 f"grasp at ({g.x:.3f}, {g.y:.3f}, {z:.3f}) yaw {math.degrees(yaw):.0f} "
-                f"deg, q={g.quality:.2f} (view at {g.view_height:.2f} m)",
+                f"deg, q={g.quality:.2f} (view at {g.view_height:.2f} m)"
+                + (" [drawn to fail: the hand stays open]" if s.injected else ""),
             )
         )
-        s.steps = self._grasp_steps(g.x, g.y, z, yaw, s.side)
+        s.steps = self._grasp_steps(g.x, g.y, z, yaw, s.side, close=not s.injected)
 
-    def _grasp_steps(self, x: float, y: float, z: float, yaw: float, side: str) -> tuple:
-        """Open, approach from 12 cm above, close, check the fingers, lift, look again."""
+    def _grasp_steps(
+        self, x: float, y: float, z: float, yaw: float, side: str, close: bool = True
+    ) -> tuple:
+        """Open, approach from 12 cm above, close, check the fingers, lift, look again
+        (``close=False``: an attempt drawn to fail, the hand stays open)."""
         return (
             Step("grip", width=OPEN),
             self._move((x, y, z + 0.12, yaw)),
             self._move((x, y, z, yaw), APPROACH_SPEED),
-            Step("grip", width=CLOSED),
+            Step("grip", width=CLOSED if close else OPEN),
             Step("check_fingers"),
             self._move((x, y, LIFT_Z, yaw)),
             *self._look(side),
@@ -496,6 +508,14 @@ class SkillController(LeafSystem):
         )
 
     def _on_lifted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
+        if s.injected:
+            s.injected = False
+            return self._retry(
+                s,
+                t,
+                "the hand did not close (a drawn failure: perturbation.skills)",
+                "injected_failure",
+            )
         if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
             return self._retry(s, t, "slipped: the fingers closed after the lift", "grasp_slipped")
         if any(d.label == s.track for d in obs.detections):

@@ -37,7 +37,7 @@ from pydrake.multibody.tree import PdControllerGains
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from tamp.sim.core.executor import BtExecutor, Policy
-from tamp.sim.core.models import model_url, sdf_path
+from tamp.sim.core.models import model_url, sdf_path, with_friction
 from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.smp.controller import SkillController
@@ -133,13 +133,6 @@ def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodie
     builder.Connect(detector.observation_port, estimator.observation_port)
     builder.Connect(estimator.view_request_port, detector.request_port)
     return estimator
-
-
-def with_friction(sdf: str, mu: float) -> str:
-    """An object's SDF with every Coulomb coefficient (static and dynamic) set to ``mu``."""
-    for tag in ("drake:mu_dynamic", "drake:mu_static"):
-        sdf = re.sub(rf"<{tag}>[^<]*</{tag}>", f"<{tag}>{mu:.6f}</{tag}>", sdf)
-    return sdf
 
 
 def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None) -> SimSystem:

@@ -44,11 +44,51 @@ def test_lots_objects_move_inside_their_workspace_and_apart(tmp_path):
     assert perturbed(s, 1)[0].objects != perturbed(s, 2)[0].objects
 
 
-def test_lots_refuses_what_it_does_not_simulate(tmp_path):
+@pytest.mark.parametrize(
+    ("section", "field"),
+    [
+        ({"sensor": {"pose_noise": 0.01}}, "perturbation.sensor.pose_noise"),
+        ({"skills": {"Place": 0.1}}, "perturbation.skills.Place"),
+        ({"robot": {"xy": 0.01}}, "perturbation.robot"),  # the arm is bolted to the table
+    ],
+)
+def test_lots_refuses_what_it_does_not_simulate(tmp_path, section, field):
     with pytest.raises(InputError) as e:
-        load_cell_scenario(lots_file(tmp_path, {"friction": [0.4, 0.6]}))
-    assert e.value.field == "perturbation.friction"
-    assert "not simulated by the LOTS workcell" in str(e.value)
+        load_cell_scenario(lots_file(tmp_path, section))
+    assert e.value.field == field
+
+
+def test_lots_draws_friction_noise_failures_and_reactions(tmp_path):
+    from tamp.sim.lots.person import REACTION, reaction_time
+    from tamp.sim.lots.plant import object_sdf
+
+    section = {
+        "friction": [0.5, 0.9],
+        "sensor": {"depth_noise": 0.002},
+        "timing": {"jitter": 1.0},
+        "skills": {"Pick": 0.3},
+    }
+    s = load_cell_scenario(lots_file(tmp_path, section))
+    runs = [perturbed(s, seed) for seed in range(30)]
+    frictions = [a.friction for _, a in runs]
+    assert all(0.5 <= f <= 0.9 for f in frictions) and len(set(frictions)) == 30
+    assert all(a.depth_noise == 0.002 for _, a in runs)
+    fails = [a.skill_failures["Pick"] for _, a in runs]
+    rate = sum(len(f) for f in fails) / (30 * 32)  # 32 drawn attempts per run
+    assert 0.2 < rate < 0.4
+    assert perturbed(s, 3)[1].to_json() == perturbed(s, 3)[1].to_json()  # bit for bit
+    # the drawn coefficient reaches every contact surface of an object's SDF
+    out, applied = runs[4]
+    sdf = object_sdf("saw", "saw_0", (1.0, 0.0, 0.0), out.sample.friction)
+    assert f"<drake:mu_dynamic>{applied.friction:.6f}</drake:mu_dynamic>" in sdf
+    assert "<drake:mu_static>0.8</drake:mu_static>" not in sdf
+    # the person's reaction: REACTION shifted by the slot's draw, never negative, per seed
+    times = [reaction_time(o.sample, 2, "idle") for o, _ in runs]
+    assert min(times) >= 0.0 and len(set(times)) > 20
+    assert reaction_time(None, 2, "idle") == REACTION
+    assert reaction_time(out.sample, 2, "idle") == reaction_time(
+        perturbed(s, 4)[0].sample, 2, "idle"
+    )
 
 
 def test_lots_without_a_section_keeps_its_scene():

@@ -195,3 +195,33 @@ def test_skills_speak_the_lots_arm_domain(building):
     assert d.context.get_time() - t0 >= 2.0 + 0.2  # the move over W^A, then the hold
     assert d.run("Place(waste)").detail == "nothing held"  # the Discard branch
     assert d.run("Place(floor)").status is Status.FAILURE
+
+
+def test_a_perturbed_cell_adds_depth_noise_and_a_drawn_grasp_failure_is_retried():
+    """``tower_perturbed`` at seed 116: depth noise between the camera and its readers, the
+    seed's friction on the objects, and the first pick attempt drawn to fail (the hand stays
+    open): the skill sees the object still on the table, names the cause, and tries again."""
+    from tamp.sim.lots.scenario import perturbed
+
+    scenario, applied = perturbed(load_cell_scenario("tower_perturbed"), 116)
+    assert applied.skill_failures["Pick"] == [1]
+    cell = build_diagram(scenario)
+    conn = cell.diagram.connection_map()
+    readers = {
+        k[0].get_name(): v[0].get_name()
+        for k, v in conn.items()
+        if "depth" in k[0].get_input_port(k[1]).get_name()
+    }
+    assert readers == {
+        "perception": "depth_noise",
+        "safety": "depth_noise",
+        "depth_noise": "wrist_camera",
+    }
+    d = CellDriver(cell)
+    st = d.run("Pick(bottom)", timeout=120)
+    log = [text for _, text in d.skill_state().log]
+    assert st.status is Status.SUCCESS, log
+    assert any("drawn to fail" in t for t in log)
+    assert any("injected" not in t and "did not close" in t for t in log)
+    s = d.skill_state()
+    assert s.picks_tried == 2 and s.grasp_successes == 1
