@@ -20,6 +20,7 @@ import torch
 
 from tamp.grasp.datasets import similarity, warp
 from tamp.grasp.maps import detect_grasps, fill_missing_depth, post_process, stack_input
+from tamp.grasp.pinhole import pixel_to_camera
 from tamp.grasp.rect import GraspRect, wrap_angle
 
 
@@ -50,11 +51,6 @@ class PredictedGrasp:
 
     def as_dict(self) -> dict:
         return asdict(self)
-
-
-def pixel_to_camera(u: float, v: float, z: float, intrinsics) -> np.ndarray:
-    fx, fy, cx, cy = intrinsics
-    return np.array([(u - cx) * z / fx, (v - cy) * z / fy, z])
 
 
 def depth_at(depth: np.ndarray, u: float, v: float, radius: int = 2) -> float:

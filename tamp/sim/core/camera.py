@@ -20,6 +20,7 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 from pydrake.systems.sensors import CameraConfig, ImageDepth32F, RgbdSensor
 
+from tamp.grasp.pinhole import pixel_to_camera
 from tamp.sim.core.perturbation import stream
 
 RENDERER = "vtk"
@@ -69,13 +70,10 @@ def add_rgbd_camera(
     return camera, (K.focal_x(), K.focal_y(), K.center_x(), K.center_y())
 
 
-def backproject(
-    u: float, v: float, depth: float, intrinsics: tuple[float, float, float, float], X_WC
-) -> np.ndarray:
-    """The world point seen at pixel (u, v) with depth ``depth`` (along the optical axis)."""
-    fx, fy, cx, cy = intrinsics
-    p_C = np.array([(u - cx) / fx * depth, (v - cy) / fy * depth, depth])
-    return X_WC.multiply(p_C)
+def backproject(u, v, depth, intrinsics: tuple[float, float, float, float], X_WC) -> np.ndarray:
+    """The world point(s) seen at pixel (u, v) with depth ``depth`` (along the optical axis):
+    `tamp.grasp.pinhole.pixel_to_camera` moved by the camera pose (arrays: 3 x N)."""
+    return X_WC.multiply(pixel_to_camera(u, v, depth, intrinsics))
 
 
 def look_at(position, target) -> RigidTransform:

@@ -45,6 +45,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I
 
+from tamp.sim.core.camera import backproject
 from tamp.sim.core.parsing import make_parser
 from tamp.sim.lots.catalogue import (
     ARM,
@@ -176,11 +177,10 @@ def hand_points(
     vs, us = np.nonzero(mask)
     too_close = int(np.count_nonzero(z == 0))
     ok = np.isfinite(z) & (z > 0)
-    fx, fy, cx, cy = intrinsics
     z, us, vs = z[ok], us[ok], vs[ok]
-    p_C = np.stack([(us - cx) * z / fx, (vs - cy) * z / fy, z])
-    p_W = X_WC.rotation().matrix() @ p_C + X_WC.translation()[:, None]
-    return p_W.T, too_close
+    if z.size == 0:
+        return np.zeros((0, 3)), too_close
+    return backproject(us, vs, z, intrinsics, X_WC).T, too_close
 
 
 def distance_to_boxes(points: np.ndarray, boxes: list[tuple[RigidTransform, np.ndarray]]) -> float:
