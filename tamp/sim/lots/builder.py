@@ -7,8 +7,8 @@ idiom: one function, one named Diagram, exported ports).
         ─► desired_state (the arm's PD actuators); SafetyMonitor.stopped ─► SkillController.hold
       SkillController.view_request ─► Perception
     PersonSystem (optional, tamp.sim.lots.person) ─► the hand's desired state, carry forces
-    exported: skill_command, person_present (in); skill_status, observation, view_request,
-      arm_state, safety_stopped (out)
+    exported: skill_command, person_present (in; the person's curtain when scripted);
+      skill_status, observation, view_request, arm_state, safety_stopped (out)
     MeshcatVisualizer (optional)
 
 The camera is configured through Drake's `CameraConfig` (D435 colour intrinsics at a reduced
@@ -169,7 +169,10 @@ def build_diagram(
     builder.ExportOutput(skills.view_request_port, "view_request")
     builder.ExportOutput(plant.get_state_output_port(cell.arm), "arm_state")
     if safety is not None:
-        builder.ExportInput(safety.present_port, "person_present")
+        if person_system is not None:  # the person's light curtain wakes the monitor
+            builder.Connect(person_system.present_port, safety.present_port)
+        else:
+            builder.ExportInput(safety.present_port, "person_present")
         builder.ExportOutput(safety.stopped_port, "safety_stopped")
 
     visualizer = None

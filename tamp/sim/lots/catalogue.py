@@ -197,6 +197,9 @@ class PersonSpec:
     park: tuple[float, float, float] = (1.3, 0.0, 0.35)
     shelf_center: tuple[float, float] = (1.1, 0.0)
     shelf_size: tuple[float, float] = (0.26, 1.2)
+    #: the light curtain between the robot's side of the table and the shelf: a hand nearer
+    #: the robot than this x (m) is inside the workcell (the shelf's inner edge is 0.97 m)
+    curtain_x: float = 0.92
     speed: float = 1.2  # mean hand speed of a move (m/s)
     transit: float = 0.24  # height of the hand over the table between workspaces (m)
 

@@ -259,6 +259,14 @@ class PersonSystem(LeafSystem):
         self.desired_state_port = self.DeclareVectorOutputPort(
             "hand_desired_state", 6, self._calc_desired, prerequisites_of_calc=ticket
         )
+        #: a light curtain at ``PERSON.curtain_x``: 1 while the hand (its measured pose) is on
+        #: the robot's side; wakes the safety monitor's own camera frames, nothing else
+        self.present_port = self.DeclareVectorOutputPort(
+            "person_present",
+            1,
+            self._calc_present,
+            prerequisites_of_calc={self.input_port_ticket(self.poses_port.get_index())},
+        )
         self.forces_port = self.DeclareAbstractOutputPort(
             "carry_forces",
             lambda: AbstractValue.Make([ExternallyAppliedSpatialForce()]),
@@ -283,6 +291,10 @@ class PersonSystem(LeafSystem):
     def _calc_desired(self, context, output: BasicVector) -> None:
         p, v = self.hand_target(self.state(context), context.get_time())
         output.SetFromVector(np.r_[p[self._order], v[self._order]])
+
+    def _calc_present(self, context, output: BasicVector) -> None:
+        x = self.poses_port.Eval(context)[self._hand_index].translation()[0]
+        output.SetAtIndex(0, 1.0 if x < PERSON.curtain_x else 0.0)
 
     def _calc_forces(self, context, output) -> None:
         s = self.state(context)

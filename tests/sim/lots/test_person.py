@@ -128,12 +128,14 @@ def test_the_hand_carries_an_object_between_workspaces_and_parks(tmp_path):
     hand = plant.GetBodyByName(PERSON.hand_body, cell.hand)
     body = cell.bodies["body_0"]
     start = plant.EvalBodyPoseInWorld(mc, body)
-    offsets, took = [], None
+    offsets, took, curtain = [], None, []
     t = 0.0
     while t < 7.0:
         t += 0.1
         sim.AdvanceTo(t)
         s = person.state(pc)
+        x = plant.EvalBodyPoseInWorld(mc, hand).translation()[0]
+        curtain.append((x < PERSON.curtain_x, person.present_port.Eval(pc)[0] == 1.0))
         if s.carrying == "body_0":
             X_HO = plant.EvalBodyPoseInWorld(mc, hand).inverse() @ plant.EvalBodyPoseInWorld(
                 mc, body
@@ -152,6 +154,9 @@ def test_the_hand_carries_an_object_between_workspaces_and_parks(tmp_path):
     assert took is not None
     assert took[2] == pytest.approx(-(CLASSES["body"].height + GRIP_GAP), abs=0.004)
     assert np.linalg.norm(took[:2]) < 0.01
+    # the light curtain: on exactly while the hand is on the robot's side; off when parked
+    assert all(inside == on for inside, on in curtain)
+    assert curtain[0] == (False, False) and any(on for _, on in curtain)
     # carried: the body kept its place in the hand (the carrying force holds it within 5 mm)
     assert len(offsets) >= 10 and max(offsets) < 0.005
     end = plant.EvalBodyPoseInWorld(mc, body)
@@ -166,6 +171,22 @@ def test_the_hand_carries_an_object_between_workspaces_and_parks(tmp_path):
     sim.AdvanceTo(t + 2.0)
     p = plant.EvalBodyPoseInWorld(mc, hand).translation()
     assert np.linalg.norm(p - np.array(PERSON.park)) < 0.01
+
+
+def test_the_persons_light_curtain_wakes_the_safety_monitor():
+    """With a scripted person the monitor's ``person_present`` is the person's curtain (not
+    an exported input); the controller side still gets nothing of the person."""
+    from tamp.sim.lots.builder import build_diagram
+    from tamp.sim.lots.scenario import load_cell_scenario
+
+    task = load_task("tower")
+    cell = build_diagram(
+        load_cell_scenario("tower"), person=load_events("tower_interference", task)
+    )
+    conn = cell.diagram.connection_map()
+    src = conn[(cell.safety, cell.safety.present_port.get_index())]
+    assert src[0] is cell.person and src[1] == cell.person.present_port.get_index()
+    assert not cell.diagram.HasInputPort("person_present")
 
 
 def test_hand_pixels_carry_the_hand_label(tmp_path):
