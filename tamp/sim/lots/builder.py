@@ -144,6 +144,7 @@ def build_diagram(
             width=scenario.camera.width,
             height=scenario.camera.height,
             period=scenario.control.perception_period,
+            intrinsics=intrinsics,
         )
     )
     builder.Connect(camera.color_image_output_port(), perception.color_port)

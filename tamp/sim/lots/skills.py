@@ -45,6 +45,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 
 from tamp.lots.cell import WASTE, lots_domain
+from tamp.sim.core.camera import backproject
 from tamp.sim.core.messages import SkillCommand, SkillStatus
 from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner
@@ -316,7 +317,7 @@ class SkillController(LeafSystem):
         step = s.steps[0]
         if s.step_t0 is None:
             s.step_t0 = t
-            self._enter(s, step, t)
+            self._enter(s, step, t, q_meas)
         el = t - s.step_t0
         done = False
         if step.kind == "move":
@@ -366,7 +367,7 @@ class SkillController(LeafSystem):
             s.steps, s.step_t0, s.move_from = s.steps[1:], None, None
             s.v = np.zeros(7)
 
-    def _enter(self, s: SkillState, step: Step, t: float) -> None:
+    def _enter(self, s: SkillState, step: Step, t: float, q_meas: np.ndarray) -> None:
         if step.kind == "move":
             X0 = self.kin.tcp_pose(s.q)
             x, y, z, yaw = step.pose
@@ -380,7 +381,10 @@ class SkillController(LeafSystem):
         elif step.kind == "grip":
             s.finger = step.width
         elif step.kind == "view":
-            s.request = ViewRequest(s.next_view, s.side, s.target_cls, s.track)
+            # where the camera is, from the arm's own kinematics (the arm has settled):
+            # perception back-projects what it sees and projects what it remembers with it
+            X_WC = self.kin.camera_pose(q_meas[:7])
+            s.request = ViewRequest(s.next_view, s.side, s.target_cls, s.track, X_WC)
             s.next_view += 1
 
     def _track(self, s: SkillState, el: float) -> bool:
@@ -425,9 +429,7 @@ class SkillController(LeafSystem):
         det = crop.detection
         s.track = det.label
         X_WC = self.kin.camera_pose(q_meas[:7])
-        fx, fy, cx, cy = self.planner.intrinsics
-        pc = np.array([(det.u - cx) * det.depth / fx, (det.v - cy) * det.depth / fy, det.depth])
-        p = X_WC @ pc
+        p = backproject(det.u, det.v, det.depth, self.planner.intrinsics, X_WC)
         s.target_xy = (float(p[0]), float(p[1]))
         s.target_top = max(float(p[2]), 0.0)  # median depth of its pixels: about its top
         height = float(X_WC.translation()[2]) - s.target_top  # camera above the target
@@ -513,7 +515,11 @@ class SkillController(LeafSystem):
     def _on_place(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         X_WC = self.kin.camera_pose(q_meas[:7])
         x, y = free_spot(
-            self.scenario.workspaces[s.side], obs.occupied, X_WC, self.planner.intrinsics
+            self.scenario.workspaces[s.side],
+            obs.occupied,
+            X_WC,
+            self.planner.intrinsics,
+            avoid=tuple(m.position[:2] for m in obs.occluded),
         )
         tray = 0.01 if self.scenario.workspaces[s.side].tray else 0.0
         z = s.hold_z + 0.008 + tray
@@ -536,9 +542,11 @@ def free_spot(
     intrinsics,
     margin: float = 0.06,
     step: float = 0.02,
+    avoid: tuple[tuple[float, float], ...] = (),
 ) -> tuple[float, float]:
     """The point of ``workspace`` (``margin`` inside its edges) farthest from every object
-    pixel of the view, measured in the table plane."""
+    pixel of the view and every point of ``avoid`` (objects hidden from the view: their
+    remembered centres), measured in the table plane."""
     fx, fy, cx, cy = intrinsics
     cxw, cyw = workspace.center
     hx, hy = workspace.size[0] / 2 - margin, workspace.size[1] / 2 - margin
@@ -549,15 +557,19 @@ def free_spot(
             for dy in np.arange(-hy, hy + 1e-9, step)
         ]
     )
-    if occupied is None or not occupied.any():
+    if (occupied is None or not occupied.any()) and not avoid:
         return workspace.center
-    vs, us = np.nonzero(occupied)
-    # object pixels on the table plane (z = 0) through the camera
-    R, p = X_WC.rotation().matrix(), X_WC.translation()
-    rays = R @ np.stack([(us - cx) / fx, (vs - cy) / fy, np.ones_like(us, float)])
-    s_ = -p[2] / rays[2]
-    pts = (p[:2, None] + rays[:2] * s_).T
-    pts = pts[:: max(1, len(pts) // 2000)]
+    pts = np.zeros((0, 2))
+    if occupied is not None and occupied.any():
+        vs, us = np.nonzero(occupied)
+        # object pixels on the table plane (z = 0) through the camera
+        R, p = X_WC.rotation().matrix(), X_WC.translation()
+        rays = R @ np.stack([(us - cx) / fx, (vs - cy) / fy, np.ones_like(us, float)])
+        s_ = -p[2] / rays[2]
+        pts = (p[:2, None] + rays[:2] * s_).T
+        pts = pts[:: max(1, len(pts) // 2000)]
+    if avoid:
+        pts = np.vstack([pts, np.asarray(avoid, float).reshape(-1, 2)])
     d = np.min(np.linalg.norm(grid[:, None, :] - pts[None, :, :], axis=2), axis=1)
     best = grid[int(np.argmax(d))]
     return (float(best[0]), float(best[1]))
