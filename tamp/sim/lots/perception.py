@@ -199,21 +199,22 @@ def hidden(
     tolerance: float = OCCLUSION_TOLERANCE,
     window: float = OCCLUSION_WINDOW,
 ) -> bool:
-    """Whether the camera at ``X_WC`` cannot tell if anything is at world ``point``: it
-    projects out of the image (or behind the camera), or a pixel of the patch ``window``
-    around it shows something more than ``tolerance`` nearer than the point (the gripper or
-    the object it holds, a hand). Depth 0 (nearer than the clipping plane) is near too."""
+    """Whether the camera at ``X_WC`` cannot tell if anything is at world ``point``: the
+    patch ``window`` around its projection is not all in the image (or the point is behind
+    the camera), or a pixel of that patch shows something more than ``tolerance`` nearer
+    than the point (the gripper or the object it holds, a hand). Depth 0 (nearer than the
+    clipping plane) is near too."""
     fx, fy, cx, cy = intrinsics
     x, y, z = X_WC.inverse().multiply(np.asarray(point, float))
     if z <= 0:
         return True
     u, v = fx * x / z + cx, fy * y / z + cy
     h, w = depth.shape
-    if not (-0.5 <= u < w - 0.5 and -0.5 <= v < h - 0.5):
-        return True
     r = max(0, int(round(window * fx / z)))
     ui, vi = int(round(u)), int(round(v))
-    patch = depth[max(vi - r, 0) : vi + r + 1, max(ui - r, 0) : ui + r + 1]
+    if not (r <= ui < w - r and r <= vi < h - r):  # the patch is not all in the image
+        return True
+    patch = depth[vi - r : vi + r + 1, ui - r : ui + r + 1]
     return bool(np.any(patch < z - tolerance))  # NaN compares False: no cover
 
 

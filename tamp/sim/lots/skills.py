@@ -12,7 +12,8 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   grasp over all views is taken; approach, close, lift. A grasp fails when the fingers close
   on nothing (finger width) or when the target is still on the table in the next view (not
   lifted); it is retried with new predictions up to ``grasp.attempts`` times.
-- ``Place(side)``: look at W^side, put the held object down on the freest spot seen.
+- ``Place(side)``: look at W^side, put the held object down on the freest spot seen (away
+  from objects perception remembers there but cannot see), lift, one view from there.
 - ``Discard()`` (also ``Place(waste)``, the ``lots_arm`` domain's name for it): drop the
   held object into the waste basket. Both places check the fingers before letting go: an
   object lost on the way is reported (FAILURE, "dropped ... while carrying it") and the
@@ -414,6 +415,8 @@ class SkillController(LeafSystem):
     # ---- view handlers -------------------------------------------------------------------
     def _on_counted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         detail = ",".join(f"{k}={v}" for k, v in sorted(obs.counts.items()))
+        if obs.occluded:  # counted, but remembered rather than seen: say so
+            detail += "; occluded " + ",".join(sorted(m.cls for m in obs.occluded))
         self._finish(s, t, Status.SUCCESS, detail)
 
     def _on_seen(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
@@ -523,14 +526,20 @@ class SkillController(LeafSystem):
         )
         tray = 0.01 if self.scenario.workspaces[s.side].tray else 0.0
         z = s.hold_z + 0.008 + tray
-        s.log.append((t, f"place the {s.held} at ({x:.3f}, {y:.3f})"))
+        hidden = "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
+        s.log.append((t, f"place the {s.held} at ({x:.3f}, {y:.3f}){hidden}"))
         yaw = 0.0
+        s.target_cls, s.track = None, None  # no grasp target: the views below need no colour
         s.steps = (
             self._move((x, y, z + 0.12, yaw)),
             Step("check_held"),
             self._move((x, y, z, yaw), APPROACH_SPEED),
             Step("grip", width=OPEN),
             self._move((x, y, LIFT_Z, yaw)),
+            # one view from over the object just put down: perception remembers where it
+            # lies (a later view with an object in the gripper may have it hidden)
+            Step("settle"),
+            Step("view", handler="seen"),
             Step("finish", detail=f"placed {s.held} in W^{s.side}", handler="released"),
         )
 

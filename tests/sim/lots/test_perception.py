@@ -176,6 +176,9 @@ def test_hidden_out_of_the_image_behind_the_camera_and_under_a_patch():
     assert not hidden((0.5, -0.25, 0.0), depth, X_LOOK, K)  # the centre: bare table
     assert hidden((0.5, 0.25, 0.0), depth, X_LOOK, K)  # W^A: out of the image
     assert hidden((0.5, -0.25, 0.6), depth, X_LOOK, K)  # above the camera
+    # 3 px from the image's left edge: its 7 px patch is not all in the image; 20 px: it is
+    assert hidden((0.5 + (3 - K[2]) / K[0] * TABLE, -0.25, 0.0), depth, X_LOOK, K)
+    assert not hidden((0.5 + (20 - K[2]) / K[0] * TABLE, -0.25, 0.0), depth, X_LOOK, K)
     depth[88:92, 158:162] = 0.0  # nearer than the clipping plane: covered
     assert hidden((0.5, -0.25, 0.0), depth, X_LOOK, K)
     _, depth = view({})
