@@ -240,6 +240,8 @@ def run_narrative(name: str):
     figures |= {"replans": result.replans, "final": result.final_counts}
     print(f"\nnarrative {name}: {json.dumps(figures)}")
     print("robot:", [a.text() for a in result.robot_actions])
+    skills = result.to_json()["actions"]
+    print("skills:", [f"{a['action']} {a['start']}-{a['end']} {a['detail']}" for a in skills])
     print("person:", [a.to_json() for a in result.person_actions])
     return result
 
