@@ -19,7 +19,7 @@ pytestmark = pytest.mark.slow
 #: a spot on W^B's near side (towards the robot) that the held hammer's head covers at the
 #: look pose, for the grasp below (found by rendering; the test checks it is not detected)
 HIDDEN_XY = [-0.09, 0.08]
-#: a top grasp across the hammer's handle, 4 cm from the handle's end: the head hangs
+#: a top grasp across the hammer's handle, 6 cm from the handle's end: the head hangs
 #: towards the robot, the handle ends just short of the camera's axis (6.5 cm off the TCP)
 GRASP = "PickAt(A, 0.54, 0.25, 0)"
 
