@@ -140,6 +140,7 @@ def build_diagram(
             width=scenario.camera.width,
             height=scenario.camera.height,
             period=scenario.control.perception_period,
+            intrinsics=intrinsics,
         )
     )
     depth = noisy_depth(builder, scenario, camera.depth_image_32F_output_port())

@@ -12,6 +12,16 @@ workspace): an instance counts when at least ``min_pixels`` of its pixels lie fa
 (the instance of the requested class tracked so far, else the one nearest the image centre)
 comes with a square crop of colour, depth and its mask around it: the grasp network's input.
 
+Occlusion is not absence: the object the gripper holds hangs in front of the camera (the camera
+sits 6.5 cm off the gripper's axis) and hides part of the workspace. Perception therefore keeps,
+per workspace, what it last saw there (`Seen`: each instance's class and the world point of
+its centroid, back-projected through its depth, the intrinsics and the camera pose the skills
+give with the request, from the arm's own kinematics). At a new view of that workspace, a
+remembered instance that is not seen now is kept (counted, and reported as occluded) when its
+point is hidden: out of the image, or covered by something nearer than it (the gripper, the
+held object); one whose point lies in plain view is gone (`recall`). An instance seen in the
+gripper is forgotten everywhere: it lies in no workspace.
+
 Rendering is the budget (~15-20 ms per image kind at 320x180 on 2 cores): the sensor renders
 only when an output port is evaluated, and `Perception` evaluates the image inputs only in
 its periodic update and only when a new `ViewRequest` id arrives; the colour image only when
@@ -26,20 +36,30 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from pydrake.common.value import AbstractValue
+from pydrake.math import RigidTransform
 from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I, ImageRgba8U
 
+from tamp.sim.core.camera import backproject
 from tamp.sim.lots.timing import Stopwatch
+
+#: a remembered point counts as covered where the image shows something this much nearer (m)
+OCCLUSION_TOLERANCE = 0.02
+#: half-size of the patch around a remembered point's pixel that is checked for cover (m)
+OCCLUSION_WINDOW = 0.015
 
 
 @dataclass(frozen=True)
 class ViewRequest:
-    """Ask for one view: id (0 = none), the workspace looked at, and what to find in it."""
+    """Ask for one view: id (0 = none), the workspace looked at, what to find in it, and
+    where the camera is (the arm's own kinematics: `ArmKinematics.camera_pose` of the measured
+    joints). Without ``camera_pose`` perception counts what it sees and remembers nothing."""
 
     id: int = 0
     side: str = ""
     target: str | None = None  # class to find for a grasp (then the colour image is rendered)
     track: int | None = None  # instance tracked so far (its detector id)
+    camera_pose: RigidTransform | None = None  # X_WC when the view was asked for
 
     def __deepcopy__(self, memo: dict) -> ViewRequest:
         return self
@@ -55,6 +75,16 @@ class Detection:
     u: float
     v: float
     depth: float
+
+
+@dataclass(frozen=True)
+class Seen:
+    """An instance as perception last saw it: detector id, class, and the world point of its
+    centroid (back-projected through its median depth: about the middle of its top)."""
+
+    label: int
+    cls: str
+    position: tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -81,6 +111,9 @@ class Observation:
     in_hand: tuple[str, ...] = ()  # classes seen closer than hand_depth (in the gripper)
     target: TargetCrop | None = None
     occupied: np.ndarray | None = None  # object pixels on the table (full image, bool)
+    #: remembered instances of this workspace not seen now because something hides them
+    #: (counted in ``counts``, not in ``detections``)
+    occluded: tuple[Seen, ...] = ()
 
     def __deepcopy__(self, memo: dict) -> Observation:
         return self  # immutable (arrays are read-only): Drake's state copies cost nothing
@@ -88,12 +121,14 @@ class Observation:
 
 @dataclass(frozen=True)
 class PerceptionState:
-    """Last request served, its observation, and how many frames were rendered."""
+    """Last request served, its observation, how many frames were rendered, and what was
+    last seen in each workspace (never mutated: every update builds a new mapping)."""
 
     served: int = 0
     observation: Observation = field(default_factory=Observation)
     frames: int = 0
     render_kinds: int = 0  # image kinds evaluated in total (label, depth, colour)
+    memory: dict[str, tuple[Seen, ...]] = field(default_factory=dict)
 
     def __deepcopy__(self, memo: dict) -> PerceptionState:
         return self
@@ -110,19 +145,15 @@ def analyse(
     """(counts per class, detections, classes in the gripper, table-object mask) of one view."""
     valid = np.isfinite(depth) & (depth > 0)
     far = valid & (depth > hand_depth)
-    near = valid & (depth <= hand_depth)
+    held = gripper_labels(label, depth, classes, min_pixels=min_pixels, hand_depth=hand_depth)
     detections = []
-    in_hand = []
     occupied = np.zeros(label.shape, bool)
     for value in np.unique(label):
         cls = classes.get(int(value))
         if cls is None:
             continue
-        pix = label == value
-        on_table = pix & far
+        on_table = (label == value) & far
         n = int(on_table.sum())
-        if int((pix & near).sum()) >= min_pixels:
-            in_hand.append(cls)
         if n < min_pixels:
             continue
         occupied |= on_table
@@ -138,7 +169,89 @@ def analyse(
             )
         )
     counts = dict(Counter(d.cls for d in detections))
-    return counts, tuple(detections), tuple(sorted(in_hand)), occupied
+    in_hand = tuple(sorted(classes[v] for v in held))
+    return counts, tuple(detections), in_hand, occupied
+
+
+def gripper_labels(
+    label: np.ndarray,
+    depth: np.ndarray,
+    classes: dict[int, str],
+    *,
+    min_pixels: int = 25,
+    hand_depth: float = 0.12,
+) -> frozenset[int]:
+    """Detector ids of the objects in the gripper: ``min_pixels`` or more of their pixels
+    nearer than ``hand_depth``."""
+    near = np.isfinite(depth) & (depth > 0) & (depth <= hand_depth)
+    values, n = np.unique(label[near], return_counts=True)
+    return frozenset(
+        int(v) for v, k in zip(values, n, strict=True) if k >= min_pixels and int(v) in classes
+    )
+
+
+def hidden(
+    point: tuple[float, float, float] | np.ndarray,
+    depth: np.ndarray,
+    X_WC: RigidTransform,
+    intrinsics: tuple[float, float, float, float],
+    *,
+    tolerance: float = OCCLUSION_TOLERANCE,
+    window: float = OCCLUSION_WINDOW,
+) -> bool:
+    """Whether the camera at ``X_WC`` cannot tell if anything is at world ``point``: the
+    patch ``window`` around its projection is not all in the image (or the point is behind
+    the camera), or a pixel of that patch shows something more than ``tolerance`` nearer
+    than the point (the gripper or the object it holds, a hand). Depth 0 (nearer than the
+    clipping plane) is near too."""
+    fx, fy, cx, cy = intrinsics
+    x, y, z = X_WC.inverse().multiply(np.asarray(point, float))
+    if z <= 0:
+        return True
+    u, v = fx * x / z + cx, fy * y / z + cy
+    h, w = depth.shape
+    r = max(0, int(round(window * fx / z)))
+    ui, vi = int(round(u)), int(round(v))
+    if not (r <= ui < w - r and r <= vi < h - r):  # the patch is not all in the image
+        return True
+    patch = depth[vi - r : vi + r + 1, ui - r : ui + r + 1]
+    return bool(np.any(patch < z - tolerance))  # NaN compares False: no cover
+
+
+def recall(
+    memory: tuple[Seen, ...],
+    detections: tuple[Detection, ...],
+    held: frozenset[int],
+    depth: np.ndarray,
+    X_WC: RigidTransform,
+    intrinsics: tuple[float, float, float, float],
+    *,
+    tolerance: float = OCCLUSION_TOLERANCE,
+    window: float = OCCLUSION_WINDOW,
+) -> tuple[tuple[Seen, ...], tuple[Seen, ...]]:
+    """(what to remember of the workspace in view now, the remembered instances kept as
+    occluded) after one view of it.
+
+    ``memory``: what was last seen in this workspace; ``detections`` and ``depth``: this
+    view; ``held``: detector ids seen in the gripper. Every detection is remembered where it
+    is seen now. A remembered instance not detected now is kept, as occluded, when its point
+    is `hidden`; it is gone when its point is in plain view or when it is in the gripper.
+    Instances are matched by detector id (the label image's instance id, as the grasp's
+    tracking uses it).
+    """
+    now = tuple(
+        Seen(d.label, d.cls, tuple(backproject(d.u, d.v, d.depth, intrinsics, X_WC).tolist()))
+        for d in detections
+    )
+    seen = {d.label for d in detections}
+    occluded = tuple(
+        m
+        for m in memory
+        if m.label not in seen
+        and m.label not in held
+        and hidden(m.position, depth, X_WC, intrinsics, tolerance=tolerance, window=window)
+    )
+    return now + occluded, occluded
 
 
 def choose_target(
@@ -180,10 +293,13 @@ class Perception(LeafSystem):
         period: float,
         min_pixels: int = 25,
         hand_depth: float = 0.12,
+        intrinsics: tuple[float, float, float, float] | None = None,
     ):
         super().__init__()
         self.set_name("perception")
         self._classes = dict(classes)
+        #: (fx, fy, cx, cy) of the depth image; None: remember nothing (no back-projection)
+        self._intrinsics = intrinsics
         self._min_pixels = min_pixels
         self._hand_depth = hand_depth
         self._center = ((width - 1) / 2, (height - 1) / 2)
@@ -259,10 +375,49 @@ class Perception(LeafSystem):
                     _frozen(np.nan_to_num(depth[sl], nan=0.0, posinf=0.0)),
                     _frozen((label[sl] == det.label) & (depth[sl] > self._hand_depth)),
                 )
+        memory, occluded = s.memory, ()
+        if req.camera_pose is not None and self._intrinsics is not None and req.side:
+            with self.analysis:
+                memory, occluded = self._remember(s.memory, req, label, depth, dets)
+                counts = dict(Counter(d.cls for d in dets) + Counter(m.cls for m in occluded))
         obs = Observation(
-            req.id, context.get_time(), req.side, counts, dets, in_hand, target, _frozen(occupied)
+            req.id,
+            context.get_time(),
+            req.side,
+            counts,
+            dets,
+            in_hand,
+            target,
+            _frozen(occupied),
+            occluded,
         )
         state.get_mutable_abstract_state(self._state).set_value(
-            PerceptionState(req.id, obs, s.frames + 1, s.render_kinds + kinds)
+            PerceptionState(req.id, obs, s.frames + 1, s.render_kinds + kinds, memory)
         )
         return EventStatus.Succeeded()
+
+    def _remember(
+        self,
+        memory: dict[str, tuple[Seen, ...]],
+        req: ViewRequest,
+        label: np.ndarray,
+        depth: np.ndarray,
+        dets: tuple[Detection, ...],
+    ) -> tuple[dict[str, tuple[Seen, ...]], tuple[Seen, ...]]:
+        """The new memory of every workspace after a view of ``req.side``, and the occluded
+        instances of that view. An instance is in one place: one seen here or in the gripper
+        is forgotten in the other workspaces."""
+        held = gripper_labels(
+            label, depth, self._classes, min_pixels=self._min_pixels, hand_depth=self._hand_depth
+        )
+        here, occluded = recall(
+            memory.get(req.side, ()), dets, held, depth, req.camera_pose, self._intrinsics
+        )
+        moved = held | {d.label for d in dets}
+        new = {
+            side: tuple(m for m in seen if m.label not in moved)
+            for side, seen in memory.items()
+            if side != req.side
+        }
+        new[req.side] = here
+        return new, occluded

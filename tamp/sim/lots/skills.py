@@ -12,7 +12,8 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   grasp over all views is taken; approach, close, lift. A grasp fails when the fingers close
   on nothing (finger width) or when the target is still on the table in the next view (not
   lifted); it is retried with new predictions up to ``grasp.attempts`` times.
-- ``Place(side)``: look at W^side, put the held object down on the freest spot seen.
+- ``Place(side)``: look at W^side, put the held object down on the freest spot seen (away
+  from objects perception remembers there but cannot see), lift, one view from there.
 - ``Discard()`` (also ``Place(waste)``, the ``lots_arm`` domain's name for it): drop the
   held object into the waste basket. Both places check the fingers before letting go: an
   object lost on the way is reported (FAILURE, "dropped ... while carrying it") and the
@@ -45,6 +46,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 
 from tamp.lots.cell import WASTE, lots_domain
+from tamp.sim.core.camera import backproject
 from tamp.sim.core.messages import SkillCommand, SkillStatus
 from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner
@@ -328,7 +330,7 @@ class SkillController(LeafSystem):
         step = s.steps[0]
         if s.step_t0 is None:
             s.step_t0 = t
-            self._enter(s, step, t)
+            self._enter(s, step, t, q_meas)
         el = t - s.step_t0
         done = False
         if step.kind == "move":
@@ -379,7 +381,7 @@ class SkillController(LeafSystem):
             s.steps, s.step_t0, s.move_from = s.steps[1:], None, None
             s.v = np.zeros(7)
 
-    def _enter(self, s: SkillState, step: Step, t: float) -> None:
+    def _enter(self, s: SkillState, step: Step, t: float, q_meas: np.ndarray) -> None:
         if step.kind == "move":
             X0 = self.kin.tcp_pose(s.q)
             x, y, z, yaw = step.pose
@@ -393,7 +395,10 @@ class SkillController(LeafSystem):
         elif step.kind == "grip":
             s.finger = step.width
         elif step.kind == "view":
-            s.request = ViewRequest(s.next_view, s.side, s.target_cls, s.track)
+            # where the camera is, from the arm's own kinematics (the arm has settled):
+            # perception back-projects what it sees and projects what it remembers with it
+            X_WC = self.kin.camera_pose(q_meas[:7])
+            s.request = ViewRequest(s.next_view, s.side, s.target_cls, s.track, X_WC)
             s.next_view += 1
 
     def _track(self, s: SkillState, el: float) -> bool:
@@ -423,6 +428,8 @@ class SkillController(LeafSystem):
     # ---- view handlers -------------------------------------------------------------------
     def _on_counted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         detail = ",".join(f"{k}={v}" for k, v in sorted(obs.counts.items()))
+        if obs.occluded:  # counted, but remembered rather than seen: say so
+            detail += "; occluded " + ",".join(sorted(m.cls for m in obs.occluded))
         self._finish(s, t, Status.SUCCESS, detail)
 
     def _on_seen(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
@@ -442,9 +449,7 @@ class SkillController(LeafSystem):
         det = crop.detection
         s.track = det.label
         X_WC = self.kin.camera_pose(q_meas[:7])
-        fx, fy, cx, cy = self.planner.intrinsics
-        pc = np.array([(det.u - cx) * det.depth / fx, (det.v - cy) * det.depth / fy, det.depth])
-        p = X_WC @ pc
+        p = backproject(det.u, det.v, det.depth, self.planner.intrinsics, X_WC)
         s.target_xy = (float(p[0]), float(p[1]))
         s.target_top = max(float(p[2]), 0.0)  # median depth of its pixels: about its top
         height = float(X_WC.translation()[2]) - s.target_top  # camera above the target
@@ -549,18 +554,28 @@ class SkillController(LeafSystem):
     def _on_place(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         X_WC = self.kin.camera_pose(q_meas[:7])
         x, y = free_spot(
-            self.scenario.workspaces[s.side], obs.occupied, X_WC, self.planner.intrinsics
+            self.scenario.workspaces[s.side],
+            obs.occupied,
+            X_WC,
+            self.planner.intrinsics,
+            avoid=tuple(m.position[:2] for m in obs.occluded),
         )
         tray = 0.01 if self.scenario.workspaces[s.side].tray else 0.0
         z = s.hold_z + 0.008 + tray
-        s.log.append((t, f"place the {s.held} at ({x:.3f}, {y:.3f})"))
+        hidden = "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
+        s.log.append((t, f"place the {s.held} at ({x:.3f}, {y:.3f}){hidden}"))
         yaw = 0.0
+        s.target_cls, s.track = None, None  # no grasp target: the views below need no colour
         s.steps = (
             self._move((x, y, z + 0.12, yaw)),
             Step("check_held"),
             self._move((x, y, z, yaw), APPROACH_SPEED),
             Step("grip", width=OPEN),
             self._move((x, y, LIFT_Z, yaw)),
+            # one view from over the object just put down: perception remembers where it
+            # lies (a later view with an object in the gripper may have it hidden)
+            Step("settle"),
+            Step("view", handler="seen"),
             Step("finish", detail=f"placed {s.held} in W^{s.side}", handler="released"),
         )
 
@@ -572,9 +587,11 @@ def free_spot(
     intrinsics,
     margin: float = 0.06,
     step: float = 0.02,
+    avoid: tuple[tuple[float, float], ...] = (),
 ) -> tuple[float, float]:
     """The point of ``workspace`` (``margin`` inside its edges) farthest from every object
-    pixel of the view, measured in the table plane."""
+    pixel of the view and every point of ``avoid`` (objects hidden from the view: their
+    remembered centres), measured in the table plane."""
     fx, fy, cx, cy = intrinsics
     cxw, cyw = workspace.center
     hx, hy = workspace.size[0] / 2 - margin, workspace.size[1] / 2 - margin
@@ -585,15 +602,19 @@ def free_spot(
             for dy in np.arange(-hy, hy + 1e-9, step)
         ]
     )
-    if occupied is None or not occupied.any():
+    if (occupied is None or not occupied.any()) and not avoid:
         return workspace.center
-    vs, us = np.nonzero(occupied)
-    # object pixels on the table plane (z = 0) through the camera
-    R, p = X_WC.rotation().matrix(), X_WC.translation()
-    rays = R @ np.stack([(us - cx) / fx, (vs - cy) / fy, np.ones_like(us, float)])
-    s_ = -p[2] / rays[2]
-    pts = (p[:2, None] + rays[:2] * s_).T
-    pts = pts[:: max(1, len(pts) // 2000)]
+    pts = np.zeros((0, 2))
+    if occupied is not None and occupied.any():
+        vs, us = np.nonzero(occupied)
+        # object pixels on the table plane (z = 0) through the camera
+        R, p = X_WC.rotation().matrix(), X_WC.translation()
+        rays = R @ np.stack([(us - cx) / fx, (vs - cy) / fy, np.ones_like(us, float)])
+        s_ = -p[2] / rays[2]
+        pts = (p[:2, None] + rays[:2] * s_).T
+        pts = pts[:: max(1, len(pts) // 2000)]
+    if avoid:
+        pts = np.vstack([pts, np.asarray(avoid, float).reshape(-1, 2)])
     d = np.min(np.linalg.norm(grid[:, None, :] - pts[None, :, :], axis=2), axis=1)
     best = grid[int(np.argmax(d))]
     return (float(best[0]), float(best[1]))

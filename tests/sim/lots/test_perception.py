@@ -11,7 +11,14 @@ from pydrake.math import RigidTransform
 from tamp.grasp.rect import GraspRect
 from tamp.sim.lots.grasping import dilate, on_mask, snap_to_mask
 from tamp.sim.lots.kinematics import down
-from tamp.sim.lots.perception import analyse, choose_target, crop_square
+from tamp.sim.lots.perception import (
+    analyse,
+    choose_target,
+    crop_square,
+    gripper_labels,
+    hidden,
+    recall,
+)
 from tamp.sim.lots.scenario import Workspace
 from tamp.sim.lots.skills import free_spot
 
@@ -89,3 +96,102 @@ def test_free_spot_avoids_objects():
     x, y = free_spot(w, occupied, X_WC, K)
     assert w.contains(x, y, margin=0.05)
     assert math.hypot(x - 0.5, y + 0.25) > 0.12
+
+
+# ---- occlusion is not absence: what perception remembers of a workspace ---------------------
+
+K = (231.4, 231.4, 159.5, 89.5)
+TABLE = 0.47  # the camera's height over the table at the look pose
+X_LOOK = RigidTransform(down(0.0), [0.5, -0.25, TABLE])
+
+
+def view(objects: dict[int, tuple[slice, slice]], held: tuple[slice, slice] | None = None):
+    """A 320 x 180 look at a table 0.47 m below: label and depth images with objects 2 cm
+    tall at the given pixel blocks and, optionally, a held hammer (label 9) 8 cm from the
+    camera."""
+    label = np.full((180, 320), EMPTY, np.int16)
+    depth = np.full((180, 320), TABLE, np.float32)
+    for value, block in objects.items():
+        label[block] = value
+        depth[block] = TABLE - 0.02
+    if held is not None:
+        label[held] = 9
+        depth[held] = 0.08
+    return label, depth
+
+
+def look(memory, label, depth):
+    classes = CLASSES | {9: "hammer"}
+    _, dets, _, _ = analyse(label, depth, classes)
+    held = gripper_labels(label, depth, classes)
+    return recall(memory, dets, held, depth, X_LOOK, K)
+
+
+SAW = (slice(80, 100), slice(100, 130))
+SCISSORS = (slice(130, 155), slice(190, 225))  # W^B's corner, where the person put it
+
+
+def test_a_remembered_instance_hidden_by_the_held_object_is_kept_as_occluded():
+    memory, occluded = look((), *view({8: SAW, 5: SCISSORS}))
+    assert occluded == () and sorted(m.cls for m in memory) == ["saw", "scissors"]
+    scissors = next(m for m in memory if m.cls == "scissors")
+    # back-projected through depth, intrinsics and the camera pose: on the table, in W^B
+    x, y, z = scissors.position
+    assert z == pytest.approx(0.02, abs=1e-6)
+    u, v = 207.0, 142.0  # the block's centroid; image right is world +x, image down -y
+    assert (x, y) == pytest.approx(
+        (0.5 + (u - K[2]) / K[0] * 0.45, -0.25 - (v - K[3]) / K[1] * 0.45)
+    )
+    # the robot comes back holding the hammer, whose band covers the corner: the scissors'
+    # pixels show the hammer 8 cm away; the scissors stays in memory, reported occluded
+    assert Workspace("B", (0.5, -0.25), (0.34, 0.34)).contains(x, y)
+    hammer_band = (slice(110, 180), slice(180, 320))
+    label, depth = view({8: SAW}, held=hammer_band)
+    label[SCISSORS][depth[SCISSORS] > 0.1] = 5  # nothing of it is left uncovered
+    memory2, occluded2 = look(memory, label, depth)
+    assert [m.cls for m in occluded2] == ["scissors"] and occluded2[0] == scissors
+    assert sorted(m.cls for m in memory2) == ["saw", "scissors"]
+
+
+def test_an_instance_whose_place_is_in_plain_view_and_empty_is_gone():
+    memory, _ = look((), *view({8: SAW, 5: SCISSORS}))
+    # the held hammer covers another part of the image; the corner shows the bare table
+    memory2, occluded = look(memory, *view({8: SAW}, held=(slice(0, 40), slice(0, 80))))
+    assert occluded == () and [m.cls for m in memory2] == ["saw"]
+
+
+def test_an_instance_seen_in_the_gripper_is_forgotten_and_one_seen_again_is_updated():
+    memory, _ = look((), *view({8: SAW, 5: SCISSORS}))
+    # the scissors is now in the gripper (label 5 near the camera), over its old place
+    label, depth = view({8: (slice(80, 100), slice(140, 170))})
+    label[SCISSORS], depth[SCISSORS] = 5, 0.09
+    memory2, occluded = look(memory, label, depth)
+    assert occluded == () and [m.cls for m in memory2] == ["saw"]
+    saw0 = next(m for m in memory if m.cls == "saw")
+    assert memory2[0].position[0] > saw0.position[0]  # seen further right (+x): remembered there
+
+
+def test_hidden_out_of_the_image_behind_the_camera_and_under_a_patch():
+    _, depth = view({})
+    assert not hidden((0.5, -0.25, 0.0), depth, X_LOOK, K)  # the centre: bare table
+    assert hidden((0.5, 0.25, 0.0), depth, X_LOOK, K)  # W^A: out of the image
+    assert hidden((0.5, -0.25, 0.6), depth, X_LOOK, K)  # above the camera
+    # 3 px from the image's left edge: its 7 px patch is not all in the image; 20 px: it is
+    assert hidden((0.5 + (3 - K[2]) / K[0] * TABLE, -0.25, 0.0), depth, X_LOOK, K)
+    assert not hidden((0.5 + (20 - K[2]) / K[0] * TABLE, -0.25, 0.0), depth, X_LOOK, K)
+    depth[88:92, 158:162] = 0.0  # nearer than the clipping plane: covered
+    assert hidden((0.5, -0.25, 0.0), depth, X_LOOK, K)
+    _, depth = view({})
+    depth[89, 165] = 0.3  # 5.5 px from the centre, inside the 1.5 cm patch (7 px)
+    assert hidden((0.5, -0.25, 0.0), depth, X_LOOK, K)
+    assert not hidden((0.5, -0.25, 0.0), depth, X_LOOK, K, window=0.005)
+    # an object lying there 2 cm tall is no cover for a point on its top
+    _, depth = view({5: (slice(80, 100), slice(150, 170))})
+    assert not hidden((0.5, -0.25, 0.02), depth, X_LOOK, K)
+
+
+def test_free_spot_keeps_away_from_hidden_objects():
+    w = Workspace("B", (0.5, -0.25), (0.34, 0.34))
+    occupied = np.zeros((180, 320), bool)
+    x, y = free_spot(w, occupied, X_LOOK, K, avoid=((0.61, -0.36),))
+    assert math.hypot(x - 0.61, y + 0.36) > 0.25
