@@ -1,8 +1,10 @@
 """Grasp choice over several views (Zhou et al. §IV-B, Fig. 6), on top of `tamp.grasp.predict`.
 
-Each view gives the network a square crop around the target; its grasps are mapped to the
-world through the crop's intrinsics and the camera pose (the arm's own kinematics), and only
-grasps whose centre lies on the target's mask are kept. The skill keeps the best grasp of
+Each view gives the network a square crop around the target; its grasps are moved onto the
+target's mask along their closing line (`snap_to_mask`), kept only where the pads can hold
+the target while carrying it (`seated`: re-centred on the chord, within the opening,
+antipodal contacts, each pad on one face), and mapped to the world through the crop's
+intrinsics and the camera pose (the arm's own kinematics). The skill keeps the best grasp of
 every view and, after the last (lowest) view, takes the best of all of them.
 """
 
@@ -40,9 +42,10 @@ MIN_TOP = 0.008
 #:   (Drake combines them to 0.89); the margin covers the mask's pixel outline (Nguyen's
 #:   antipodal condition);
 MAX_CONTACT_ANGLE = 25.0
-#: - the centre may lie this far from the target's centroid along the jaws, as a fraction of
-#:   the target's extent that way (off the centre of mass the object turns about the pads);
-MAX_JAW_OFFSET = 0.2
+#: - each pad (2 cm wide along the jaws) must rest on the same face over its whole width: the
+#:   closing lines half a pad to either side must meet the target where the centre line does
+#:   (a grasp at the end of a face touches it with a corner of the pad);
+PAD_WIDTH = 0.02
 #: - the open pads must clear the target on both sides by this much (m): a chord longer than
 #:   the opening less twice this lands a pad on the object's top (a body held by its 7 cm
 #:   length tipped 66 deg in the pads).
@@ -106,11 +109,12 @@ class GraspPlanner:
         top = depth[crop.mask]
         top = float(np.median(top[top > 0])) if np.any(top > 0) else float("nan")
         opening = (MAX_OPENING - 2 * PAD_CLEARANCE) * fx / top  # in pixels at the top
+        half_pad = PAD_WIDTH / 2 * fx / top
         out = []
         for g in grasps:
             rect = snap_to_mask(g.rect(), mask) if self.snap else on_mask(g.rect(), mask)
             if rect is not None and self.seat:
-                rect = seated(rect, mask, opening)
+                rect = seated(rect, mask, opening, half_pad)
             if rect is None:
                 continue
             (x, y, z), yaw, width = to_world(rect, depth, (fx, fy, cx - u0, cy - v0), X_WC)
@@ -223,21 +227,32 @@ def antipodal(rect: GraspRect, mask: np.ndarray, max_angle: float = MAX_CONTACT_
     return True
 
 
-def centred(rect: GraspRect, mask: np.ndarray, frac: float = MAX_JAW_OFFSET) -> bool:
-    """Does the grasp's centre lie within ``frac`` of the target's extent of its centroid,
-    measured along the jaws (across the closing direction)?"""
-    vs, us = np.nonzero(mask)
-    if len(us) == 0:
+def supported(
+    rect: GraspRect, mask: np.ndarray, half_pad: float, max_angle: float = MAX_CONTACT_ANGLE
+) -> bool:
+    """Does each pad rest on the target over its width? The closing lines ``half_pad`` pixels
+    to either side along the jaws must cross the mask and end within ``half_pad *
+    tan(max_angle)`` (+2 px of outline) of the centre line's contacts: the same faces, not
+    past a corner or off the target's end."""
+    ends = chord(rect, mask)
+    if ends is None:
         return False
-    along = us * rect.normal[0] + vs * rect.normal[1]
-    offset = (rect.x - us.mean()) * rect.normal[0] + (rect.y - vs.mean()) * rect.normal[1]
-    return abs(offset) <= frac * float(along.max() - along.min() + 1)
+    tol = half_pad * math.tan(math.radians(max_angle)) + 2.0
+    across = rect.normal
+    for off in (-half_pad, half_pad):
+        side = GraspRect(
+            rect.x + off * across[0], rect.y + off * across[1], rect.angle, rect.width, rect.height
+        )
+        e = chord(side, mask)
+        if e is None or abs(e[0] - ends[0]) > tol or abs(e[1] - ends[1]) > tol:
+            return False
+    return True
 
 
-def seated(rect: GraspRect, mask: np.ndarray, opening: float) -> GraspRect | None:
+def seated(rect: GraspRect, mask: np.ndarray, opening: float, half_pad: float) -> GraspRect | None:
     """The grasp re-centred on its whole chord through the target, if the pads can hold it:
     the chord fits the ``opening`` (pixels, clearance included), both contacts are
-    `antipodal` and the centre is `centred` along the jaws; else None.
+    `antipodal` and each pad (``half_pad`` pixels to either side) is `supported`; else None.
 
     Our post-processing of the network's grasp, like `snap_to_mask` (which centres on the
     part of the chord within the predicted opening): the angle and quality stay the
@@ -249,7 +264,7 @@ def seated(rect: GraspRect, mask: np.ndarray, opening: float) -> GraspRect | Non
     t = (ends[0] + ends[1]) / 2
     d = rect.direction
     out = GraspRect(rect.x + t * d[0], rect.y + t * d[1], rect.angle, rect.width, rect.height)
-    return out if antipodal(out, mask) and centred(out, mask) else None
+    return out if antipodal(out, mask) and supported(out, mask, half_pad) else None
 
 
 def box_blur(img: np.ndarray, r: int) -> np.ndarray:

@@ -1,7 +1,8 @@
 """Where the pads meet the target (`tamp.sim.lots.grasping.seated`): pixel geometry only, no
 network, no simulation. The cases are the Fig. 10 narrative's: a diagonal grasp on the
 peak's square base and one at its edge (the peak turned in the pads and fell), a grasp along
-a body's full length (a pad landed on its top and tipped it)."""
+a body's full length (a pad landed on its top and tipped it); and a saw's handle (Fig. 9:
+taken by the handle, far from its centre of mass, and carried)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 from tamp.grasp.rect import GraspRect
-from tamp.sim.lots.grasping import antipodal, centred, chord, seated, snap_to_mask
+from tamp.sim.lots.grasping import antipodal, chord, seated, snap_to_mask, supported
 
 
 def _square(size: int = 40) -> np.ndarray:
@@ -55,13 +56,20 @@ def test_chord_ends_where_the_closing_line_leaves_the_mask():
     assert chord(_grasp(30, 30, 0), _square()) is None  # centre off the target
 
 
-def test_a_grasp_at_the_edge_along_the_jaws_is_not_centred():
-    """The Fig. 10 peak: held 2.3 cm off the centre of its 5 cm base, it turned in the pads."""
-    m = _square()
-    assert centred(_grasp(90, 90, 0), m)
-    assert centred(_grasp(90, 96, 0), m)  # 6 px of a 40 px extent: within 20 %
-    assert not centred(_grasp(90, 105, 0), m)  # 15 px off: near the edge
-    assert centred(_grasp(105, 90, 0), m)  # off along the closing line: `seated` re-centres
+def test_a_pad_past_the_end_of_a_face_is_not_supported():
+    """The Fig. 10 peak: a grasp at the edge of its base along the jaws touched the face with
+    a corner of each pad; it slipped after the lift."""
+    m = _square()  # 40 px; a pad half-width of 8 px
+    assert supported(_grasp(90, 90, 0), m, 8)
+    assert supported(_grasp(90, 100, 0), m, 8)  # pads on rows 92..108: still on the faces
+    assert not supported(_grasp(90, 105, 0), m, 8)  # a pad reaches past the corner
+    # a handle: a 60 x 20 px bar joined to a 40 px wide blade (a saw from above); closing
+    # across the handle's middle is supported, across the step to the blade is not
+    saw = np.zeros((180, 180), bool)
+    saw[80:100, 20:80] = True
+    saw[70:110, 80:160] = True
+    assert supported(_grasp(50, 90, 90), saw, 8)
+    assert not supported(_grasp(76, 90, 90), saw, 8)
 
 
 def test_seated_centres_on_the_whole_chord_and_needs_the_opening():
@@ -72,9 +80,11 @@ def test_seated_centres_on_the_whole_chord_and_needs_the_opening():
     along = _grasp(90 - 25 * math.cos(a), 90 + 25 * math.sin(a), 35, width=30.0)
     snapped = snap_to_mask(along, m)
     assert np.hypot(snapped.x - 90, snapped.y - 90) > 5  # snap's reach ends inside the body
-    s = seated(along, m, opening=100.0)
+    s = seated(along, m, opening=100.0, half_pad=8)
     assert s is not None and (s.x, s.y) == pytest.approx((90, 90), abs=1.0)
     assert s.angle == along.angle  # the network's angle is kept
-    assert seated(along, m, opening=65.0) is None  # 70 px long: the pads would land on it
+    assert (
+        seated(along, m, opening=65.0, half_pad=8) is None
+    )  # 70 px long: the pads would land on it
     across = _grasp(90, 90, 35 + 90)
-    assert seated(across, m, opening=65.0) is not None  # across its 40 px width
+    assert seated(across, m, opening=65.0, half_pad=8) is not None  # across its 40 px width
