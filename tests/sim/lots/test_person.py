@@ -5,6 +5,7 @@ the paper's narratives end to end (slow)."""
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -17,6 +18,8 @@ from tamp.sim.lots.person import (
     GRIP_GAP,
     REACTION,
     STAGING,
+    box_gap,
+    free_spot,
     on_shelf,
     shelf_spot,
     staged_objects,
@@ -71,6 +74,34 @@ def test_due_returns_each_scripted_event_once_in_its_slot():
     assert [(n, ph, e.kind) for n, ph, e in p.due(1, True)] == [(1, "holding", "remove")]
     assert [(n, e.kind) for n, _, e in p.due(2, False)] == [(2, "move")]
     assert p.unfired() == []
+
+
+def test_the_person_puts_an_object_down_clear_of_the_others_footprints():
+    """Fig. 9 in the cell: the person put the wrench where its origin was farthest from the
+    others' origins, and its 16 cm bar lay on the hammer's head (lifting the hammer then made
+    the plant non-finite). The spot now keeps the footprints apart."""
+    from tamp.sim.lots.scenario import Workspace
+
+    w = Workspace("A", center=(0.5, 0.25), size=(0.34, 0.34))
+    lying = [  # W^A when the wrench came in that run: class, x, y, yaw
+        ("hammer", 0.387, 0.142, 0.105),
+        ("scissors", 0.416, 0.261, math.pi),
+        ("scissors", 0.57, 0.32, -0.203),
+    ]
+    others = [CLASSES[c].footprint.corners(x, y, yaw) for c, x, y, yaw in lying]
+    f, yaw = CLASSES["wrench"].footprint, -0.022
+    x, y = free_spot(w, f, yaw, others)
+    assert min(box_gap(f.corners(x, y, yaw), o) for o in others) > 0.004  # clear of all three
+    assert box_gap(f.corners(0.535, 0.202, yaw), others[0]) == 0.0  # where it lay: overlapping
+    assert free_spot(w, f, yaw, []) == w.center
+
+
+def test_box_gap():
+    unit = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    assert box_gap(unit, unit + [3.0, 0.0]) == pytest.approx(2.0)
+    assert box_gap(unit, unit + [0.5, 0.5]) == 0.0
+    diamond = np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]]) + [3.0, 0.5]
+    assert box_gap(unit, diamond) == pytest.approx(1.0)
 
 
 def _person_cell(tmp_path, events: list[dict], objects: list[dict]):
