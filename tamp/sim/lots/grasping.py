@@ -1,11 +1,12 @@
 """Grasp choice over several views (Zhou et al. §IV-B, Fig. 6), on top of `tamp.grasp.predict`.
 
 Each view gives the network a square crop around the target; its grasps are moved onto the
-target's mask along their closing line (`snap_to_mask`), kept only where the pads can hold
+target's mask along their closing line (`snap_to_mask`), preferred where the pads can hold
 the target while carrying it (`seated`: re-centred on the chord, within the opening,
 antipodal contacts, each pad on one face), and mapped to the world through the crop's
 intrinsics and the camera pose (the arm's own kinematics). The skill keeps the best grasp of
-every view and, after the last (lowest) view, takes the best of all of them.
+every view and, after the last (lowest) view, takes the best of all of them, seated ones
+first (`GraspCandidate.seated`).
 """
 
 from __future__ import annotations
@@ -64,6 +65,14 @@ class GraspCandidate:
     width: float
     quality: float
     view_height: float
+    seated: bool = True  # passed `seated`; False: a fallback the pads may not hold carrying
+
+
+#: the network's best grasps a view considers: seated ones among the first `SEATED_BEST`;
+#: when none of a pick's views has one, the snapped ones among the first `SNAPPED_BEST` (the
+#: choice before `seated` existed: it may hold, and a pick without a grasp surely fails)
+SEATED_BEST = 30
+SNAPPED_BEST = 5
 
 
 class GraspPlanner:
@@ -85,14 +94,16 @@ class GraspPlanner:
         self.history: list[tuple[TargetCrop, list, list[GraspCandidate]]] = []
         #: move each grasp's centre along its closing line onto the target (see `snap_to_mask`)
         self.snap = True
-        #: keep only grasps the pads can hold while carrying, centred on the target's
-        #: chord (see `seated`)
+        #: prefer grasps the pads can hold while carrying, centred on the target's chord
+        #: (see `seated`); off: the snapped grasps alone, as before
         self.seat = True
 
     def candidates(
-        self, crop: TargetCrop, X_WC: np.ndarray, view_height: float, n: int = 30
+        self, crop: TargetCrop, X_WC: np.ndarray, view_height: float
     ) -> list[GraspCandidate]:
-        """The network's ``n`` best grasps on the target's mask, best first."""
+        """Grasps on the target's mask: the seated ones (best first), then the snapped
+        fallbacks (``seated=False``, best first); see `SEATED_BEST`."""
+        n = SEATED_BEST if self.seat else SNAPPED_BEST
         fx, fy, cx, cy = self.intrinsics
         u0, v0 = crop.origin
         with self.network, torch_threads(INFERENCE_THREADS):
@@ -110,19 +121,22 @@ class GraspPlanner:
         top = float(np.median(top[top > 0])) if np.any(top > 0) else float("nan")
         opening = (MAX_OPENING - 2 * PAD_CLEARANCE) * fx / top  # in pixels at the top
         half_pad = PAD_WIDTH / 2 * fx / top
-        out = []
-        for g in grasps:
+        out, fallbacks = [], []
+        for i, g in enumerate(grasps):
             rect = snap_to_mask(g.rect(), mask) if self.snap else on_mask(g.rect(), mask)
-            if rect is not None and self.seat:
-                rect = seated(rect, mask, opening, half_pad)
-            if rect is None:
+            good = rect is not None and self.seat and seated(rect, mask, opening, half_pad)
+            if good:
+                rect, into = good, out
+            elif i < SNAPPED_BEST and rect is not None:
+                into = fallbacks
+            else:
                 continue
             (x, y, z), yaw, width = to_world(rect, depth, (fx, fy, cx - u0, cy - v0), X_WC)
             if not all(math.isfinite(v) for v in (x, y, z)) or z < MIN_TOP:
                 continue  # no depth, or too thin there for the pads (a saw's blade)
-            out.append(
-                GraspCandidate(x, y, z, yaw, min(width, MAX_OPENING), g.quality, view_height)
-            )
+            w = min(width, MAX_OPENING)
+            into.append(GraspCandidate(x, y, z, yaw, w, g.quality, view_height, seated=into is out))
+        out += fallbacks
         if self.record:
             self.history.append((crop, grasps, out))
         return out

@@ -455,7 +455,7 @@ class SkillController(LeafSystem):
             return
         if not s.candidates:
             return self._retry(s, t, f"no grasp found on the {s.target_cls}")
-        g = max(s.candidates, key=lambda c: c.quality)
+        g = max(s.candidates, key=lambda c: (c.seated, c.quality))  # seated ones first
         s.chosen = g
         z = max(g.z - GRASP_DEPTH, MIN_GRASP_Z)
         yaw = hand_yaw_for_closing(g.yaw)
@@ -465,7 +465,8 @@ class SkillController(LeafSystem):
             (
                 t,
                 f"grasp at ({g.x:.3f}, {g.y:.3f}, {z:.3f}) yaw {math.degrees(yaw):.0f} "
-                f"deg, q={g.quality:.2f} (view at {g.view_height:.2f} m)",
+                f"deg, q={g.quality:.2f} (view at {g.view_height:.2f} m)"
+                + ("" if g.seated else ", not seated"),
             )
         )
         s.steps = self._grasp_steps(g.x, g.y, z, yaw, s.side)
