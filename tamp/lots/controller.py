@@ -23,7 +23,9 @@ state.
 When the task can no longer be completed (Assumption 1 broken: every hammer taken away, a
 W^B state no run can finish from), the robot waits a bounded number of times and then stops
 with FAILURE and the reason; it never loops forever. A skill that fails is started again
-(a failed pick: the cycle restarts with a fresh look), at most ``max_retries`` times in a row.
+(a failed pick: the cycle restarts with a fresh look), at most ``max_retries`` times in a row;
+the looks that start each retry do not break the row (a pick that never finds a grasp stops
+the robot after ``max_retries`` retries, not at the action bound).
 
 Every table the controller builds (the initial one, Alg. 1 line 3, and each rebuilt after an
 unforeseen W^B state, line 20) is described by a :class:`Build` — the plan, the table and the
@@ -239,7 +241,7 @@ class LotsController:
         self.handle: int | None = None  # its world handle while it runs
         self.waits = 0  # consecutive waits because the task cannot go on
         self.looks = 0  # consecutive cycles that only looked (guard against oscillation)
-        self.failures = 0  # consecutive skill failures
+        self.failures = 0  # consecutive skill failures (the looks between them do not count)
         self.ticks = 0
         self.skills = 0  # skills started
         self.result: Status | None = None
@@ -339,7 +341,8 @@ class LotsController:
             return Status.RUNNING
         done, self.pending, self.handle = self.pending, None, None
         if status is Status.SUCCESS:
-            self.failures = 0
+            if done.action.name != "LookAt":  # a retry starts with a look: not progress
+                self.failures = 0
             getattr(self, f"_on_{done.then}")(done, world)
         else:
             self._on_failure(done, world)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from tamp.lots.run import run_task
@@ -88,6 +90,32 @@ def test_tower_fig10(tower):
     c = r.controller
     word = [frozenset({a.prop}) for a in r.actions if a.kind == "move"]
     assert c.aut.accepts_lasso(word, [frozenset()])
+
+
+def test_tower_fig10_at_the_workcells_timing(tower):
+    """The Drake workcell's Fig. 10 run (docs/lots_workcell.md): the person's hand needs ~4 s
+    for the dis_1 move "after action 4", so it lands in W^A after the robot's look and the
+    robot, already carrying the peak, finds the body gone from W^B: the move happens in the
+    holding phase. The symbolic world with that timing gives the cell's seven actions."""
+    evs = events("tower_interference.yaml", tower)
+    assert (evs[2].kind, evs[2].after, evs[2].phase) == ("move", 4, "idle")
+    evs[2] = dataclasses.replace(evs[2], phase="holding")
+    r = run_task(tower, evs)
+    assert r.satisfied
+    assert keys(r) == [
+        ("move", "p1"),
+        ("discard_held", "body"),
+        ("return_held", "peak"),
+        ("move", "p2"),
+        ("return_held", "peak"),  # the body left W^B while the robot carried the peak
+        ("move", "p2"),
+        ("move", "p3"),
+    ]
+    assert r.counts() == {
+        "A": {"toy_car": 1},
+        "B": {"body": 1, "bottom": 1, "peak": 1},
+        "waste": {"body": 1},
+    }
 
 
 def test_every_hammer_taken_away_is_infeasible(model_building):

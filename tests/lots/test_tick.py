@@ -202,6 +202,21 @@ def test_a_skill_that_keeps_failing_stops_the_controller_with_the_reason():
     assert c.tick(world) is Status.FAILURE  # sticky
 
 
+def test_a_pick_that_keeps_failing_stops_the_controller_although_the_looks_between_succeed():
+    """The Drake cell's Fig. 10 run: after the peak fell beside it, no grasp was found on the
+    body, Pick after Pick. Each retry starts with a look that succeeds; counted as progress,
+    it reset the row and the robot retried until the action bound (752 failed picks here,
+    94 waits "observations of W^A and W^B disagree"), in the cell past any time limit."""
+    task = load_task("tower.yaml")
+    c = LotsController(task, max_retries=2)
+    world = lots_world(task)
+    world.outcomes = ScriptedOutcomes([Fail("Pick", ("body", "A"), 1000)])
+    assert c.run(world, step=world.step) is Status.FAILURE
+    assert c.reason == "Pick(body, A) failed 3 times in a row"
+    assert [e.subject for e in world.history if e.kind == "failure"] == ["Pick(body, A)"] * 3
+    assert [a.key() for a in c.actions] == [("move", "p1")]  # no waits, no other action
+
+
 def test_halt_cancels_the_running_skill():
     task = load_task("tower.yaml")
     c, world = LotsController(task), lots_world(task, skill_ticks=5)

@@ -1,9 +1,12 @@
 """Grasp choice over several views (Zhou et al. §IV-B, Fig. 6), on top of `tamp.grasp.predict`.
 
-Each view gives the network a square crop around the target; its grasps are mapped to the
-world through the crop's intrinsics and the camera pose (the arm's own kinematics), and only
-grasps whose centre lies on the target's mask are kept. The skill keeps the best grasp of
-every view and, after the last (lowest) view, takes the best of all of them.
+Each view gives the network a square crop around the target; its grasps are moved onto the
+target's mask along their closing line (`snap_to_mask`), preferred where the pads can hold
+the target while carrying it (`seated`: re-centred on the chord, within the opening,
+antipodal contacts, each pad on one face), and mapped to the world through the crop's
+intrinsics and the camera pose (the arm's own kinematics). The skill keeps the best grasp of
+every view and, after the last (lowest) view, takes the best of all of them, seated ones
+first (`GraspCandidate.seated`).
 """
 
 from __future__ import annotations
@@ -31,6 +34,23 @@ INFERENCE_THREADS = 1
 #: the object's top must stand this high above the table where the fingers close: the pads
 #: stop 2 mm above the table, so a 6 mm saw blade gives them nothing to squeeze
 MIN_TOP = 0.008
+#: Where the pads meet the target (`seated`), seen from above. Objects are held by friction
+#: alone; three ways a grasp holds through the lift and still lets go while carried (the
+#: Fig. 10 run: a diagonal grasp on the peak's square base, 2.3 cm off its centre, turned
+#: the peak 50 deg in the pads over 10 s of carrying until it fell):
+#: - the closing direction may deviate this much from the target's outline normal at each
+#:   contact (deg): pads (mu 1.0) on objects (mu 0.8) hold within a cone of about 42 deg
+#:   (Drake combines them to 0.89); the margin covers the mask's pixel outline (Nguyen's
+#:   antipodal condition);
+MAX_CONTACT_ANGLE = 25.0
+#: - each pad (2 cm wide along the jaws) must rest on the same face over its whole width: the
+#:   closing lines half a pad to either side must meet the target where the centre line does
+#:   (a grasp at the end of a face touches it with a corner of the pad);
+PAD_WIDTH = 0.02
+#: - the open pads must clear the target on both sides by this much (m): a chord longer than
+#:   the opening less twice this lands a pad on the object's top (a body held by its 7 cm
+#:   length tipped 66 deg in the pads).
+PAD_CLEARANCE = 0.005
 
 
 @dataclass(frozen=True)
@@ -45,6 +65,14 @@ class GraspCandidate:
     width: float
     quality: float
     view_height: float
+    seated: bool = True  # passed `seated`; False: a fallback the pads may not hold carrying
+
+
+#: the network's best grasps a view considers: seated ones among the first `SEATED_BEST`;
+#: when none of a pick's views has one, the snapped ones among the first `SNAPPED_BEST` (the
+#: choice before `seated` existed: it may hold, and a pick without a grasp surely fails)
+SEATED_BEST = 30
+SNAPPED_BEST = 5
 
 
 class GraspPlanner:
@@ -66,11 +94,16 @@ class GraspPlanner:
         self.history: list[tuple[TargetCrop, list, list[GraspCandidate]]] = []
         #: move each grasp's centre along its closing line onto the target (see `snap_to_mask`)
         self.snap = True
+        #: prefer grasps the pads can hold while carrying, centred on the target's chord
+        #: (see `seated`); off: the snapped grasps alone, as before
+        self.seat = True
 
     def candidates(
-        self, crop: TargetCrop, X_WC: np.ndarray, view_height: float, n: int = 5
+        self, crop: TargetCrop, X_WC: np.ndarray, view_height: float
     ) -> list[GraspCandidate]:
-        """The network's ``n`` best grasps on the target's mask, best first."""
+        """Grasps on the target's mask: the seated ones (best first), then the snapped
+        fallbacks (``seated=False``, best first); see `SEATED_BEST`."""
+        n = SEATED_BEST if self.seat else SNAPPED_BEST
         fx, fy, cx, cy = self.intrinsics
         u0, v0 = crop.origin
         with self.network, torch_threads(INFERENCE_THREADS):
@@ -84,17 +117,26 @@ class GraspPlanner:
         self.calls += 1
         mask = dilate(np.asarray(crop.mask), 1)
         depth = np.where(crop.mask, crop.depth, 0.0).astype(np.float32)  # the target's top
-        out = []
-        for g in grasps:
+        top = depth[crop.mask]
+        top = float(np.median(top[top > 0])) if np.any(top > 0) else float("nan")
+        opening = (MAX_OPENING - 2 * PAD_CLEARANCE) * fx / top  # in pixels at the top
+        half_pad = PAD_WIDTH / 2 * fx / top
+        out, fallbacks = [], []
+        for i, g in enumerate(grasps):
             rect = snap_to_mask(g.rect(), mask) if self.snap else on_mask(g.rect(), mask)
-            if rect is None:
+            good = rect is not None and self.seat and seated(rect, mask, opening, half_pad)
+            if good:
+                rect, into = good, out
+            elif i < SNAPPED_BEST and rect is not None:
+                into = fallbacks
+            else:
                 continue
             (x, y, z), yaw, width = to_world(rect, depth, (fx, fy, cx - u0, cy - v0), X_WC)
             if not all(math.isfinite(v) for v in (x, y, z)) or z < MIN_TOP:
                 continue  # no depth, or too thin there for the pads (a saw's blade)
-            out.append(
-                GraspCandidate(x, y, z, yaw, min(width, MAX_OPENING), g.quality, view_height)
-            )
+            w = min(width, MAX_OPENING)
+            into.append(GraspCandidate(x, y, z, yaw, w, g.quality, view_height, seated=into is out))
+        out += fallbacks
         if self.record:
             self.history.append((crop, grasps, out))
         return out
@@ -150,6 +192,102 @@ def snap_to_mask(rect: GraspRect, mask: np.ndarray, reach: float = 0.75) -> Gras
     )
     t = (ts[best[0]] + ts[best[-1]]) / 2
     return GraspRect(rect.x + t * d[0], rect.y + t * d[1], rect.angle, rect.width, rect.height)
+
+
+def chord(rect: GraspRect, mask: np.ndarray) -> tuple[float, float] | None:
+    """Where the closing line through the grasp's centre (on the mask) leaves the mask each
+    way: ``(t_minus, t_plus)`` in pixels along `GraspRect.direction` (the last mask samples,
+    half a pixel apart); None when the centre is off the mask."""
+    d = rect.direction
+    h, w = mask.shape
+
+    def inside(t: float) -> bool:
+        u, v = int(round(rect.x + t * d[0])), int(round(rect.y + t * d[1]))
+        return 0 <= v < h and 0 <= u < w and bool(mask[v, u])
+
+    if not inside(0.0):
+        return None
+    ends = []
+    for sign in (-1.0, 1.0):
+        t = 0.0
+        while inside(t + sign * 0.5):
+            t += sign * 0.5
+        ends.append(t)
+    return ends[0], ends[1]
+
+
+def antipodal(rect: GraspRect, mask: np.ndarray, max_angle: float = MAX_CONTACT_ANGLE) -> bool:
+    """Do both pads meet the target's outline within ``max_angle`` degrees of its normal?
+
+    The contacts are the ends of the closing line's `chord`; the outline's outward normal
+    there is the negative gradient of the mask smoothed over 5x5 pixels. A diagonal closing
+    across a box's faces (normals 45 deg off) is rejected; one across parallel faces passes.
+    A line exactly through two opposite corners reads the corners' diagonal normals and
+    passes: one line stands for the pad (a check across the pad's width also rejected the
+    Fig. 10 body's only good grasp, 24 deg off its faces, on the pixel outline's noise).
+    """
+    ends = chord(rect, mask)
+    if ends is None:
+        return False
+    d = rect.direction
+    gy, gx = np.gradient(box_blur(mask.astype(np.float32), 2))
+    cos_max = math.cos(math.radians(max_angle))
+    for sign, t in zip((-1.0, 1.0), ends, strict=True):
+        v, u = int(round(rect.y + t * d[1])), int(round(rect.x + t * d[0]))
+        n = -np.array([gx[v, u], gy[v, u]])  # outward
+        norm = float(np.linalg.norm(n))
+        if norm < 1e-6 or float(np.dot(sign * d, n)) / norm < cos_max:
+            return False
+    return True
+
+
+def supported(
+    rect: GraspRect, mask: np.ndarray, half_pad: float, max_angle: float = MAX_CONTACT_ANGLE
+) -> bool:
+    """Does each pad rest on the target over its width? The closing lines ``half_pad`` pixels
+    to either side along the jaws must cross the mask and end within ``half_pad *
+    tan(max_angle)`` (+2 px of outline) of the centre line's contacts: the same faces, not
+    past a corner or off the target's end."""
+    ends = chord(rect, mask)
+    if ends is None:
+        return False
+    tol = half_pad * math.tan(math.radians(max_angle)) + 2.0
+    across = rect.normal
+    for off in (-half_pad, half_pad):
+        side = GraspRect(
+            rect.x + off * across[0], rect.y + off * across[1], rect.angle, rect.width, rect.height
+        )
+        e = chord(side, mask)
+        if e is None or abs(e[0] - ends[0]) > tol or abs(e[1] - ends[1]) > tol:
+            return False
+    return True
+
+
+def seated(rect: GraspRect, mask: np.ndarray, opening: float, half_pad: float) -> GraspRect | None:
+    """The grasp re-centred on its whole chord through the target, if the pads can hold it:
+    the chord fits the ``opening`` (pixels, clearance included), both contacts are
+    `antipodal` and each pad (``half_pad`` pixels to either side) is `supported`; else None.
+
+    Our post-processing of the network's grasp, like `snap_to_mask` (which centres on the
+    part of the chord within the predicted opening): the angle and quality stay the
+    network's. Centring on the whole chord makes both open pads clear the target equally.
+    """
+    ends = chord(rect, mask)
+    if ends is None or not math.isfinite(opening) or ends[1] - ends[0] + 1 > opening:
+        return None
+    t = (ends[0] + ends[1]) / 2
+    d = rect.direction
+    out = GraspRect(rect.x + t * d[0], rect.y + t * d[1], rect.angle, rect.width, rect.height)
+    return out if antipodal(out, mask) and supported(out, mask, half_pad) else None
+
+
+def box_blur(img: np.ndarray, r: int) -> np.ndarray:
+    """Mean over a (2r+1) square around each pixel (edge pixels repeated; numpy only)."""
+    k = 2 * r + 1
+    p = np.pad(img, r, mode="edge")
+    s = np.cumsum(np.cumsum(p, axis=0), axis=1)
+    s = np.pad(s, ((1, 0), (1, 0)))
+    return (s[k:, k:] - s[:-k, k:] - s[k:, :-k] + s[:-k, :-k]) / (k * k)
 
 
 def dilate(mask: np.ndarray, r: int) -> np.ndarray:

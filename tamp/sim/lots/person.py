@@ -40,6 +40,7 @@ takes anyway and costs no render of its own.
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -446,23 +447,19 @@ class PersonSystem(LeafSystem):
         return float(p[0]), float(p[1])
 
     def _free_spot(self, side: str, uid: str, where) -> tuple[float, float]:
-        """The point of W^side (inside by the object's reach) farthest from every other
-        object lying there: where a person would put a thing down."""
+        """The point of W^side (inside by the object's reach) where the object, put down with
+        the yaw it has, keeps the largest clearance from every other object lying there:
+        where a person would put a thing down. Clearance is measured between footprints
+        (`box_gap`), not origins: the Fig. 9 wrench, put 15 cm from the hammer's
+        origin, lay on the hammer's head, and lifting the hammer made the plant non-finite."""
         w = self.scenario.workspaces[side]
+        others = [
+            CLASSES[self._classes[u]].footprint.corners(*X.translation()[:2], yaw_of(X))
+            for u, (_, X) in where.items()
+            if u != uid and _near(X, w)
+        ]
         f = CLASSES[self._classes[uid]].footprint
-        reach = max(abs(f.xmin), abs(f.xmax), abs(f.ymin), abs(f.ymax)) + 0.01
-        hx, hy = w.size[0] / 2 - reach, w.size[1] / 2 - reach
-        others = [X.translation()[:2] for u, (_, X) in where.items() if u != uid and _near(X, w)]
-        if not others or hx <= 0 or hy <= 0:
-            return w.center
-        best, best_d = w.center, -1.0
-        for dx in np.linspace(-max(hx, 0), max(hx, 0), 9):
-            for dy in np.linspace(-max(hy, 0), max(hy, 0), 9):
-                p = np.array([w.center[0] + dx, w.center[1] + dy])
-                d = min(float(np.linalg.norm(p - o)) for o in others)
-                if d > best_d + 1e-9:
-                    best, best_d = (float(p[0]), float(p[1])), d
-        return best
+        return free_spot(w, f, yaw_of(where[uid][1]), others)
 
     def _advance(self, s: PersonState, context, t: float) -> None:
         """Run the current step; a step that ends hands over to the next in the same update."""
@@ -501,6 +498,60 @@ class PersonSystem(LeafSystem):
             s.steps, s.step_t0 = s.steps[1:], None
             if not s.steps and s.queue:
                 self._plan_next(s, context, t)
+
+
+def free_spot(w, f, yaw: float, others: list[np.ndarray]) -> tuple[float, float]:
+    """The origin, on a 9 x 9 grid over workspace ``w`` (inside by the object's reach), that
+    gives an object of footprint ``f`` at ``yaw`` the largest gap to the ``others``'
+    footprints (4 x 2 corners each, `Footprint.corners`); the centre when there are none."""
+    reach = max(abs(f.xmin), abs(f.xmax), abs(f.ymin), abs(f.ymax)) + 0.01
+    hx, hy = w.size[0] / 2 - reach, w.size[1] / 2 - reach
+    if not others or hx <= 0 or hy <= 0:
+        return w.center
+    best, best_d = w.center, -1.0
+    for dx in np.linspace(-hx, hx, 9):
+        for dy in np.linspace(-hy, hy, 9):
+            x, y = w.center[0] + dx, w.center[1] + dy
+            mine = f.corners(x, y, yaw)
+            d = min(box_gap(mine, o) for o in others)
+            if d > best_d + 1e-9:
+                best, best_d = (float(x), float(y)), d
+    return best
+
+
+def box_gap(a: np.ndarray, b: np.ndarray) -> float:
+    """The distance between two convex quadrilaterals (4 x 2 corners, in order); 0 when they
+    overlap (no separating axis among their edge normals)."""
+
+    def separated() -> bool:
+        for poly in (a, b):
+            for i in range(4):
+                e = poly[(i + 1) % 4] - poly[i]
+                n = np.array([-e[1], e[0]])
+                pa, pb = a @ n, b @ n
+                if pa.max() < pb.min() or pb.max() < pa.min():
+                    return True
+        return False
+
+    def to_segment(p: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> float:
+        e = q1 - q0
+        t = min(max(float(np.dot(p - q0, e) / np.dot(e, e)), 0.0), 1.0)
+        return float(np.linalg.norm(p - (q0 + t * e)))
+
+    if not separated():
+        return 0.0
+    return min(
+        to_segment(p, poly[i], poly[(i + 1) % 4])
+        for pts, poly in ((a, b), (b, a))
+        for p in pts
+        for i in range(4)
+    )
+
+
+def yaw_of(X: RigidTransform) -> float:
+    """The heading of a pose about the vertical (rad)."""
+    R = X.rotation().matrix()
+    return math.atan2(R[1, 0], R[0, 0])
 
 
 def _near(X: RigidTransform, w) -> bool:

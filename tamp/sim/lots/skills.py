@@ -477,7 +477,7 @@ class SkillController(LeafSystem):
             return
         if not s.candidates:
             return self._retry(s, t, f"no grasp found on the {s.target_cls}", "object_not_found")
-        g = max(s.candidates, key=lambda c: c.quality)
+        g = max(s.candidates, key=lambda c: (c.seated, c.quality))  # seated ones first
         s.chosen = g
         z = max(g.z - GRASP_DEPTH, MIN_GRASP_Z)
         yaw = hand_yaw_for_closing(g.yaw)
@@ -491,6 +491,7 @@ class SkillController(LeafSystem):
                 t,
                 f"grasp at ({g.x:.3f}, {g.y:.3f}, {z:.3f}) yaw {math.degrees(yaw):.0f} "
                 f"deg, q={g.quality:.2f} (view at {g.view_height:.2f} m)"
+                + ("" if g.seated else ", not seated")
                 + (" [drawn to fail: the hand stays open]" if s.injected else ""),
             )
         )

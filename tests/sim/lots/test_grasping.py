@@ -1,0 +1,90 @@
+"""Where the pads meet the target (`tamp.sim.lots.grasping.seated`): pixel geometry only, no
+network, no simulation. The cases are the Fig. 10 narrative's: a diagonal grasp on the
+peak's square base and one at its edge (the peak turned in the pads and fell), a grasp along
+a body's full length (a pad landed on its top and tipped it); and a saw's handle (Fig. 9:
+taken by the handle, far from its centre of mass, and carried)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tamp.grasp.rect import GraspRect
+from tamp.sim.lots.grasping import antipodal, chord, seated, snap_to_mask, supported
+
+
+def _square(size: int = 40) -> np.ndarray:
+    m = np.zeros((180, 180), bool)
+    lo = 90 - size // 2
+    m[lo : lo + size, lo : lo + size] = True  # rows 70..109, cols 70..109
+    return m
+
+
+def _box(length: float, width: float, deg: float) -> np.ndarray:
+    """A length x width box centred at (90, 90), its long axis along GraspRect angle ``deg``."""
+    a = math.radians(deg)
+    e1 = np.array([math.cos(a), -math.sin(a)])  # the GraspRect direction of angle deg
+    e2 = np.array([math.sin(a), math.cos(a)])
+    yy, xx = np.mgrid[0:180, 0:180]
+    u = (xx - 90) * e1[0] + (yy - 90) * e1[1]
+    v = (xx - 90) * e2[0] + (yy - 90) * e2[1]
+    return (np.abs(u) < length / 2) & (np.abs(v) < width / 2)
+
+
+def _grasp(x: float, y: float, deg: float, width: float = 50.0) -> GraspRect:
+    return GraspRect(x, y, math.radians(deg), width, width / 2)
+
+
+@pytest.mark.parametrize("deg", [0, 10, 20, 80, 90, 100])
+def test_closing_across_parallel_faces_is_antipodal(deg):
+    assert antipodal(_grasp(90, 90, deg), _square())
+
+
+@pytest.mark.parametrize("deg", [30, 35, 43, 60, 120])
+@pytest.mark.parametrize("y", [90, 96])
+def test_closing_diagonally_across_a_square_is_not(deg, y):
+    """The Fig. 10 peak: closing at 43 deg on its square base, the pads 45 deg off the faces'
+    normals (outside the friction cone's margin)."""
+    assert not antipodal(_grasp(90, y, deg), _square())
+
+
+def test_chord_ends_where_the_closing_line_leaves_the_mask():
+    lo, hi = chord(_grasp(90, 80, 0), _square())  # cols 70..109 along x from x = 90
+    assert (lo, hi) == (pytest.approx(-20, abs=0.5), pytest.approx(19, abs=0.5))
+    assert chord(_grasp(30, 30, 0), _square()) is None  # centre off the target
+
+
+def test_a_pad_past_the_end_of_a_face_is_not_supported():
+    """The Fig. 10 peak: a grasp at the edge of its base along the jaws touched the face with
+    a corner of each pad; it slipped after the lift."""
+    m = _square()  # 40 px; a pad half-width of 8 px
+    assert supported(_grasp(90, 90, 0), m, 8)
+    assert supported(_grasp(90, 100, 0), m, 8)  # pads on rows 92..108: still on the faces
+    assert not supported(_grasp(90, 105, 0), m, 8)  # a pad reaches past the corner
+    # a handle: a 60 x 20 px bar joined to a 40 px wide blade (a saw from above); closing
+    # across the handle's middle is supported, across the step to the blade is not
+    saw = np.zeros((180, 180), bool)
+    saw[80:100, 20:80] = True
+    saw[70:110, 80:160] = True
+    assert supported(_grasp(50, 90, 90), saw, 8)
+    assert not supported(_grasp(76, 90, 90), saw, 8)
+
+
+def test_seated_centres_on_the_whole_chord_and_needs_the_opening():
+    # a 70 x 40 px body at 35 deg; the network's grasp closes along its length, 25 px off
+    # the centre along the closing line, with a 30 px predicted opening
+    m = _box(70, 40, 35)
+    a = math.radians(35)
+    along = _grasp(90 - 25 * math.cos(a), 90 + 25 * math.sin(a), 35, width=30.0)
+    snapped = snap_to_mask(along, m)
+    assert np.hypot(snapped.x - 90, snapped.y - 90) > 5  # snap's reach ends inside the body
+    s = seated(along, m, opening=100.0, half_pad=8)
+    assert s is not None and (s.x, s.y) == pytest.approx((90, 90), abs=1.0)
+    assert s.angle == along.angle  # the network's angle is kept
+    assert (
+        seated(along, m, opening=65.0, half_pad=8) is None
+    )  # 70 px long: the pads would land on it
+    across = _grasp(90, 90, 35 + 90)
+    assert seated(across, m, opening=65.0, half_pad=8) is not None  # across its 40 px width
