@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tamp.grasp.pinhole import pixel_to_camera
 from tamp.grasp.predict import to_world
 from tamp.grasp.rect import GraspRect
 from tamp.sim.core.models import models_dir
@@ -51,6 +52,12 @@ PAD_WIDTH = 0.02
 #:   the opening less twice this lands a pad on the object's top (a body held by its 7 cm
 #:   length tipped 66 deg in the pads).
 PAD_CLEARANCE = 0.005
+#: a grasp is *clear* when nothing but the target stands higher than `CLEAR_HEIGHT` above the
+#: table in the open jaws' sweep: the fingers (open 8 cm, 1 cm thick, `FINGER_REACH` from the
+#: centre) close from there and take whatever lies between them (in a Fig. 9 run the jaws
+#: closed on the hammer and a wrench the person had put beside it; both went to W^B)
+FINGER_REACH = 0.05
+CLEAR_HEIGHT = 0.01
 
 
 @dataclass(frozen=True)
@@ -66,6 +73,7 @@ class GraspCandidate:
     quality: float
     view_height: float
     seated: bool = True  # passed `seated`; False: a fallback the pads may not hold carrying
+    clear: bool = True  # no other object in the jaws' sweep (`clear_of_others`)
 
 
 #: the network's best grasps a view considers: seated ones among the first `SEATED_BEST`;
@@ -131,11 +139,17 @@ class GraspPlanner:
                 into = fallbacks
             else:
                 continue
-            (x, y, z), yaw, width = to_world(rect, depth, (fx, fy, cx - u0, cy - v0), X_WC)
+            K = (fx, fy, cx - u0, cy - v0)
+            (x, y, z), yaw, width = to_world(rect, depth, K, X_WC)
             if not all(math.isfinite(v) for v in (x, y, z)) or z < MIN_TOP:
                 continue  # no depth, or too thin there for the pads (a saw's blade)
             w = min(width, MAX_OPENING)
-            into.append(GraspCandidate(x, y, z, yaw, w, g.quality, view_height, seated=into is out))
+            clear = clear_of_others(rect, crop, K, X_WC, FINGER_REACH * fx / top, half_pad)
+            into.append(
+                GraspCandidate(
+                    x, y, z, yaw, w, g.quality, view_height, seated=into is out, clear=clear
+                )
+            )
         out += fallbacks
         if self.record:
             self.history.append((crop, grasps, out))
@@ -279,6 +293,31 @@ def seated(rect: GraspRect, mask: np.ndarray, opening: float, half_pad: float) -
     d = rect.direction
     out = GraspRect(rect.x + t * d[0], rect.y + t * d[1], rect.angle, rect.width, rect.height)
     return out if antipodal(out, mask) and supported(out, mask, half_pad) else None
+
+
+def clear_of_others(
+    rect: GraspRect, crop: TargetCrop, K, X_WC: np.ndarray, reach: float, half_pad: float
+) -> bool:
+    """Whether the open jaws' sweep (``reach`` pixels to either side of the grasp centre along
+    the closing line, ``half_pad`` across it) holds nothing but the target standing higher
+    than `CLEAR_HEIGHT` above the table: the crop's depth back-projected through ``K`` and the
+    camera pose ``X_WC`` (4 x 4)."""
+    h, w = crop.mask.shape
+    d = rect.direction
+    n = np.array([-d[1], d[0]])
+    t, s = np.meshgrid(np.arange(-reach, reach + 1.0), np.arange(-half_pad, half_pad + 1.0))
+    us = np.round(rect.x + t * d[0] + s * n[0]).astype(int).ravel()
+    vs = np.round(rect.y + t * d[1] + s * n[1]).astype(int).ravel()
+    inside = (us >= 0) & (us < w) & (vs >= 0) & (vs < h)
+    us, vs = us[inside], vs[inside]
+    target = dilate(np.asarray(crop.mask), 2)
+    z = np.asarray(crop.depth)[vs, us]
+    other = ~target[vs, us] & np.isfinite(z) & (z > 0)
+    if not other.any():
+        return True
+    X = np.asarray(X_WC)
+    pts = X[:3, :3] @ pixel_to_camera(us[other], vs[other], z[other], K) + X[:3, 3:4]
+    return not bool(np.any(pts[2] > CLEAR_HEIGHT))
 
 
 def box_blur(img: np.ndarray, r: int) -> np.ndarray:

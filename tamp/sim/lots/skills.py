@@ -68,6 +68,10 @@ LIFT_Z = 0.16
 ANGULAR_SPEED = 1.2  # rad/s, mean over a move
 APPROACH_SPEED = 0.15  # m/s (mean 0.08), the last 12 cm to the grasp
 CARRY_SPEED = 0.2  # m/s, mean TCP speed of moves while the fingers are closed
+#: how far inside a workspace's edges a placed object's centre stays: its reach, but at least
+#: and at most these (a hammer kept nearer the centre leaves no room beside it: docs)
+PLACE_MARGIN = 0.06
+MAX_PLACE_MARGIN = 0.10
 
 
 @dataclass(frozen=True)
@@ -105,12 +109,17 @@ class SkillState:
     track: int | None = None
     target_xy: tuple[float, float] | None = None
     target_top: float = 0.0  # the target's top above the table, from the last view
+    target_radius: float = 0.0  # the target's reach from its centre in the table plane (m)
     views_done: int = 0
     candidates: tuple[GraspCandidate, ...] = ()
     chosen: GraspCandidate | None = None
     attempt: int = 0
     held: str | None = None
     hold_z: float = MIN_GRASP_Z  # TCP height above the object's bottom when it was picked
+    #: the held object's centre relative to the TCP, in the hand's frame (x, y; m), and its
+    #: reach: `Place` puts the object, not the TCP, on the free spot
+    hold_offset: tuple[float, float] = (0.0, 0.0)
+    hold_radius: float = 0.0
     grasp_attempts: int = 0
     grasp_successes: int = 0
     picks_tried: int = 0  # grasp attempts of network picks (the chance failures' index)
@@ -261,6 +270,7 @@ class SkillController(LeafSystem):
                 return self._finish(s, t, Status.FAILURE, f"PickAt needs numbers: {cmd}")
             s.side, s.target_cls, s.track, s.attempt = args[0], "object", None, 1
             s.hold_z = MIN_GRASP_Z
+            s.hold_offset, s.hold_radius = (0.0, 0.0), 0.0  # a scripted grasp: the TCP's spot
             s.grasp_attempts += 1
             s.steps = self._grasp_steps(x, y, MIN_GRASP_Z, math.radians(yaw), args[0])
         elif name == "Place" and len(args) == 1 and args[0] in sides:
@@ -452,6 +462,7 @@ class SkillController(LeafSystem):
         p = backproject(det.u, det.v, det.depth, self.planner.intrinsics, X_WC)
         s.target_xy = (float(p[0]), float(p[1]))
         s.target_top = max(float(p[2]), 0.0)  # median depth of its pixels: about its top
+        s.target_radius = reach_of(crop, self.planner.intrinsics, X_WC, s.target_xy)
         height = float(X_WC.translation()[2]) - s.target_top  # camera above the target
         cands = self.planner.candidates(crop, X_WC.GetAsMatrix4(), height)
         if cands:
@@ -477,11 +488,16 @@ class SkillController(LeafSystem):
             return
         if not s.candidates:
             return self._retry(s, t, f"no grasp found on the {s.target_cls}", "object_not_found")
-        g = max(s.candidates, key=lambda c: (c.seated, c.quality))  # seated ones first
+        # clear of other objects first (the jaws take nothing else), then seated, then quality
+        g = max(s.candidates, key=lambda c: (c.clear, c.seated, c.quality))
         s.chosen = g
         z = max(g.z - GRASP_DEPTH, MIN_GRASP_Z)
         yaw = hand_yaw_for_closing(g.yaw)
         s.hold_z = z
+        c, w = math.cos(yaw), math.sin(yaw)  # the centre's offset from the TCP, hand frame
+        dx, dy = s.target_xy[0] - g.x, s.target_xy[1] - g.y
+        s.hold_offset = (c * dx + w * dy, -w * dx + c * dy)
+        s.hold_radius = s.target_radius
         s.grasp_attempts += 1
         s.picks_tried += 1
         k = s.picks_tried
@@ -492,6 +508,7 @@ class SkillController(LeafSystem):
                 f"grasp at ({g.x:.3f}, {g.y:.3f}, {z:.3f}) yaw {math.degrees(yaw):.0f} "
                 f"deg, q={g.quality:.2f} (view at {g.view_height:.2f} m)"
                 + ("" if g.seated else ", not seated")
+                + ("" if g.clear else ", not clear of other objects")
                 + (" [drawn to fail: the hand stays open]" if s.injected else ""),
             )
         )
@@ -554,17 +571,21 @@ class SkillController(LeafSystem):
 
     def _on_place(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         X_WC = self.kin.camera_pose(q_meas[:7])
-        x, y = free_spot(
+        # the object's centre goes on the spot, far enough inside the edges for its reach
+        margin = min(max(PLACE_MARGIN, s.hold_radius + 0.005), MAX_PLACE_MARGIN)
+        cx, cy = free_spot(
             self.scenario.workspaces[s.side],
             obs.occupied,
             X_WC,
             self.planner.intrinsics,
+            margin=margin,
             avoid=tuple(m.position[:2] for m in obs.occluded),
         )
+        x, y = cx - s.hold_offset[0], cy - s.hold_offset[1]  # hand yaw 0 at the place
         tray = 0.01 if self.scenario.workspaces[s.side].tray else 0.0
         z = s.hold_z + 0.008 + tray
         hidden = "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
-        s.log.append((t, f"place the {s.held} at ({x:.3f}, {y:.3f}){hidden}"))
+        s.log.append((t, f"place the {s.held}'s centre at ({cx:.3f}, {cy:.3f}){hidden}"))
         yaw = 0.0
         s.target_cls, s.track = None, None  # no grasp target: the views below need no colour
         s.steps = (
@@ -579,6 +600,23 @@ class SkillController(LeafSystem):
             Step("view", handler="seen"),
             Step("finish", detail=f"placed {s.held} in W^{s.side}", handler="released"),
         )
+
+
+def reach_of(crop, intrinsics, X_WC: RigidTransform, center: tuple[float, float]) -> float:
+    """How far the target's pixels reach from ``center`` in the table plane (m): its mask in
+    the crop back-projected through its depth (the 95th percentile, so a stray edge pixel
+    does not count)."""
+    vs, us = np.nonzero(crop.mask)
+    if len(us) == 0:
+        return 0.0
+    z = crop.depth[vs, us]
+    ok = z > 0
+    if not ok.any():
+        return 0.0
+    u0, v0 = crop.origin
+    pts = backproject(us[ok] + u0, vs[ok] + v0, z[ok], intrinsics, X_WC)
+    d = np.hypot(pts[0] - center[0], pts[1] - center[1])
+    return float(np.percentile(d, 95))
 
 
 def free_spot(

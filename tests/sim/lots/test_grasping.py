@@ -88,3 +88,39 @@ def test_seated_centres_on_the_whole_chord_and_needs_the_opening():
     )  # 70 px long: the pads would land on it
     across = _grasp(90, 90, 35 + 90)
     assert seated(across, m, opening=65.0, half_pad=8) is not None  # across its 40 px width
+
+
+def _scene(neighbour_u: int):
+    """A 180 px crop seen from 0.4 m straight above the table: a 20 x 30 px target block 3 cm
+    high in the centre, and a 2 cm high neighbour (10 x 30 px) whose left edge is at
+    ``neighbour_u`` (the closing line runs along u)."""
+    from pydrake.math import RigidTransform
+
+    from tamp.sim.lots.kinematics import down
+    from tamp.sim.lots.perception import Detection, TargetCrop
+
+    depth = np.full((180, 180), 0.4, np.float32)  # the table
+    mask = np.zeros((180, 180), bool)
+    mask[75:105, 80:100] = True
+    depth[mask] = 0.37
+    depth[75:105, neighbour_u : neighbour_u + 10] = 0.38
+    det = Detection(1, "body", int(mask.sum()), 89.5, 89.5, 0.37)
+    crop = TargetCrop(det, (0, 0), np.zeros((180, 180, 3), np.uint8), depth, mask)
+    X_WC = RigidTransform(down(0.0), [0.5, 0.25, 0.4]).GetAsMatrix4()
+    return crop, (231.0, 231.0, 89.5, 89.5), X_WC
+
+
+@pytest.mark.parametrize(("neighbour_u", "clear"), [(112, False), (150, True)])
+def test_a_grasp_is_clear_only_without_other_objects_in_the_jaws_sweep(neighbour_u, clear):
+    """The jaws open 5 cm to either side (29 px at 0.4 m): a block 5 mm beyond the target's
+    edge is caught, one 13 cm away is not; the table itself never counts."""
+    from tamp.sim.lots.grasping import clear_of_others
+
+    crop, K, X_WC = _scene(neighbour_u)
+    rect = GraspRect(89.5, 89.5, 0.0, 30.0, 10.0)  # closing along u through the centre
+    reach = 0.05 * K[0] / 0.37
+    assert clear_of_others(rect, crop, K, X_WC, reach, 3.0) is clear
+    across = GraspRect(
+        89.5, 89.5, math.pi / 2, 30.0, 10.0
+    )  # closing along v: the neighbour is beside
+    assert clear_of_others(across, crop, K, X_WC, reach, 3.0)

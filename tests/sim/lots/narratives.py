@@ -1,0 +1,48 @@
+"""The paper's narratives in the Drake workcell (Zhou et al. Fig. 8-10, Example 1): each runs
+the LOTS task with its packaged interference script end to end (slow: 80-180 s of sim time).
+One test file per narrative, so that the suite's workers share them out."""
+
+from __future__ import annotations
+
+import json
+
+from tamp.lots.task import load_events, load_task
+
+NARRATIVES = {
+    "fig8": ("model_building", "model_building_fig8"),
+    "fig9": ("model_building", "model_building_fig9"),
+    "fig10": ("tower", "tower_interference"),
+    "example1": ("example1", "example1_interference"),
+}
+
+
+#: sim-time bound of a narrative run: Fig. 9 ends in 136 s; a run that loops (Fig. 8's known
+#: occlusion) stops here instead of at the scenario's 600 s
+NARRATIVE_SIM_LIMIT = 240.0
+
+
+def run_narrative(name: str):
+    from tamp.sim.lots.scenario import load_cell_scenario
+    from tamp.sim.lots.simulate import simulate_lots
+    from verification import gate
+
+    task_name, events_name = NARRATIVES[name]
+    task = load_task(task_name)
+    events = load_events(events_name, task)
+    result = simulate_lots(
+        load_cell_scenario(task_name), task, events, check=gate, max_sim_time=NARRATIVE_SIM_LIMIT
+    )
+    figures = {
+        k: result.to_json()[k] for k in ("status", "satisfied", "sim_time", "wall_time", "rtf")
+    }
+    figures |= {"replans": result.replans, "final": result.final_counts}
+    print(f"\nnarrative {name}: {json.dumps(figures)}")
+    print("robot:", [a.text() for a in result.robot_actions])
+    skills = result.to_json()["actions"]
+    print("skills:", [f"{a['action']} {a['start']}-{a['end']} {a['detail']}" for a in skills])
+    print("person:", [a.to_json() for a in result.person_actions])
+    return result
+
+
+def kinds(result) -> list[tuple[str, str | None]]:
+    return [a.key() for a in result.robot_actions]
