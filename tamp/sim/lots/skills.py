@@ -69,7 +69,7 @@ ANGULAR_SPEED = 1.2  # rad/s, mean over a move
 APPROACH_SPEED = 0.15  # m/s (mean 0.08), the last 12 cm to the grasp
 CARRY_SPEED = 0.2  # m/s, mean TCP speed of moves while the fingers are closed
 #: how far inside a workspace's edges a placed object's centre stays: its reach, but at least
-#: and at most these (a hammer kept nearer the centre leaves no room beside it: docs)
+#: and at most these (a long object kept nearer the centre would leave no room beside it)
 PLACE_MARGIN = 0.06
 MAX_PLACE_MARGIN = 0.10
 
