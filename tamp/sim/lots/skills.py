@@ -12,8 +12,9 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   grasp over all views is taken; approach, close, lift. A grasp fails when the fingers close
   on nothing (finger width) or when the target is still on the table in the next view (not
   lifted); it is retried with new predictions up to ``grasp.attempts`` times.
-- ``Place(side)``: look at W^side, put the held object down on the freest spot seen (away
-  from objects perception remembers there but cannot see), lift, one view from there.
+- ``Place(side)``: look at W^side, put the held object's centre (its offset from the TCP kept
+  at the grasp) on the freest spot seen (away from objects perception remembers there but
+  cannot see; its reach inside the edges), lift, one view from there.
 - ``Discard()`` (also ``Place(waste)``, the ``lots_arm`` domain's name for it): drop the
   held object into the waste basket. Both places check the fingers before letting go: an
   object lost on the way is reported (FAILURE, "dropped ... while carrying it") and the
