@@ -28,6 +28,7 @@ import numpy as np
 
 from tamp.grasp.formats import write_jacquard
 from tamp.grasp.objects import PRIMITIVES, TOOLS, GraspObject, grasp_world, make_object
+from tamp.grasp.pinhole import camera_to_pixel
 from tamp.grasp.rect import GraspRect
 
 TABLE_TOP = 0.0
@@ -73,9 +74,7 @@ def project(K: np.ndarray, X_WC: np.ndarray, points_W: np.ndarray) -> np.ndarray
     """Pixel (u, v) of world points (N x 3) for intrinsics K and camera pose X_WC (4x4)."""
     R, p = X_WC[:3, :3], X_WC[:3, 3]
     pc = (np.asarray(points_W) - p) @ R
-    return np.stack(
-        [K[0, 0] * pc[:, 0] / pc[:, 2] + K[0, 2], K[1, 1] * pc[:, 1] / pc[:, 2] + K[1, 2]], axis=1
-    )
+    return np.stack(camera_to_pixel(pc.T, (K[0, 0], K[1, 1], K[0, 2], K[1, 2])), axis=1)
 
 
 def grasp_rectangle(K, X_WC, center_W, yaw_W, opening, jaw) -> GraspRect:

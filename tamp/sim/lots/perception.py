@@ -40,6 +40,7 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I, ImageRgba8U
 
+from tamp.grasp.pinhole import camera_to_pixel
 from tamp.sim.core.camera import backproject
 from tamp.sim.lots.timing import Stopwatch
 
@@ -204,13 +205,13 @@ def hidden(
     the camera), or a pixel of that patch shows something more than ``tolerance`` nearer
     than the point (the gripper or the object it holds, a hand). Depth 0 (nearer than the
     clipping plane) is near too."""
-    fx, fy, cx, cy = intrinsics
-    x, y, z = X_WC.inverse().multiply(np.asarray(point, float))
+    p_C = X_WC.inverse().multiply(np.asarray(point, float))
+    z = p_C[2]
     if z <= 0:
         return True
-    u, v = fx * x / z + cx, fy * y / z + cy
+    u, v = camera_to_pixel(p_C, intrinsics)
     h, w = depth.shape
-    r = max(0, int(round(window * fx / z)))
+    r = max(0, int(round(window * intrinsics[0] / z)))
     ui, vi = int(round(u)), int(round(v))
     if not (r <= ui < w - r and r <= vi < h - r):  # the patch is not all in the image
         return True

@@ -46,6 +46,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 
+from tamp.grasp.pinhole import pixel_to_camera
 from tamp.lots.cell import WASTE, lots_domain
 from tamp.sim.core.camera import backproject
 from tamp.sim.core.messages import SkillCommand, SkillStatus
@@ -632,7 +633,6 @@ def free_spot(
     """The point of ``workspace`` (``margin`` inside its edges) farthest from every object
     pixel of the view and every point of ``avoid`` (objects hidden from the view: their
     remembered centres), measured in the table plane."""
-    fx, fy, cx, cy = intrinsics
     cxw, cyw = workspace.center
     hx, hy = workspace.size[0] / 2 - margin, workspace.size[1] / 2 - margin
     grid = np.array(
@@ -649,7 +649,7 @@ def free_spot(
         vs, us = np.nonzero(occupied)
         # object pixels on the table plane (z = 0) through the camera
         R, p = X_WC.rotation().matrix(), X_WC.translation()
-        rays = R @ np.stack([(us - cx) / fx, (vs - cy) / fy, np.ones_like(us, float)])
+        rays = R @ pixel_to_camera(us, vs, np.ones(len(us)), intrinsics)
         s_ = -p[2] / rays[2]
         pts = (p[:2, None] + rays[:2] * s_).T
         pts = pts[:: max(1, len(pts) // 2000)]
