@@ -135,6 +135,19 @@ class PerceptionState:
         return self
 
 
+@dataclass(frozen=True)
+class ViewAnalysis:
+    """What `analyse` finds in one view: per-class counts and detections of the objects on
+    the table (beyond ``hand_depth``), the detector ids and classes of the objects in the
+    gripper (`gripper_labels`), and the mask of table-object pixels."""
+
+    counts: dict[str, int]
+    detections: tuple[Detection, ...]
+    held: frozenset[int]
+    in_hand: tuple[str, ...]
+    occupied: np.ndarray
+
+
 def analyse(
     label: np.ndarray,
     depth: np.ndarray,
@@ -142,8 +155,8 @@ def analyse(
     *,
     min_pixels: int = 25,
     hand_depth: float = 0.12,
-) -> tuple[dict[str, int], tuple[Detection, ...], tuple[str, ...], np.ndarray]:
-    """(counts per class, detections, classes in the gripper, table-object mask) of one view."""
+) -> ViewAnalysis:
+    """What one view's label and depth images show (see `ViewAnalysis`)."""
     valid = np.isfinite(depth) & (depth > 0)
     far = valid & (depth > hand_depth)
     held = gripper_labels(label, depth, classes, min_pixels=min_pixels, hand_depth=hand_depth)
@@ -171,7 +184,7 @@ def analyse(
         )
     counts = dict(Counter(d.cls for d in detections))
     in_hand = tuple(sorted(classes[v] for v in held))
-    return counts, tuple(detections), in_hand, occupied
+    return ViewAnalysis(counts, tuple(detections), held, in_hand, occupied)
 
 
 def gripper_labels(
@@ -349,13 +362,14 @@ class Perception(LeafSystem):
         self.render_seconds.append(time.perf_counter() - t0)
         kinds = 2
         with self.analysis:
-            counts, dets, in_hand, occupied = analyse(
+            view = analyse(
                 label,
                 depth,
                 self._classes,
                 min_pixels=self._min_pixels,
                 hand_depth=self._hand_depth,
             )
+            counts, dets = view.counts, view.detections
             det = None
             if req.target is not None:
                 det = choose_target(dets, req.target, req.track, self._center)
@@ -379,7 +393,7 @@ class Perception(LeafSystem):
         memory, occluded = s.memory, ()
         if req.camera_pose is not None and self._intrinsics is not None and req.side:
             with self.analysis:
-                memory, occluded = self._remember(s.memory, req, label, depth, dets)
+                memory, occluded = self._remember(s.memory, req, depth, dets, view.held)
                 counts = dict(Counter(d.cls for d in dets) + Counter(m.cls for m in occluded))
         obs = Observation(
             req.id,
@@ -387,9 +401,9 @@ class Perception(LeafSystem):
             req.side,
             counts,
             dets,
-            in_hand,
+            view.in_hand,
             target,
-            _frozen(occupied),
+            _frozen(view.occupied),
             occluded,
         )
         state.get_mutable_abstract_state(self._state).set_value(
@@ -401,16 +415,14 @@ class Perception(LeafSystem):
         self,
         memory: dict[str, tuple[Seen, ...]],
         req: ViewRequest,
-        label: np.ndarray,
         depth: np.ndarray,
         dets: tuple[Detection, ...],
+        held: frozenset[int],
     ) -> tuple[dict[str, tuple[Seen, ...]], tuple[Seen, ...]]:
-        """The new memory of every workspace after a view of ``req.side``, and the occluded
-        instances of that view. An instance is in one place: one seen here or in the gripper
-        is forgotten in the other workspaces."""
-        held = gripper_labels(
-            label, depth, self._classes, min_pixels=self._min_pixels, hand_depth=self._hand_depth
-        )
+        """The new memory of every workspace after a view of ``req.side`` (its detections
+        ``dets``, ``held``: detector ids in the gripper), and the occluded instances of that
+        view. An instance is in one place: one seen here or in the gripper is forgotten in the
+        other workspaces."""
         here, occluded = recall(
             memory.get(req.side, ()), dets, held, depth, req.camera_pose, self._intrinsics
         )

@@ -42,18 +42,19 @@ CLASSES = {5: "scissors", 6: "scissors", 7: "hammer", 8: "saw"}
 
 def test_counts_per_class_with_threshold_and_hand_cut():
     label, depth = scene()
-    counts, dets, in_hand, occupied = analyse(label, depth, CLASSES, min_pixels=25)
-    assert counts == {"scissors": 2}
-    assert in_hand == ("saw",)
-    assert sorted(d.pixels for d in dets) == [100, 200]
-    d5 = next(d for d in dets if d.label == 5)
+    view = analyse(label, depth, CLASSES, min_pixels=25)
+    assert view.counts == {"scissors": 2}
+    assert view.in_hand == ("saw",)
+    assert view.held == gripper_labels(label, depth, CLASSES) == {8}
+    assert sorted(d.pixels for d in view.detections) == [100, 200]
+    d5 = next(d for d in view.detections if d.label == 5)
     assert (d5.u, d5.v, d5.depth) == pytest.approx((19.5, 14.5, 0.45))
-    assert occupied.sum() == 300
+    assert view.occupied.sum() == 300
 
 
 def test_choose_target_tracks_then_nearest_centre():
     label, depth = scene()
-    _, dets, _, _ = analyse(label, depth, CLASSES)
+    dets = analyse(label, depth, CLASSES).detections
     assert choose_target(dets, "scissors", 6, (0, 0)).label == 6  # tracked
     assert choose_target(dets, "scissors", None, (0, 0)).label == 5  # nearest
     assert choose_target(dets, "scissors", 99, (80, 60)).label == 6
@@ -122,9 +123,8 @@ def view(objects: dict[int, tuple[slice, slice]], held: tuple[slice, slice] | No
 
 def look(memory, label, depth):
     classes = CLASSES | {9: "hammer"}
-    _, dets, _, _ = analyse(label, depth, classes)
-    held = gripper_labels(label, depth, classes)
-    return recall(memory, dets, held, depth, X_LOOK, K)
+    view = analyse(label, depth, classes)
+    return recall(memory, view.detections, view.held, depth, X_LOOK, K)
 
 
 SAW = (slice(80, 100), slice(100, 130))
