@@ -5,7 +5,11 @@ A separate arm-only `MultibodyPlant` (same SDF, base welded) serves as the contr
 model, as on a real robot: it never sees the objects. `step` solves Drake's
 ``DoDifferentialInverseKinematics`` QP over the 7 arm joints for a desired TCP spatial
 velocity, with Franka's joint position, velocity and acceleration limits and a small
-joint-centring term towards the ready posture (it resolves the arm's redundancy).
+joint-centring term towards the ready posture (it resolves the arm's redundancy). The QP
+plans within `LIMIT_MARGIN` of the velocity and acceleration limits, and where it finds no
+solution the arm brakes within them (`brake`) instead of stopping dead: the safety monitor
+checks the commands against the full limits, and a velocity zeroed in one 10 ms step is an
+acceleration of 100 rad/s^2 or more, an emergency stop of the arm's own making.
 """
 
 from __future__ import annotations
@@ -24,6 +28,11 @@ from pydrake.multibody.tree import JacobianWrtVariable
 
 from tamp.sim.core.parsing import make_parser
 from tamp.sim.lots.catalogue import ARM, READY
+
+#: share of Franka's joint velocity and acceleration limits the differential IK plans within
+#: (the safety monitor allows 1 % over the full limits; the 1 kHz command stream between
+#: the two reads the setpoints' differences, which round a little above the QP's bound)
+LIMIT_MARGIN = 0.9
 
 #: TCP pointing down, hand x along world x: the orientation of the look poses (yaw 0).
 R_DOWN = RotationMatrix(np.diag([1.0, -1.0, -1.0]))
@@ -61,10 +70,11 @@ class ArmKinematics:
         self.params = DifferentialInverseKinematicsParameters(7, 7)
         self.params.set_time_step(period)
         self.params.set_joint_position_limits((np.array(ARM.lower), np.array(ARM.upper)))
-        vmax = np.array(ARM.max_velocity)
+        self.period = float(period)
+        vmax = LIMIT_MARGIN * np.array(ARM.max_velocity)
         self.params.set_joint_velocity_limits((-vmax, vmax))
-        amax = np.array(ARM.max_acceleration)
-        self.params.set_joint_acceleration_limits((-amax, amax))
+        self.amax = LIMIT_MARGIN * np.array(ARM.max_acceleration)
+        self.params.set_joint_acceleration_limits((-self.amax, self.amax))
         self.params.set_nominal_joint_position(np.array(READY))
         self.params.set_joint_centering_gain(0.5 * np.eye(7))
 
@@ -87,7 +97,9 @@ class ArmKinematics:
 
     def step(self, q7: np.ndarray, v7: np.ndarray, V_WT: np.ndarray) -> tuple[np.ndarray, bool]:
         """Joint velocities that move the TCP at spatial velocity ``V_WT`` ([w; v] in the
-        world frame), within the limits; (v, solved)."""
+        world frame), within the limits; (v, solved). A step Drake calls stuck (a tiny
+        velocity scale) is used but not solved; with no solution (the direction cannot be
+        followed within the limits from ``v7``) the joints brake (`brake`)."""
         self._set(q7)
         J = self.plant.CalcJacobianSpatialVelocity(
             self.context,
@@ -98,9 +110,21 @@ class ArmKinematics:
             self.plant.world_frame(),
         )[:, :7]
         result = DoDifferentialInverseKinematics(q7, v7, V_WT, J, self.params)
-        if result.status != DifferentialInverseKinematicsStatus.kSolutionFound:
-            return np.zeros(7), False
-        return np.asarray(result.joint_velocities).reshape(-1), True
+        if (
+            result.status == DifferentialInverseKinematicsStatus.kNoSolutionFound
+            or result.joint_velocities is None
+        ):
+            return self.brake(v7), False
+        # kStuck (the velocity scale alpha is tiny, e.g. from rest towards a far target, the
+        # acceleration limit allowing one small step): still the right direction, so use it
+        v = np.asarray(result.joint_velocities).reshape(-1)
+        return v, result.status == DifferentialInverseKinematicsStatus.kSolutionFound
+
+    def brake(self, v7: np.ndarray) -> np.ndarray:
+        """The joint velocities one period after ``v7`` when every joint decelerates towards
+        rest at its (margined) acceleration limit: a controlled stop, not a jump to zero."""
+        v7 = np.asarray(v7, float)
+        return v7 - np.clip(v7, -self.amax * self.period, self.amax * self.period)
 
 
 def pose_error(X_now: RigidTransform, X_goal: RigidTransform) -> np.ndarray:

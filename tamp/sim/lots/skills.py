@@ -432,9 +432,11 @@ class SkillController(LeafSystem):
         s.v = v
         if el >= T:
             err = pose_error(self.kin.tcp_pose(s.q), X1)
-            return bool(np.linalg.norm(err[3:]) < 0.002 and np.linalg.norm(err[:3]) < 0.01) or (
-                el >= T + 1.0
-            )
+            there = bool(np.linalg.norm(err[3:]) < 0.002 and np.linalg.norm(err[:3]) < 0.01)
+            # the next step starts from rest: arrive only when stopping now keeps within
+            # the acceleration limits (else the safety monitor stops the arm)
+            slow = bool(np.all(np.abs(v) <= self.kin.amax * self.dt))
+            return ((there or el >= T + 1.0) and slow) or el >= T + 2.0
         return False
 
     # ---- view handlers -------------------------------------------------------------------

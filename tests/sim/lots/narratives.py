@@ -36,6 +36,7 @@ def run_narrative(name: str):
         k: result.to_json()[k] for k in ("status", "satisfied", "sim_time", "wall_time", "rtf")
     }
     figures |= {"replans": result.replans, "final": result.final_counts}
+    figures["safety_stops"] = [f"{s.time:.2f} {s.cause}: {s.detail}" for s in result.safety_stops]
     print(f"\nnarrative {name}: {json.dumps(figures)}")
     print("robot:", [a.text() for a in result.robot_actions])
     skills = result.to_json()["actions"]

@@ -80,3 +80,50 @@ def test_object_models_are_free_bodies_with_collision_boxes():
         assert body.is_floating_base_body()
         assert 0.05 <= body.default_mass() <= 0.35
         assert plant.GetCollisionGeometriesForBody(body)
+
+
+def test_diff_ik_stays_within_the_margined_limits_and_brakes_when_unsolved():
+    """The safety monitor stops the arm at Franka's limits: the skills' differential IK must
+    plan inside them, and where its QP has no solution decelerate instead of jumping to 0."""
+    from tamp.sim.lots.kinematics import LIMIT_MARGIN
+
+    kin = ArmKinematics(0.01)
+    amax = np.array(ARM.max_acceleration)
+    rng = np.random.default_rng(0)
+    q, v = np.array(READY), np.zeros(7)
+    for _ in range(40):  # a fast sweep: 0.5 m/s along y, turning
+        v_new, ok = kin.step(q, v, np.r_[0.0, 0.0, 0.8, 0.0, 0.5, 0.1])
+        assert ok
+        assert np.all(np.abs(v_new) <= LIMIT_MARGIN * np.array(ARM.max_velocity) + 1e-6)
+        assert np.all(np.abs(v_new - v) / 0.01 <= LIMIT_MARGIN * amax + 1e-6)
+        q, v = q + v_new * 0.01, v_new
+    # joint 1 past its upper limit: no velocity within the limits gets it back in one step
+    q_out = np.array(READY)
+    q_out[0] = ARM.upper[0] + 0.1
+    v7 = rng.uniform(-1.5, 1.5, 7)
+    braked, ok = kin.step(q_out, v7, np.zeros(6))
+    assert not ok
+    np.testing.assert_allclose(braked, kin.brake(v7))
+    dv = np.abs(braked - v7) / 0.01
+    assert np.all(dv <= LIMIT_MARGIN * amax + 1e-9)  # never beyond the limit
+    assert np.all(np.abs(braked) <= np.abs(v7)) and np.all(np.sign(braked) * np.sign(v7) >= 0)
+    # braking repeatedly comes to rest
+    for _ in range(200):
+        v7 = kin.brake(v7)
+    assert np.all(v7 == 0.0)
+
+
+def test_diff_ik_towards_a_far_target_from_rest_accelerates_within_the_limit():
+    """A desired TCP velocity far beyond reach in one step (Drake's ``kStuck``: tiny alpha)
+    still gives a small step in its direction, not a standstill."""
+    from tamp.sim.lots.kinematics import LIMIT_MARGIN
+
+    kin = ArmKinematics(0.01)
+    q = np.array(READY)
+    V = np.r_[0.0, 0.0, 0.0, 0.0, 30.0, 0.0]  # 30 m/s along y: alpha ~ 0
+    v, ok = kin.step(q, np.zeros(7), V)
+    assert np.any(v != 0.0)
+    assert np.all(np.abs(v) / 0.01 <= LIMIT_MARGIN * np.array(ARM.max_acceleration) + 1e-6)
+    X0, X1 = kin.tcp_pose(q), kin.tcp_pose(q + v * 0.01)
+    d = X1.translation() - X0.translation()
+    assert d[1] > 0 and abs(d[0]) < 0.1 * d[1] and abs(d[2]) < 0.1 * d[1]
