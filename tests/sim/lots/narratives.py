@@ -42,6 +42,9 @@ def run_narrative(name: str):
     skills = result.to_json()["actions"]
     print("skills:", [f"{a['action']} {a['start']}-{a['end']} {a['detail']}" for a in skills])
     print("person:", [a.to_json() for a in result.person_actions])
+    # the robot's own commands stay within Franka's limits: only a hand may stop the arm
+    own = [s for s in result.safety_stops if s.cause in ("speed_limit", "accel_limit")]
+    assert not own, f"the arm's own commands breached its limits: {own}"
     return result
 
 
