@@ -42,6 +42,12 @@ def register(subparsers) -> None:
     p.add_argument(
         "--jobs", type=int, default=1, help="render in N processes (same files; default 1)"
     )
+    p.add_argument(
+        "--table",
+        choices=("plain", "mats"),
+        default="plain",
+        help="plain beige-grey table (default) or coloured mats of random hue under the objects",
+    )
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.set_defaults(func=run_synth)
 
@@ -200,7 +206,7 @@ def run_synth(args) -> int:
 
     if args.scenes < 1 or args.views < 1 or args.jobs < 1 or args.size < 16:
         raise InputError("--scenes, --views and --jobs must be >= 1 and --size >= 16")
-    cfg = SynthConfig(size=args.size, views=args.views, seed=args.seed)
+    cfg = SynthConfig(size=args.size, views=args.views, seed=args.seed, table=args.table)
     summary = generate(args.out, args.scenes, cfg, progress=True, jobs=args.jobs)
     if args.json:
         print_json(summary | {"out": args.out})

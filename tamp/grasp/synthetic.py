@@ -46,6 +46,38 @@ class SynthConfig:
     min_height: float = 0.2
     max_height: float = 0.32
     max_tilt_deg: float = 15.0
+    #: "plain": a beige-grey table (the shipped weights' data); "mats": in three scenes of
+    #: four a coloured mat of random hue lies under the objects, as the LOTS workcell's
+    #: green and blue workspace mats do (`Mat`)
+    table: str = "plain"
+
+
+TABLES = ("plain", "mats")
+
+
+@dataclass(frozen=True, slots=True)
+class Mat:
+    """A thin coloured rectangle on the table under the objects (visual only, 1 mm proud)."""
+
+    size: tuple[float, float]
+    center: tuple[float, float]
+    yaw: float
+    rgba: tuple[float, float, float, float]
+
+
+def sample_mat(rng: np.random.Generator, placements: list[Placement]) -> Mat | None:
+    """A mat for ``table: mats`` (None in one scene of four): 0.25-0.6 m a side, about the
+    objects' centre, any hue at moderate saturation and brightness (the workcell's mats are
+    a pale green and a pale blue; a random hue keeps the network from learning those two)."""
+    import colorsys
+
+    if rng.random() < 0.25:
+        return None
+    cx = float(np.mean([p.x for p in placements])) + rng.uniform(-0.1, 0.1)
+    cy = float(np.mean([p.y for p in placements])) + rng.uniform(-0.1, 0.1)
+    r, g, b = colorsys.hsv_to_rgb(rng.uniform(0, 1), rng.uniform(0.2, 0.6), rng.uniform(0.45, 0.85))
+    size = (float(rng.uniform(0.25, 0.6)), float(rng.uniform(0.25, 0.6)))
+    return Mat(size, (cx, cy), float(rng.uniform(-math.pi, math.pi)), (r, g, b, 1.0))
 
 
 @dataclass(frozen=True, slots=True)
@@ -115,7 +147,8 @@ class SceneRenderer:
     """A Drake diagram of one scene with one RgbdSensor per viewpoint."""
 
     def __init__(self, placements: list[Placement], cameras: list[np.ndarray], cfg: SynthConfig,
-                 table_rgba: tuple[float, float, float, float]):  # fmt: skip
+                 table_rgba: tuple[float, float, float, float],
+                 mat: Mat | None = None):  # fmt: skip
         from pydrake.geometry import (
             Box,
             ClippingRange,
@@ -142,6 +175,10 @@ class SceneRenderer:
                          RigidTransform([0.0, 0.0, TABLE_TOP - 0.025]))  # fmt: skip
         plant.RegisterVisualGeometry(table, RigidTransform(), Box(1.5, 1.5, 0.05), "table",
                                      np.array(table_rgba))  # fmt: skip
+        if mat is not None:  # its top 1 mm above the table's (0.025 m above the table body)
+            X_TM = RigidTransform(RollPitchYaw(0, 0, mat.yaw), [*mat.center, 0.025])
+            plant.RegisterVisualGeometry(table, X_TM, Box(*mat.size, 0.002), "mat",
+                                         np.array(mat.rgba))  # fmt: skip
         self.body_of: list[int] = []
         for k, pl in enumerate(placements):
             body = plant.AddRigidBody(f"obj{k}_{pl.obj.name}", inertia)
@@ -236,6 +273,8 @@ def generate(
     """Render scenes ``first .. first + scenes - 1`` into ``out``; returns counts of scenes,
     images and grasps. Scene ``i`` depends on ``(seed, i)`` alone, so ``jobs > 1`` renders
     chunks of scenes in that many processes and writes the same files as one process."""
+    if cfg.table not in TABLES:
+        raise ValueError(f"SynthConfig.table: expected one of {TABLES}, got {cfg.table!r}")
     if jobs > 1 and scenes > 1:
         return _generate_in_processes(Path(out), scenes, cfg, first, jobs, progress, on_scene)
     from tqdm import tqdm
@@ -249,7 +288,9 @@ def generate(
         cams = sample_cameras(rng, placements, cfg)
         shade = rng.uniform(0.3, 0.8)
         table_rgba = (shade, shade * rng.uniform(0.8, 1.0), shade * rng.uniform(0.6, 1.0), 1.0)
-        renderer = SceneRenderer(placements, cams, cfg, table_rgba)
+        # drawn after everything "plain" draws: a plain set stays the same file for file
+        mat = sample_mat(rng, placements) if cfg.table == "mats" else None
+        renderer = SceneRenderer(placements, cams, cfg, table_rgba, mat)
         name = f"scene_{i:05d}"
         for v, X_WC in enumerate(cams):
             rgb, depth, label = renderer.render(v)

@@ -13,6 +13,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from tamp.grasp.objects import MAX_OPENING, PRIMITIVES, TOOLS, grasp_world, make_object
+from tamp.grasp.pinhole import pixel_to_camera
 from tamp.grasp.synthetic import grasp_rectangle, look_at, project
 
 
@@ -106,3 +107,43 @@ def test_loader_reads_the_generated_set(rendered: Path):
     assert len(set(ds.groups())) == len({p.parent for p in (rendered / "a").rglob("*_RGB.png")})
     s = ds.load(0)
     assert s.y[0].sum() > 0
+
+
+def test_mats_change_the_colour_under_the_objects_and_nothing_else(tmp_path: Path):
+    """``table: mats`` (the LOTS workcell's coloured workspace mats): the same scenes, grasps
+    and depth (within the mat's 1 mm) as the plain set of the same seed; only colours differ,
+    and where they differ the camera sees the table plane, not an object."""
+    pytest.importorskip("pydrake")
+    from tamp.grasp import formats
+    from tamp.grasp.synthetic import SynthConfig, generate
+
+    plain = generate(tmp_path / "p", 4, SynthConfig(size=48, views=1, seed=3), progress=False)
+    mats = generate(
+        tmp_path / "m", 4, SynthConfig(size=48, views=1, seed=3, table="mats"), progress=False
+    )
+    assert mats == plain
+    recoloured = 0
+    for grasps in sorted((tmp_path / "p").rglob("*_grasps.txt")):
+        rel = grasps.relative_to(tmp_path / "p")
+        assert grasps.read_text() == (tmp_path / "m" / rel).read_text()
+        prefix_p = str(grasps)[: -len("_grasps.txt")]
+        prefix_m = str(tmp_path / "m" / rel)[: -len("_grasps.txt")]
+        dp = formats.read_depth_tiff(prefix_p + "_perfect_depth.tiff")
+        dm = formats.read_depth_tiff(prefix_m + "_perfect_depth.tiff")
+        assert np.nanmax(np.abs(dp - dm)) <= 0.0011
+        changed = np.any(
+            formats.read_rgb(prefix_p + "_RGB.png") != formats.read_rgb(prefix_m + "_RGB.png"), 2
+        )
+        if changed.any():
+            recoloured += 1
+            # the recoloured pixels back-projected: on the table plane (z = 0), not on objects
+            cam = json.loads(Path(prefix_m + "_camera.json").read_text())
+            K, X = np.asarray(cam["K"]), np.asarray(cam["X_WC"])
+            vs, us = np.nonzero(changed)
+            p_C = pixel_to_camera(us, vs, dm[vs, us], (K[0, 0], K[1, 1], K[0, 2], K[1, 2]))
+            z_W = (X[:3, :3] @ p_C + X[:3, 3:4])[2]
+            # (objects' outline pixels blend with what lies beside them: a few change too)
+            assert np.mean(np.abs(z_W) < 0.003) > 0.9
+    assert recoloured >= 2  # three scenes in four get a mat
+    with pytest.raises(ValueError, match="table"):
+        generate(tmp_path / "x", 1, SynthConfig(table="green"), progress=False)
