@@ -25,6 +25,7 @@ figures are what the workcell itself costs.
 
     python benchmarks/lots_workcell.py [--scenes 30] [--networks hrgnet grconvnet ggcnn]
         [--task tower] [--time-steps 0.004 0.01] [--pick-timeout 60] [--threads 2]
+        [--weights NET=PATH ...]
 
 Prints a table and one JSON line.
 """
@@ -85,15 +86,21 @@ def make_scene(base, seed: int):
     return scene, target, placed[0].id
 
 
-def run_pick(scene, target: str, uid: str, network: str, timeout: float) -> dict:
-    """One ``Pick(target)`` in ``scene`` with ``network``; what happened and what it cost."""
+def run_pick(
+    scene, target: str, uid: str, network: str, timeout: float, weights: str | None = None
+) -> dict:
+    """One ``Pick(target)`` in ``scene`` with ``network`` (its shipped weights, or the file
+    ``weights``); what happened and what it cost."""
     from tamp.sim.lots.builder import build_diagram
     from tamp.sim.lots.driver import CellDriver
     from tamp.sim.lots.grasping import dilate, on_mask, snap_to_mask
     from tamp.sim.lots.simulate import with_network
     from tamp.sim.lots.timing import breakdown, cell_parts
 
-    cell = build_diagram(with_network(scene, network))
+    scene = with_network(scene, network)
+    if weights is not None:
+        scene = dataclasses.replace(scene, grasp=dataclasses.replace(scene.grasp, weights=weights))
+    cell = build_diagram(scene)
     cell.planner.record = True  # every view's crop and predictions (for the on-target count)
     driver = CellDriver(cell)
     w0, c0, t0 = time.perf_counter(), time.process_time(), driver.context.get_time()
@@ -228,7 +235,20 @@ def main() -> int:
     ap.add_argument("--task", default=None, help="also run this LOTS task (e.g. tower)")
     ap.add_argument("--time-steps", type=float, nargs="+", default=None)
     ap.add_argument("--threads", type=int, default=None, help="torch threads (default: torch's)")
+    ap.add_argument(
+        "--weights",
+        nargs="+",
+        default=[],
+        metavar="NET=PATH",
+        help="a weights file instead of NET's shipped one (e.g. a network trained on other data)",
+    )
     args = ap.parse_args()
+    weights = {}
+    for item in args.weights:
+        net, sep, path = item.partition("=")
+        if not sep or net not in args.networks or not os.path.isfile(path):
+            ap.error(f"--weights {item!r}: expected NET=PATH with NET one of --networks, a file")
+        weights[net] = path
 
     import torch
 
@@ -244,7 +264,7 @@ def main() -> int:
         picks = []
         for s in seeds:
             scene, target, uid = scenes[s]
-            p = run_pick(scene, target, uid, net, args.pick_timeout)
+            p = run_pick(scene, target, uid, net, args.pick_timeout, weights.get(net))
             p |= {"scene": s, "network": net, "target": target}
             picks.append(p)
             print(
@@ -254,7 +274,7 @@ def main() -> int:
                 flush=True,
             )
         per_scene += [{k: v for k, v in p.items() if k != "parts"} for p in picks]
-        rows.append(summarise(net, picks))
+        rows.append(summarise(net, picks) | {"weights": weights.get(net, "shipped")})
     tasks = []
     if args.task:
         for step in args.time_steps or [base.time_step]:

@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 import torch
 
@@ -102,3 +103,25 @@ def test_one_pick_per_network_on_the_plant(bench):
         assert parts["physics"]["cpu"] > 0
         assert sum(r["cpu_share"] for r in parts.values()) == pytest.approx(1.0, abs=0.01)
     assert picks["hrgnet"]["success"]  # the benchmark's scene 4: HRG-Net lifts the body
+
+
+def test_views_probe_paints_only_the_table_plane_and_counts_grasps_on_the_mask():
+    path = ROOT / "benchmarks" / "workcell_views.py"
+    spec = importlib.util.spec_from_file_location("workcell_views_bench", path)
+    views = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(views)
+    rgb = np.zeros((20, 20, 3), np.uint8)
+    rgb[...] = (140, 190, 140)  # a green mat
+    depth = np.full((20, 20), 0.30, np.float32)
+    depth[5:10, 5:15] = 0.28  # an object 2 cm tall
+    rgb[5:10, 5:15] = (200, 40, 40)
+    out = dict(views.variants(rgb, depth))
+    assert np.array_equal(out["as rendered"], rgb)
+    plain = out["table beige"]
+    assert np.all(plain[5:10, 5:15] == (200, 40, 40))  # the object keeps its colour
+    assert np.all(plain[0:5] == views.BEIGE) and np.all(plain[15:] == views.BEIGE)
+    assert np.all(out["grey"][..., 0] == out["grey"][..., 2])
+    mask = depth < 0.29
+    grasps = [SimpleNamespace(u=7.0, v=6.0), SimpleNamespace(u=1.0, v=1.0),
+              SimpleNamespace(u=50.0, v=6.0)]  # fmt: skip
+    assert views.on_target(grasps, mask) == 1
