@@ -44,6 +44,8 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--table",
+        # tamp.grasp.synthetic.TABLES (a test keeps them equal; importing it here would load
+        # numpy on every start of the command line)
         choices=("plain", "mats"),
         default="plain",
         help="plain beige-grey table (default) or coloured mats of random hue under the objects",

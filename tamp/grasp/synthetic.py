@@ -8,7 +8,9 @@ camera sees the table while the arm approaches a grasp (§IV-B, Fig. 6). The gro
 rectangles come from the objects' geometry projected through the camera intrinsics; a
 grasp is kept only when the label image shows its own object at the grasp centre (not
 occluded, inside the view). Everything is drawn from ``numpy.random.default_rng((seed,
-scene))``, so a dataset is reproducible scene by scene.
+scene))``, so a dataset is reproducible scene by scene. ``SynthConfig.table = "mats"`` adds a
+coloured mat of random hue under the objects (the LOTS workcell's objects lie on mats); the
+mat is drawn last, so the rest of a scene is the plain set's.
 
 Layout (Jacquard): ``OUT/scene_NNNNN/V_scene_NNNNN_{RGB.png,perfect_depth.tiff,
 grasps.txt,camera.json}``; one folder per scene, so the object-wise split keeps all views of
@@ -46,9 +48,9 @@ class SynthConfig:
     min_height: float = 0.2
     max_height: float = 0.32
     max_tilt_deg: float = 15.0
-    #: "plain": a beige-grey table (the shipped weights' data); "mats": in three scenes of
-    #: four a coloured mat of random hue lies under the objects, as the LOTS workcell's
-    #: green and blue workspace mats do (`Mat`)
+    #: "plain": a beige-grey table; "mats": in three scenes of four a coloured mat of random
+    #: hue lies under the objects, as the LOTS workcell's green and blue workspace mats do
+    #: (`Mat`; the shipped weights are trained on a mats set)
     table: str = "plain"
 
 

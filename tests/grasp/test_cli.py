@@ -156,3 +156,11 @@ def test_synth_writes_a_jacquard_set(tmp_path: Path, capsys):
     assert len(list((tmp_path / "s").rglob("*_grasps.txt"))) == summary["images"]
     rc = main(["grasp", "synth", str(tmp_path / "t"), "--scenes", "0"])
     assert rc == 2 and "--scenes" in capsys.readouterr().err
+    from tamp.grasp.synthetic import TABLES
+
+    for table in TABLES:  # every kind of table the renderer knows is on the command line
+        rc = main(["grasp", "synth", str(tmp_path / table), "--scenes", "1", "--views", "1",
+                   "--size", "32", "--table", table, "--json"])  # fmt: skip
+        assert rc == 0 and json.loads(capsys.readouterr().out)["scenes"] == 1
+    rc = main(["grasp", "synth", str(tmp_path / "g"), "--table", "green"])
+    assert rc == 2 and "'plain', 'mats'" in capsys.readouterr().err
