@@ -50,7 +50,7 @@ class SynthConfig:
     max_tilt_deg: float = 15.0
     #: "plain": a beige-grey table; "mats": in three scenes of four a coloured mat of random
     #: hue lies under the objects, as the LOTS workcell's green and blue workspace mats do
-    #: (`Mat`; the shipped weights are trained on a mats set)
+    #: (`Mat`)
     table: str = "plain"
 
 
