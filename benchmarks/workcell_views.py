@@ -68,12 +68,10 @@ def variants(rgb: np.ndarray, depth: np.ndarray):
 
 
 def on_target(grasps, mask: np.ndarray) -> int:
-    h, w = mask.shape
-    return sum(
-        bool(mask[int(round(g.v)), int(round(g.u))])
-        for g in grasps
-        if 0 <= round(g.v) < h and 0 <= round(g.u) < w
-    )
+    """How many of ``grasps`` have their centre on ``mask`` (the workcell's own test)."""
+    from tamp.sim.lots.grasping import on_mask
+
+    return sum(on_mask(g.rect(), mask) is not None for g in grasps)
 
 
 def main() -> int:

@@ -122,6 +122,8 @@ def test_views_probe_paints_only_the_table_plane_and_counts_grasps_on_the_mask()
     assert np.all(plain[0:5] == views.BEIGE) and np.all(plain[15:] == views.BEIGE)
     assert np.all(out["grey"][..., 0] == out["grey"][..., 2])
     mask = depth < 0.29
-    grasps = [SimpleNamespace(u=7.0, v=6.0), SimpleNamespace(u=1.0, v=1.0),
-              SimpleNamespace(u=50.0, v=6.0)]  # fmt: skip
+    from tamp.grasp.predict import PredictedGrasp
+
+    grasps = [PredictedGrasp(7.0, 6.0, 0.0, 10.0, 1.0), PredictedGrasp(1.0, 1.0, 0.0, 10.0, 1.0),
+              PredictedGrasp(50.0, 6.0, 0.0, 10.0, 1.0)]  # fmt: skip
     assert views.on_target(grasps, mask) == 1
