@@ -76,6 +76,20 @@ class GraspCandidate:
     clear: bool = True  # no other object in the jaws' sweep (`clear_of_others`)
 
 
+#: a retry's grasp differs from one that missed by this much at least (centre, m; closing
+#: angle, rad): the network sees nearly the same crop again and would repeat itself
+MISSED_DISTANCE = 0.01
+MISSED_ANGLE = math.radians(20.0)
+
+
+def near_grasp(c: GraspCandidate, missed: tuple[float, float, float]) -> bool:
+    """Whether candidate ``c`` is (about) the grasp ``missed`` (x, y, closing yaw) again;
+    closing angles are equal modulo 180 degrees (a parallel gripper is symmetric)."""
+    x, y, yaw = missed
+    turn = abs((c.yaw - yaw + math.pi / 2) % math.pi - math.pi / 2)
+    return math.hypot(c.x - x, c.y - y) < MISSED_DISTANCE and turn < MISSED_ANGLE
+
+
 #: the network's best grasps a view considers: seated ones among the first `SEATED_BEST`;
 #: when none of a pick's views has one, the snapped ones among the first `SNAPPED_BEST` (the
 #: choice before `seated` existed: it may hold, and a pick without a grasp surely fails)

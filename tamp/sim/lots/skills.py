@@ -11,7 +11,8 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   (down to the paper's preset 0.2 m); the grasp network runs on every view and the best
   grasp over all views is taken; approach, close, lift. A grasp fails when the fingers close
   on nothing (finger width) or when the target is still on the table in the next view (not
-  lifted); it is retried with new predictions up to ``grasp.attempts`` times.
+  lifted); it is retried with new predictions up to ``grasp.attempts`` times, never again
+  with a grasp that missed or slipped in this pick (`grasping.near_grasp`).
 - ``Place(side)``: look at W^side, put the held object's centre (its offset from the TCP kept
   at the grasp) on the freest spot seen (away from objects perception remembers there but
   cannot see; its reach inside the edges), lift, one view from there.
@@ -51,7 +52,7 @@ from tamp.lots.cell import WASTE, lots_domain
 from tamp.sim.core.camera import backproject
 from tamp.sim.core.messages import SkillCommand, SkillStatus
 from tamp.sim.lots.catalogue import ARM
-from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner
+from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner, near_grasp
 from tamp.sim.lots.kinematics import ArmKinematics, down, hand_yaw_for_closing, pose_error
 from tamp.sim.lots.perception import Observation, ViewRequest
 from tamp.sim.lots.scenario import CellScenario
@@ -115,6 +116,8 @@ class SkillState:
     views_done: int = 0
     candidates: tuple[GraspCandidate, ...] = ()
     chosen: GraspCandidate | None = None
+    #: (x, y, yaw) of this pick's grasps that missed or slipped: a retry takes another
+    missed: tuple[tuple[float, float, float], ...] = ()
     attempt: int = 0
     held: str | None = None
     hold_z: float = MIN_GRASP_Z  # TCP height above the object's bottom when it was picked
@@ -261,7 +264,7 @@ class SkillController(LeafSystem):
             if s.held is not None:
                 return self._finish(s, t, Status.FAILURE, f"already holding {s.held}")
             s.side = args[1] if len(args) == 2 else "A"
-            s.target_cls, s.track, s.attempt = args[0], None, 1
+            s.target_cls, s.track, s.attempt, s.missed = args[0], None, 1, ()
             self._begin_attempt(s)
         elif name == "PickAt" and len(args) == 4 and args[0] in sides:
             if s.held is not None:
@@ -468,7 +471,11 @@ class SkillController(LeafSystem):
         s.target_top = max(float(p[2]), 0.0)  # median depth of its pixels: about its top
         s.target_radius = reach_of(crop, self.planner.intrinsics, X_WC, s.target_xy)
         height = float(X_WC.translation()[2]) - s.target_top  # camera above the target
-        cands = self.planner.candidates(crop, X_WC.GetAsMatrix4(), height)
+        cands = [
+            c
+            for c in self.planner.candidates(crop, X_WC.GetAsMatrix4(), height)
+            if not any(near_grasp(c, m) for m in s.missed)
+        ]
         if cands:
             s.candidates = (*s.candidates, cands[0])
         s.log.append(
@@ -557,6 +564,8 @@ class SkillController(LeafSystem):
         """A failed grasp attempt (``cause``: `tamp.sim.core.outcome.CAUSES`): try again from
         the look pose, or fail the skill with that cause after the last attempt."""
         s.log.append((t, f"grasp attempt {s.attempt} failed: {why}"))
+        if s.chosen is not None and cause in ("grasp_missed", "grasp_slipped"):
+            s.missed = (*s.missed, (s.chosen.x, s.chosen.y, s.chosen.yaw))
         if s.attempt >= self.scenario.grasp.attempts or s.command.name == "PickAt":
             return self._finish(s, t, Status.FAILURE, f"{why} ({s.attempt} attempts)", cause)
         s.attempt += 1

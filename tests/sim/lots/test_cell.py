@@ -147,6 +147,25 @@ def test_offset_grasp_misses(block_cell, offset):
     assert z < 0.005  # still on the table
 
 
+def test_a_retry_takes_another_grasp_than_the_one_that_missed(block_cell, monkeypatch):
+    """The network's best grasp lies 6 cm beside the block: the fingers close on nothing;
+    the retry's views propose that grasp again, and the pick takes the next one instead."""
+    from tamp.sim.lots.grasping import GraspCandidate
+
+    beside = GraspCandidate(0.56, 0.25, 0.05, 0.0, 0.06, 0.9, 0.2)
+    on_block = GraspCandidate(0.50, 0.25, 0.05, 0.0, 0.06, 0.5, 0.2)
+    monkeypatch.setattr(block_cell.planner, "candidates", lambda *a: [beside, on_block])
+    d = CellDriver(block_cell)
+    st = d.run("Pick(body)", timeout=120)
+    log = [text for _, text in d.skill_state().log]
+    assert st.status is Status.SUCCESS, log
+    grasps = [t for t in log if t.startswith("grasp at (")]
+    assert len(grasps) == 2 and grasps[0].startswith("grasp at (0.560")
+    assert grasps[1].startswith("grasp at (0.500")
+    assert any("closed on nothing" in t for t in log)
+    assert d.run("Place(A)").status is Status.SUCCESS
+
+
 def test_closed_loop_pick_with_hrgnet(building):
     """Pick(scissors): several views while descending, a network grasp, a friction lift."""
     building.planner.record = True

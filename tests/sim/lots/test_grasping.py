@@ -12,7 +12,15 @@ import numpy as np
 import pytest
 
 from tamp.grasp.rect import GraspRect
-from tamp.sim.lots.grasping import antipodal, chord, seated, snap_to_mask, supported
+from tamp.sim.lots.grasping import (
+    GraspCandidate,
+    antipodal,
+    chord,
+    near_grasp,
+    seated,
+    snap_to_mask,
+    supported,
+)
 
 
 def _square(size: int = 40) -> np.ndarray:
@@ -124,3 +132,22 @@ def test_a_grasp_is_clear_only_without_other_objects_in_the_jaws_sweep(neighbour
         89.5, 89.5, math.pi / 2, 30.0, 10.0
     )  # closing along v: the neighbour is beside
     assert clear_of_others(across, crop, K, X_WC, reach, 3.0)
+
+
+@pytest.mark.parametrize(
+    "dx, dyaw_deg, near",
+    [
+        (0.0, 0.0, True),
+        (0.008, 15.0, True),
+        (0.0, 180.0, True),
+        (0.0, 170.0, True),
+        (0.0, -175.0, True),
+        (0.012, 0.0, False),
+        (0.0, 25.0, False),
+        (0.0, 90.0, False),
+    ],
+)
+def test_a_grasp_near_one_that_missed_is_the_same_grasp(dx, dyaw_deg, near):
+    """Closing angles count modulo 180 degrees: the two fingers are alike."""
+    c = GraspCandidate(0.5 + dx, 0.2, 0.05, math.radians(30 + dyaw_deg), 0.05, 1.0, 0.2)
+    assert near_grasp(c, (0.5, 0.2, math.radians(30))) is near
