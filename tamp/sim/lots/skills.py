@@ -32,7 +32,8 @@ Moves are straight TCP lines with a minimum-jerk profile, tracked by Drake's dif
 IK (`tamp.sim.lots.kinematics`). The target is kept centred by re-aiming the camera at
 each view (position-based visual servoing at the view rate: images cost ~50 ms each).
 A new command id starts a skill (while another runs it is cancelled first); ``cancel=True``
-stops the arm where it is and reports FAILURE ("cancelled").
+stops the arm where it is (braking within the acceleration limits) and reports FAILURE
+("cancelled").
 """
 
 from __future__ import annotations
@@ -222,7 +223,8 @@ class SkillController(LeafSystem):
         current = self.state(context)
         cmd: SkillCommand = self.command_port.Eval(context)
         running = current.steps and current.status.status is Status.RUNNING
-        if not running and (cmd.id == 0 or cmd.id == current.command.id):
+        moving = bool(np.any(current.v))  # a skill ended mid-move: still braking
+        if not running and not moving and (cmd.id == 0 or cmd.id == current.command.id):
             return EventStatus.DidNothing()  # idle, no new command: nothing to copy or write
         s: SkillState = copy.deepcopy(current)
         t = context.get_time()
@@ -247,6 +249,11 @@ class SkillController(LeafSystem):
         elif s.steps and s.status.status is Status.RUNNING:
             obs: Observation = self.observation_port.Eval(context)
             self._advance(s, t, q_meas, v_meas, obs)
+        elif np.any(s.v):
+            # cancelled (or failed) mid-move: come to rest within the acceleration limits
+            # where the arm is, rather than stopping the targets in one period
+            s.v = self.kin.brake(s.v)
+            s.q = s.q + s.v * self.dt
         state.get_mutable_abstract_state(self._state).set_value(s)
         return EventStatus.Succeeded()
 
@@ -311,7 +318,6 @@ class SkillController(LeafSystem):
         CAUSES`; the skill layer's misuse, e.g. nothing held, is ``task_failed``)."""
         if status is Status.FAILURE and cause is None:
             cause = "task_failed"
-        s.v = np.zeros(7)
         s.status = SkillStatus(s.command.id, status, detail, cause)
         s.steps, s.step_t0, s.move_from = (), None, None
         s.log.append((t, f"{status.value} {s.command}{': ' + detail if detail else ''}"))
@@ -426,11 +432,16 @@ class SkillController(LeafSystem):
         w = q0.slerp(a, X1.rotation().ToQuaternion()).wxyz()
         rot = RotationMatrix(Quaternion(w / np.linalg.norm(w)))
         X_des = RigidTransform(rot, (1 - a) * np.asarray(p0) + a * X1.translation())
-        X_now = self.kin.tcp_pose(s.q)
-        V = pose_error(X_now, X_des) / self.dt
-        v, _ = self.kin.step(s.q, s.v, V)
-        if not np.all(np.isfinite(v)):  # never command a non-finite target: hold instead
-            v = np.zeros(7)
+        if el >= T + 2.0:
+            # the pose was not reached in time: give it up, braking to rest within the
+            # acceleration limits rather than dropping the velocity to zero in one step
+            v = self.kin.brake(s.v)
+        else:
+            X_now = self.kin.tcp_pose(s.q)
+            V = pose_error(X_now, X_des) / self.dt
+            v, _ = self.kin.step(s.q, s.v, V)
+        if not np.all(np.isfinite(v)):  # never command a non-finite target: brake instead
+            v = self.kin.brake(s.v)
         s.q = s.q + v * self.dt
         s.v = v
         if el >= T:
@@ -439,7 +450,7 @@ class SkillController(LeafSystem):
             # the next step starts from rest: arrive only when stopping now keeps within
             # the acceleration limits (else the safety monitor stops the arm)
             slow = bool(np.all(np.abs(v) <= self.kin.amax * self.dt))
-            return ((there or el >= T + 1.0) and slow) or el >= T + 2.0
+            return (there or el >= T + 1.0) and slow
         return False
 
     # ---- view handlers -------------------------------------------------------------------

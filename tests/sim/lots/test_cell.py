@@ -195,11 +195,17 @@ def test_start_poll_cancel(building):
         assert d.poll(h) is Status.RUNNING
     with pytest.raises(RuntimeError):
         d.start("LookAt(A)")
+    v = building.plant.GetVelocities(d.plant_context(), building.cell.arm)[:7]
+    assert np.max(np.abs(v)) > 0.2  # cancelled at speed
     d.cancel(h)
     assert d.poll(h) is Status.FAILURE and d.status().detail == "cancelled"
     d.advance(0.5)
     v = building.plant.GetVelocities(d.plant_context(), building.cell.arm)[:7]
     assert np.max(np.abs(v)) < 0.02  # stopped where it was
+    monitor = building.safety
+    safety = monitor.state(monitor.GetMyContextFromRoot(d.context))
+    # braked within the joints' limits: the safety monitor saw no breach
+    assert safety.stop is None and safety.stops == (), safety.all_stops(d.context.get_time())
     assert d.run("Discard()").detail == "nothing held"
     fly = d.run("Fly(A)")
     assert fly.status is Status.FAILURE and fly.cause == "task_failed"
