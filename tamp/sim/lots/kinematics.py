@@ -43,14 +43,18 @@ def down(yaw: float) -> RotationMatrix:
     return RotationMatrix.MakeZRotation(yaw) @ R_DOWN
 
 
-def hand_yaw_for_closing(closing_yaw: float) -> float:
-    """The TCP yaw whose fingers close along world direction ``closing_yaw``, in (-pi/2, pi/2].
+def hand_yaw_for_closing(closing_yaw: float, toward: float = 0.0) -> float:
+    """The TCP yaw whose fingers close along world direction ``closing_yaw``, within pi/2 of
+    ``toward`` (default: the ready yaw 0, a yaw in (-pi/2, pi/2]).
 
     The fingers close along the hand's y axis, which at TCP yaw psi points along psi - pi/2;
-    a parallel gripper is symmetric, so psi is taken modulo pi, nearest the ready yaw 0.
+    a parallel gripper is symmetric, so psi is taken modulo pi, the one nearest ``toward``
+    (the skills pass `ArmKinematics.wrist_centred_yaw`: the wrist then stays in its range).
     """
     psi = closing_yaw + math.pi / 2
-    return (psi + math.pi / 2) % math.pi - math.pi / 2
+    return math.remainder(
+        toward + (psi - toward + math.pi / 2) % math.pi - math.pi / 2, 2 * math.pi
+    )
 
 
 class ArmKinematics:
@@ -77,6 +81,8 @@ class ArmKinematics:
         self.params.set_joint_acceleration_limits((-self.amax, self.amax))
         self.params.set_nominal_joint_position(np.array(READY))
         self.params.set_joint_centering_gain(0.5 * np.eye(7))
+        self.lower, self.upper = np.array(ARM.lower), np.array(ARM.upper)
+        self.wrist = self.plant.GetJointByName(ARM.arm_joints[-1], self.model)
 
     def _set(self, q7: np.ndarray) -> None:
         q = self.plant.GetPositions(self.context)
@@ -101,6 +107,13 @@ class ArmKinematics:
         velocity scale) is used but not solved; with no solution (the direction cannot be
         followed within the limits from ``v7``) the joints brake (`brake`)."""
         self._set(q7)
+        # the position limits hold the posture the arm stands in: a joint the PD carried a
+        # hair past its limit would otherwise make every step infeasible (it must move back
+        # at once, faster than the acceleration limit allows), and the arm would never move
+        q7 = np.asarray(q7, float)
+        self.params.set_joint_position_limits(
+            (np.minimum(self.lower, q7), np.maximum(self.upper, q7))
+        )
         J = self.plant.CalcJacobianSpatialVelocity(
             self.context,
             JacobianWrtVariable.kV,
@@ -119,6 +132,19 @@ class ArmKinematics:
         # acceleration limit allowing one small step): still the right direction, so use it
         v = np.asarray(result.joint_velocities).reshape(-1)
         return v, result.status == DifferentialInverseKinematicsStatus.kSolutionFound
+
+    def wrist_centred_yaw(self, q7: np.ndarray) -> float:
+        """The TCP yaw (hand pointing down) at which the last joint would sit mid-range, the
+        other joints as in ``q7``: the wrist turns the hand about the vertical, so a grasp
+        yaw chosen near this (`hand_yaw_for_closing`) keeps it within its +-2.9 rad."""
+        self._set(q7)
+        R = self.tcp.CalcPoseInWorld(self.context).rotation().matrix()
+        yaw = math.atan2(R[1, 0], R[0, 0])
+        R_WJ = self.wrist.frame_on_parent().CalcPoseInWorld(self.context).rotation()
+        up = float((R_WJ @ self.wrist.revolute_axis())[2])  # about -1: the axis points down
+        k = self.wrist.position_start()
+        centred = yaw + up * ((self.lower[k] + self.upper[k]) / 2 - float(q7[k]))
+        return math.remainder(centred, 2 * math.pi)
 
     def brake(self, v7: np.ndarray) -> np.ndarray:
         """The joint velocities one period after ``v7`` when every joint decelerates towards

@@ -514,7 +514,7 @@ class SkillController(LeafSystem):
         g = max(s.candidates, key=lambda c: (c.clear, c.seated, c.quality))
         s.chosen = g
         z = max(g.z - GRASP_DEPTH, MIN_GRASP_Z)
-        yaw = hand_yaw_for_closing(g.yaw)
+        yaw = hand_yaw_for_closing(g.yaw, toward=self.kin.wrist_centred_yaw(s.q))
         s.hold_z = z
         c, w = math.cos(yaw), math.sin(yaw)  # the centre's offset from the TCP, hand frame
         dx, dy = s.target_xy[0] - g.x, s.target_xy[1] - g.y

@@ -61,6 +61,46 @@ def test_closing_yaw_to_hand_yaw():
         assert min(d, np.pi - d) < 1e-9
 
 
+@pytest.mark.parametrize("toward", [-3.0, -1.4, 0.0, 1.5, 3.1])
+def test_hand_yaw_is_the_symmetric_twin_nearest_the_reference(toward):
+    for a in np.linspace(-3, 3, 13):
+        psi = hand_yaw_for_closing(a, toward)
+        off = (psi - toward + np.pi) % (2 * np.pi) - np.pi
+        assert abs(off) <= np.pi / 2 + 1e-9 and -np.pi <= psi <= np.pi
+        d = (psi - np.pi / 2 - a) % np.pi
+        assert min(d, np.pi - d) < 1e-9
+
+
+#: the arm at a look pose over W^A with its wrist at 1.55 rad (seen in a LOTS campaign run)
+LOOK = np.array([0.25, 0.04, 0.49, -2.44, -0.03, 2.48, 1.55])
+
+
+def test_the_wrist_centred_yaw_keeps_the_last_joint_in_range():
+    """Whatever the wrist's angle, the reference is the yaw at which it would be mid-range;
+    a grasp closing along world x then takes the TCP yaw that turns the wrist back towards
+    0 (+91 deg), not the one that turns it past its limit (-89 deg: 1.55 + 1.55 rad)."""
+    kin = ArmKinematics(0.01)
+    q = LOOK.copy()
+    q[6] = 0.0
+    R = kin.tcp_pose(q).rotation().matrix()
+    mid_yaw = np.arctan2(R[1, 0], R[0, 0])
+    for wrist in (-2.5, -1.0, 1.55, 2.5):
+        q[6] = wrist
+        assert kin.wrist_centred_yaw(q) == pytest.approx(mid_yaw, abs=1e-3)
+    psi = hand_yaw_for_closing(np.radians(1.0), kin.wrist_centred_yaw(LOOK))
+    assert np.degrees(psi) == pytest.approx(91.0, abs=1e-6)
+
+
+def test_diff_ik_moves_a_joint_standing_past_its_limit():
+    """The PD carried the wrist to 2.9 rad, past Franka's 2.8973: the QP (position limits that
+    hold the posture) still finds steps, instead of no solution at every step for good."""
+    kin = ArmKinematics(0.01)
+    past = np.array([0.48, 0.24, 0.19, -2.3, -0.08, 2.53, 2.9])
+    v, solved = kin.step(past, np.zeros(7), np.array([0, 0, 0.3, 0, 0, 0.05]))
+    assert solved and np.abs(v).max() > 0.05
+    assert past[6] + v[6] * kin.period <= 2.9  # not further past the limit
+
+
 @pytest.mark.parametrize(
     "url", [TABLE_URL, TRAY_URL, WASTE_BASKET_URL] + [c.url for c in CLASSES.values()]
 )
