@@ -115,6 +115,9 @@ class Observation:
     #: remembered instances of this workspace not seen now because something hides them
     #: (counted in ``counts``, not in ``detections``)
     occluded: tuple[Seen, ...] = ()
+    #: share of the image the held object covers (it hangs 6.5 cm beside the camera's axis
+    #: and hides a patch of the workspace behind it)
+    hand_cover: float = 0.0
 
     def __deepcopy__(self, memo: dict) -> Observation:
         return self  # immutable (arrays are read-only): Drake's state copies cost nothing
@@ -146,6 +149,7 @@ class ViewAnalysis:
     held: frozenset[int]
     in_hand: tuple[str, ...]
     occupied: np.ndarray
+    hand_cover: float = 0.0  # share of the image the held objects cover
 
 
 def analyse(
@@ -184,7 +188,9 @@ def analyse(
         )
     counts = dict(Counter(d.cls for d in detections))
     in_hand = tuple(sorted(classes[v] for v in held))
-    return ViewAnalysis(counts, tuple(detections), held, in_hand, occupied)
+    near = valid & ~far
+    cover = float(np.mean(near & np.isin(label, list(held)))) if held else 0.0
+    return ViewAnalysis(counts, tuple(detections), held, in_hand, occupied, cover)
 
 
 def gripper_labels(
@@ -405,6 +411,7 @@ class Perception(LeafSystem):
             target,
             _frozen(view.occupied),
             occluded,
+            view.hand_cover,
         )
         state.get_mutable_abstract_state(self._state).set_value(
             PerceptionState(req.id, obs, s.frames + 1, s.render_kinds + kinds, memory)

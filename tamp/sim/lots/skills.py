@@ -72,6 +72,13 @@ LIFT_Z = 0.16
 ANGULAR_SPEED = 1.2  # rad/s, mean over a move
 APPROACH_SPEED = 0.15  # m/s (mean 0.08), the last 12 cm to the grasp
 CARRY_SPEED = 0.2  # m/s, mean TCP speed of moves while the fingers are closed
+#: a look while holding is taken again, with the hand turned about half a turn, when the
+#: held object covers more than this share of the image (it hides the table behind it)
+LOOK_AGAIN_COVER = 0.02
+#: the half turn's bounds: short of pi (a slerp over exactly pi has no direction) and within
+#: this much of the wrist-centred yaw (the wrist's +-2.9 rad less a margin)
+HALF_TURN = math.pi - 0.1
+WRIST_REACH = 2.6
 #: how far inside a workspace's edges a placed object's centre stays: its reach, but at least
 #: and at most these (a long object kept nearer the centre would leave no room beside it)
 PLACE_MARGIN = 0.06
@@ -324,15 +331,30 @@ class SkillController(LeafSystem):
 
     # ---- step plans ----------------------------------------------------------------------
     def look_pose(
-        self, side: str, height: float | None = None, at: tuple[float, float] | None = None
+        self,
+        side: str,
+        height: float | None = None,
+        at: tuple[float, float] | None = None,
+        yaw: float = 0.0,
     ) -> tuple[float, float, float, float]:
-        """TCP pose (x, y, z, yaw 0) that puts the camera ``height`` above the table at ``at``
+        """TCP pose (x, y, z, yaw) that puts the camera ``height`` above the table at ``at``
         (default: the look height over the workspace centre), looking straight down."""
         h = self.scenario.control.look_height if height is None else height
         x, y = self.scenario.workspaces[side].center if at is None else at
-        X_WC = RigidTransform(down(0.0), [x, y, h])
+        X_WC = RigidTransform(down(yaw), [x, y, h])
         p = self.kin.tcp_for_camera(X_WC).translation()
-        return (float(p[0]), float(p[1]), float(p[2]), 0.0)
+        return (float(p[0]), float(p[1]), float(p[2]), float(yaw))
+
+    def half_turn(self, s: SkillState) -> float:
+        """The yaw about half a turn from the hand's, turning the wrist towards the middle of
+        its range and never more than `WRIST_REACH` from it."""
+        R = self.kin.tcp_pose(s.q).rotation().matrix()
+        now = math.atan2(R[1, 0], R[0, 0])
+        centre = self.kin.wrist_centred_yaw(s.q)
+        towards = math.remainder(centre - now, 2 * math.pi)
+        yaw = now + math.copysign(HALF_TURN, towards)
+        off = math.remainder(yaw - centre, 2 * math.pi)
+        return centre + max(-WRIST_REACH, min(WRIST_REACH, off))
 
     def _move(self, pose, speed: float | None = None) -> Step:
         return Step(
@@ -455,6 +477,22 @@ class SkillController(LeafSystem):
 
     # ---- view handlers -------------------------------------------------------------------
     def _on_counted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
+        if s.held is not None and obs.hand_cover > LOOK_AGAIN_COVER:
+            # the held object hides a patch of the workspace (what the person put there while
+            # the robot carried it may lie behind it): look again with the camera on the
+            # other side of it; perception's memory joins the two views (what the first saw
+            # and the second cannot is counted as occluded)
+            held = ",".join(obs.in_hand) or s.held
+            s.log.append((t, f"held {held} covers {obs.hand_cover:.0%} of the view: look again"))
+            s.steps = (
+                self._move(self.look_pose(s.side, yaw=self.half_turn(s))),
+                Step("settle"),
+                Step("view", handler="recounted"),
+            )
+            return
+        self._on_recounted(s, t, obs, q_meas)
+
+    def _on_recounted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         detail = ",".join(f"{k}={v}" for k, v in sorted(obs.counts.items()))
         if obs.occluded:  # counted, but remembered rather than seen: say so
             detail += "; occluded " + ",".join(sorted(m.cls for m in obs.occluded))

@@ -39,7 +39,11 @@ def cell(tmp_path_factory):
     return build_diagram(load_cell_scenario(path))
 
 
-def test_a_scissors_hidden_by_the_held_hammer_is_still_counted(cell):
+def test_a_scissors_hidden_by_the_held_hammer_is_still_counted(cell, monkeypatch):
+    """One look only (the second look of a held object's cover is the next test's)."""
+    from tamp.sim.lots import skills
+
+    monkeypatch.setattr(skills, "LOOK_AGAIN_COVER", 1.0)
     d = CellDriver(cell)
     assert d.run("LookAt(B)").detail == "saw=1,scissors=1"
     st = d.run(GRASP)
@@ -66,3 +70,18 @@ def test_a_scissors_hidden_by_the_held_hammer_is_still_counted(cell):
     cell.plant.SetFreeBodyPose(pc, scissors, RigidTransform([0.2, 0.0, 0.0]))
     assert d.run("LookAt(B)").detail == "hammer=1,saw=1"
     assert d.observation().occluded == ()
+
+
+def test_a_look_while_holding_is_taken_again_from_the_other_side(cell):
+    """The held hammer covers part of the view: the look is taken again with the hand turned
+    about half a turn, and the scissors behind the hammer is then seen, not only remembered
+    (a person may have put something there while the robot carried the hammer)."""
+    d = CellDriver(cell)  # the scene as built: never looked at W^B, nothing remembered
+    st = d.run(GRASP)
+    assert st.status is Status.SUCCESS, d.skill_state().log
+    st = d.run("LookAt(B)")
+    log = [text for _, text in d.skill_state().log]
+    assert any("held hammer covers" in t and "look again" in t for t in log), log
+    obs = d.observation()
+    assert "scissors" in {x.cls for x in obs.detections}  # seen from the other side
+    assert obs.counts == {"saw": 1, "scissors": 1} and st.status is Status.SUCCESS
