@@ -69,7 +69,7 @@ MIN_HOLD_WIDTH = 0.004
 MIN_GRASP_Z = 0.017
 GRASP_DEPTH = 0.025  # how far below the object's top the TCP goes (pads reach 15 mm lower)
 LIFT_Z = 0.16
-ANGULAR_SPEED = 1.2  # rad/s, mean over a move
+ANGULAR_SPEED = 1.2  # rad/s, peak TCP angular speed of a move (minimum jerk: 1.875 x the mean)
 APPROACH_SPEED = 0.15  # m/s (mean 0.08), the last 12 cm to the grasp
 CARRY_SPEED = 0.2  # m/s, mean TCP speed of moves while the fingers are closed
 #: a look while holding is taken again, with the hand turned about half a turn, when the
@@ -79,6 +79,9 @@ LOOK_AGAIN_COVER = 0.02
 #: this much of the wrist-centred yaw (the wrist's +-2.9 rad less a margin)
 HALF_TURN = math.pi - 0.1
 WRIST_REACH = 2.6
+#: peak TCP angular speed of that turn (rad/s): the wrist alone turns the hand there, and
+#: Franka's last joint allows 2.61 rad/s (the IK plans within 90 %)
+TURN_SPEED = 2.0
 #: how far inside a workspace's edges a placed object's centre stays: its reach, but at least
 #: and at most these (a long object kept nearer the centre would leave no room beside it)
 PLACE_MARGIN = 0.06
@@ -92,6 +95,7 @@ class Step:
     kind: str  # move | settle | grip | wait | view | check_fingers | check_held | finish
     pose: tuple[float, float, float, float] | None = None
     speed: float = 0.0
+    turn_speed: float = 0.0  # peak TCP angular speed of a move (0: `ANGULAR_SPEED`)
     width: float = 0.0
     handler: str = ""
     duration: float = 0.0
@@ -296,7 +300,14 @@ class SkillController(LeafSystem):
             if s.held is None:
                 return self._finish(s, t, Status.FAILURE, "nothing held")
             s.side = args[0]
-            s.steps = (*self._look(args[0]), Step("view", handler="place"))
+            # at the hand's present yaw (a look while holding may have turned it half round):
+            # any yaw serves for looking and putting down, and turning back costs seconds
+            yaw = self.hand_yaw(s)
+            s.steps = (
+                self._move(self.look_pose(args[0], yaw=yaw)),
+                Step("settle"),
+                Step("view", handler="place"),
+            )
         elif name == "Wait" and len(args) == 1 and args[0] in sides:
             s.side = args[0]
             s.steps = (
@@ -345,11 +356,15 @@ class SkillController(LeafSystem):
         p = self.kin.tcp_for_camera(X_WC).translation()
         return (float(p[0]), float(p[1]), float(p[2]), float(yaw))
 
+    def hand_yaw(self, s: SkillState) -> float:
+        """The TCP's yaw about the world's vertical now (the commanded posture)."""
+        R = self.kin.tcp_pose(s.q).rotation().matrix()
+        return math.atan2(R[1, 0], R[0, 0])
+
     def half_turn(self, s: SkillState) -> float:
         """The yaw about half a turn from the hand's, turning the wrist towards the middle of
         its range and never more than `WRIST_REACH` from it."""
-        R = self.kin.tcp_pose(s.q).rotation().matrix()
-        now = math.atan2(R[1, 0], R[0, 0])
+        now = self.hand_yaw(s)
         centre = self.kin.wrist_centred_yaw(s.q)
         towards = math.remainder(centre - now, 2 * math.pi)
         yaw = now + math.copysign(HALF_TURN, towards)
@@ -433,7 +448,7 @@ class SkillController(LeafSystem):
             ang = float(np.linalg.norm(pose_error(X0, X1)[:3]))
             # with the fingers closed (carrying) the arm moves slower: friction grasps slip
             speed = step.speed if s.finger != CLOSED else min(step.speed, CARRY_SPEED)
-            T = max(1.875 * dist / speed, 1.875 * ang / ANGULAR_SPEED, 0.2)
+            T = max(1.875 * dist / speed, 1.875 * ang / (step.turn_speed or ANGULAR_SPEED), 0.2)
             s.move_from = (X0.translation().copy(), X0.rotation().ToQuaternion().wxyz(), T)
         elif step.kind == "grip":
             s.finger = step.width
@@ -484,8 +499,9 @@ class SkillController(LeafSystem):
             # and the second cannot is counted as occluded)
             held = ",".join(obs.in_hand) or s.held
             s.log.append((t, f"held {held} covers {obs.hand_cover:.0%} of the view: look again"))
+            pose = tuple(float(v) for v in self.look_pose(s.side, yaw=self.half_turn(s)))
             s.steps = (
-                self._move(self.look_pose(s.side, yaw=self.half_turn(s))),
+                Step("move", pose=pose, speed=self.scenario.control.speed, turn_speed=TURN_SPEED),
                 Step("settle"),
                 Step("view", handler="recounted"),
             )
@@ -643,12 +659,14 @@ class SkillController(LeafSystem):
             margin=margin,
             avoid=tuple(m.position[:2] for m in obs.occluded),
         )
-        x, y = cx - s.hold_offset[0], cy - s.hold_offset[1]  # hand yaw 0 at the place
+        yaw = self.hand_yaw(s)  # the look's yaw: the held object's offset turns with it
+        c, w = math.cos(yaw), math.sin(yaw)
+        hx, hy = s.hold_offset
+        x, y = cx - (c * hx - w * hy), cy - (w * hx + c * hy)
         tray = 0.01 if self.scenario.workspaces[s.side].tray else 0.0
         z = s.hold_z + 0.008 + tray
         hidden = "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
         s.log.append((t, f"place the {s.held}'s centre at ({cx:.3f}, {cy:.3f}){hidden}"))
-        yaw = 0.0
         s.target_cls, s.track = None, None  # no grasp target: the views below need no colour
         s.steps = (
             self._move((x, y, z + 0.12, yaw)),
