@@ -31,14 +31,18 @@ def test_weights_file_is_small_and_describes_itself(predictor):
 
 
 @pytest.mark.slow
-def test_correct_grasps_on_new_scenes(predictor, tmp_path: Path):
+@pytest.mark.parametrize("table", ["plain", "mats"])
+def test_correct_grasps_on_new_scenes(predictor, tmp_path: Path, table: str):
+    """On the plain beige table and on coloured mats like the LOTS workcell's (the weights
+    are trained on ``--table mats``, whose scenes are three in four on a mat)."""
     pytest.importorskip("pydrake")
     from tamp.grasp import formats
     from tamp.grasp.datasets import GraspDataset
     from tamp.grasp.evaluate import evaluate
     from tamp.grasp.synthetic import SynthConfig, generate
 
-    generate(tmp_path, 8, SynthConfig(size=predictor.size, views=2, seed=123), progress=False)
+    config = SynthConfig(size=predictor.size, views=2, seed=123, table=table)
+    generate(tmp_path, 8, config, progress=False)
     ds = GraspDataset("jacquard", tmp_path, predictor.size, "rgbd")
     result = evaluate(predictor.model, ds, range(len(ds)), progress=False)
     assert result.accuracy >= 0.75, result.as_dict()
