@@ -133,13 +133,16 @@ class ArmKinematics:
         v = np.asarray(result.joint_velocities).reshape(-1)
         return v, result.status == DifferentialInverseKinematicsStatus.kSolutionFound
 
+    def tcp_yaw(self, q7: np.ndarray) -> float:
+        """The TCP's yaw about the world's vertical (the angle of its x axis; `down`'s yaw)."""
+        R = self.tcp_pose(q7).rotation().matrix()
+        return math.atan2(R[1, 0], R[0, 0])
+
     def wrist_centred_yaw(self, q7: np.ndarray) -> float:
         """The TCP yaw (hand pointing down) at which the last joint would sit mid-range, the
         other joints as in ``q7``: the wrist turns the hand about the vertical, so a grasp
         yaw chosen near this (`hand_yaw_for_closing`) keeps it within its +-2.9 rad."""
-        self._set(q7)
-        R = self.tcp.CalcPoseInWorld(self.context).rotation().matrix()
-        yaw = math.atan2(R[1, 0], R[0, 0])
+        yaw = self.tcp_yaw(q7)
         R_WJ = self.wrist.frame_on_parent().CalcPoseInWorld(self.context).rotation()
         up = float((R_WJ @ self.wrist.revolute_axis())[2])  # about -1: the axis points down
         k = self.wrist.position_start()

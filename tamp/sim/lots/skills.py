@@ -302,7 +302,7 @@ class SkillController(LeafSystem):
             s.side = args[0]
             # at the hand's present yaw (a look while holding may have turned it half round):
             # any yaw serves for looking and putting down, and turning back costs seconds
-            yaw = self.hand_yaw(s)
+            yaw = self.kin.tcp_yaw(s.q)
             s.steps = (
                 self._move(self.look_pose(args[0], yaw=yaw)),
                 Step("settle"),
@@ -356,15 +356,10 @@ class SkillController(LeafSystem):
         p = self.kin.tcp_for_camera(X_WC).translation()
         return (float(p[0]), float(p[1]), float(p[2]), float(yaw))
 
-    def hand_yaw(self, s: SkillState) -> float:
-        """The TCP's yaw about the world's vertical now (the commanded posture)."""
-        R = self.kin.tcp_pose(s.q).rotation().matrix()
-        return math.atan2(R[1, 0], R[0, 0])
-
     def half_turn(self, s: SkillState) -> float:
         """The yaw about half a turn from the hand's, turning the wrist towards the middle of
         its range and never more than `WRIST_REACH` from it."""
-        now = self.hand_yaw(s)
+        now = self.kin.tcp_yaw(s.q)
         centre = self.kin.wrist_centred_yaw(s.q)
         towards = math.remainder(centre - now, 2 * math.pi)
         yaw = now + math.copysign(HALF_TURN, towards)
@@ -659,7 +654,7 @@ class SkillController(LeafSystem):
             margin=margin,
             avoid=tuple(m.position[:2] for m in obs.occluded),
         )
-        yaw = self.hand_yaw(s)  # the look's yaw: the held object's offset turns with it
+        yaw = self.kin.tcp_yaw(s.q)  # the look's yaw: the held object's offset turns with it
         c, w = math.cos(yaw), math.sin(yaw)
         hx, hy = s.hold_offset
         x, y = cx - (c * hx - w * hy), cy - (w * hx + c * hy)
