@@ -4,7 +4,9 @@ requests and a `SkillStatus` out (the same messages as the SMP-MRO workcell, `ta
 Skills (arguments are strings, as in `tamp.world.actions.Action`):
 
 - ``LookAt(side)``: move the camera over W^side, settle, count what is in view; the status
-  detail lists the counts, e.g. ``hammer=1,saw=1``.
+  detail lists the counts, e.g. ``hammer=1,saw=1``. While holding an object that covers more
+  than `LOOK_AGAIN_COVER` of the image, a second view with the hand about half a turn round
+  (the camera on the other side of the held object; perception's memory joins the two).
 - ``Pick(cls[, side])``: closed-loop multi-view grasp (Zhou et al. §IV-B, Fig. 6): a view at
   the look pose finds the target; the hand then descends keeping the target centred under
   the camera, viewing it at each height of ``grasp.view_heights`` above the target's top
@@ -13,8 +15,8 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   on nothing (finger width) or when the target is still on the table in the next view (not
   lifted); it is retried with new predictions up to ``grasp.attempts`` times, never again
   with a grasp that missed or slipped in this pick (`grasping.near_grasp`).
-- ``Place(side)``: look at W^side, put the held object's centre (its offset from the TCP kept
-  at the grasp) on the freest spot seen (away from objects perception remembers there but
+- ``Place(side)``: look at W^side (at the hand's present yaw), put the held object's centre
+  (its offset from the TCP kept at the grasp) on the freest spot seen (away from objects perception remembers there but
   cannot see; its reach inside the edges), lift, one view from there.
 - ``Discard()`` (also ``Place(waste)``, the ``lots_arm`` domain's name for it): drop the
   held object into the waste basket. Both places check the fingers before letting go: an
