@@ -16,8 +16,9 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   lifted); it is retried with new predictions up to ``grasp.attempts`` times, never again
   with a grasp that missed or slipped in this pick (`grasping.near_grasp`).
 - ``Place(side)``: look at W^side (at the hand's present yaw), put the held object's centre
-  (its offset from the TCP kept at the grasp) on the freest spot seen (away from objects perception remembers there but
-  cannot see; its reach inside the edges), lift, one view from there.
+  (its offset from the TCP kept at the grasp) on the freest spot seen (away from objects
+  perception remembers there but cannot see; its reach inside the edges), lift, one view
+  from there.
 - ``Discard()`` (also ``Place(waste)``, the ``lots_arm`` domain's name for it): drop the
   held object into the waste basket. Both places check the fingers before letting go: an
   object lost on the way is reported (FAILURE, "dropped ... while carrying it") and the
