@@ -47,6 +47,15 @@ def test_wilson_edges():
         wilson_interval(-1, 2)
 
 
+def test_wilson_interval_holds_the_observed_rate():
+    """Also at 0 and n successes, where rounding once put 10/10 a hair above the upper
+    bound and a campaign's plot failed on a negative error bar."""
+    for n in range(1, 200):
+        for k in range(n + 1):
+            lo, hi = wilson_interval(k, n)
+            assert 0.0 <= lo <= k / n <= hi <= 1.0
+
+
 def test_percentile_matches_numpy():
     xs = sorted([3.0, 1.5, 9.0, 4.25, 7.0, 2.0, 8.5])
     for q in (0, 10, 50, 90, 100):
