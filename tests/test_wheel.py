@@ -132,4 +132,7 @@ def test_grasp_predict_with_the_shipped_weights(installed, tmp_path):
         assert 30 <= g["u"] <= 66 and 40 <= g["v"] <= 56, g  # on the bar
         assert abs(abs(g["angle"]) - np.pi / 2) < 0.4, g  # fingers close across its width
         assert g["position"][2] == pytest.approx(0.05, abs=0.01)  # the bar's top
-        assert 0.0 < g["quality"] <= 1.0
+        # the quality map is a regression trained towards 1 at grasp centres (MSE), not a
+        # probability: a confident peak may read a little above 1 (the mats weights: 1.02)
+        assert 0.0 < g["quality"] < 2.0
+    assert grasps[0]["quality"] >= grasps[1]["quality"]

@@ -26,8 +26,10 @@ from tamp.grasp.rect import GraspRect, wrap_angle
 
 @dataclass(frozen=True)
 class PredictedGrasp:
-    """One grasp: pixel centre, angle (rad, counter-clockwise on screen), opening, quality;
-    world position (m), closing yaw (rad) and opening (m) when a camera was given."""
+    """One grasp: pixel centre, angle (rad, counter-clockwise on screen), opening, quality
+    (the regressed quality map's peak, trained towards 1 at grasp centres: not a probability,
+    it can read a little above 1); world position (m), closing yaw (rad) and opening (m) when
+    a camera was given."""
 
     u: float
     v: float
