@@ -20,7 +20,7 @@ import numpy as np
 
 from tamp.grasp.pinhole import pixel_to_camera
 from tamp.grasp.predict import to_world
-from tamp.grasp.rect import GraspRect
+from tamp.grasp.rect import GraspRect, angle_difference
 from tamp.sim.core.models import models_dir
 from tamp.sim.lots.perception import TargetCrop
 from tamp.sim.lots.scenario import DEFAULT_WEIGHTS, GraspSettings
@@ -86,8 +86,8 @@ def near_grasp(c: GraspCandidate, missed: tuple[float, float, float]) -> bool:
     """Whether candidate ``c`` is (about) the grasp ``missed`` (x, y, closing yaw) again;
     closing angles are equal modulo 180 degrees (a parallel gripper is symmetric)."""
     x, y, yaw = missed
-    turn = abs((c.yaw - yaw + math.pi / 2) % math.pi - math.pi / 2)
-    return math.hypot(c.x - x, c.y - y) < MISSED_DISTANCE and turn < MISSED_ANGLE
+    close = math.hypot(c.x - x, c.y - y) < MISSED_DISTANCE
+    return close and angle_difference(c.yaw, yaw) < MISSED_ANGLE
 
 
 #: the network's best grasps a view considers: seated ones among the first `SEATED_BEST`;

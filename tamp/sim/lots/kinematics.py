@@ -26,6 +26,7 @@ from pydrake.multibody.inverse_kinematics import (
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import JacobianWrtVariable
 
+from tamp.grasp.rect import wrap_angle
 from tamp.sim.core.parsing import make_parser
 from tamp.sim.lots.catalogue import ARM, READY
 
@@ -52,9 +53,7 @@ def hand_yaw_for_closing(closing_yaw: float, toward: float = 0.0) -> float:
     (the skills pass `ArmKinematics.wrist_centred_yaw`: the wrist then stays in its range).
     """
     psi = closing_yaw + math.pi / 2
-    return math.remainder(
-        toward + (psi - toward + math.pi / 2) % math.pi - math.pi / 2, 2 * math.pi
-    )
+    return math.remainder(toward + wrap_angle(psi - toward), 2 * math.pi)
 
 
 class ArmKinematics:

@@ -369,9 +369,12 @@ class SkillController(LeafSystem):
         off = math.remainder(yaw - centre, 2 * math.pi)
         return centre + max(-WRIST_REACH, min(WRIST_REACH, off))
 
-    def _move(self, pose, speed: float | None = None) -> Step:
+    def _move(self, pose, speed: float | None = None, turn_speed: float = 0.0) -> Step:
         return Step(
-            "move", pose=tuple(float(v) for v in pose), speed=speed or self.scenario.control.speed
+            "move",
+            pose=tuple(float(v) for v in pose),
+            speed=speed or self.scenario.control.speed,
+            turn_speed=turn_speed,
         )
 
     def _look(self, side: str) -> tuple[Step, ...]:
@@ -497,9 +500,9 @@ class SkillController(LeafSystem):
             # and the second cannot is counted as occluded)
             held = ",".join(obs.in_hand) or s.held
             s.log.append((t, f"held {held} covers {obs.hand_cover:.0%} of the view: look again"))
-            pose = tuple(float(v) for v in self.look_pose(s.side, yaw=self.half_turn(s)))
+            pose = self.look_pose(s.side, yaw=self.half_turn(s))
             s.steps = (
-                Step("move", pose=pose, speed=self.scenario.control.speed, turn_speed=TURN_SPEED),
+                self._move(pose, turn_speed=TURN_SPEED),
                 Step("settle"),
                 Step("view", handler="recounted"),
             )
