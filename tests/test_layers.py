@@ -21,6 +21,7 @@ RANK = {
     "tamp.errors": 0,
     "tamp.fileio": 0.5,
     "tamp.scenarios": 0.5,
+    "tamp.perturbation": 0.5,
     "tamp.world": 1,
     "tamp.ltl": 2,
     "tamp.demo": 2,

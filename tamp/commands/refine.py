@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     ):
         if value:
             output_file(value, option, make_parents=parents)
-    from tamp.sim.core.perturbation import check_seed
+    from tamp.perturbation import check_seed
     from tamp.sim.refine.seeded import perturbed_program, program_perturbation
 
     check_seed(args.seed)

@@ -110,7 +110,7 @@ def check_common(args: argparse.Namespace) -> None:
     from tamp.errors import InputError
 
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
-    from tamp.sim.core.perturbation import check_seed
+    from tamp.perturbation import check_seed
 
     check_seed(args.seed)
     if args.max_sim_time is not None and not (

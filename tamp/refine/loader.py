@@ -71,7 +71,7 @@ _KEYS = (
     "communication",
     "ordering",
     "robots",
-    "perturbation",  # seeded runs only: read by tamp.sim.core.perturbation (the sim layer)
+    "perturbation",  # seeded runs only: `tamp.perturbation`
 )
 _BEHAVIOR_KEYS = (
     "name",

@@ -7,7 +7,7 @@ zero-order hold rendering at a fixed rate) at a pose on a body, with a VTK rende
 `backproject` turns a pixel and its depth into a world point (Drake's camera frame: +z
 along the optical axis, +x right, +y down).
 `DepthNoise` adds per-pixel Gaussian noise to a depth image, drawn from the run's seed and
-the frame's time only (`tamp.sim.core.perturbation.stream`), so a seeded run renders the same
+the frame's time only (`tamp.perturbation.stream`), so a seeded run renders the same
 noisy images every time.
 """
 
@@ -21,7 +21,7 @@ from pydrake.systems.framework import LeafSystem
 from pydrake.systems.sensors import CameraConfig, ImageDepth32F, RgbdSensor
 
 from tamp.grasp.pinhole import pixel_to_camera
-from tamp.sim.core.perturbation import stream
+from tamp.perturbation import stream
 
 RENDERER = "vtk"
 

@@ -55,7 +55,7 @@ def model_url(name: str) -> str:
 
 def with_friction(sdf: str, mu: float) -> str:
     """A model's SDF text with every Coulomb coefficient (static and dynamic) set to ``mu``:
-    how a run's drawn friction (`tamp.sim.core.perturbation`) reaches the objects."""
+    how a run's drawn friction (`tamp.perturbation`) reaches the objects."""
     for tag in ("drake:mu_dynamic", "drake:mu_static"):
         sdf = re.sub(rf"<{tag}>[^<]*</{tag}>", f"<{tag}>{mu:.6f}</{tag}>", sdf)
     return sdf

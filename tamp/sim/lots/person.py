@@ -78,7 +78,7 @@ REACTION = 0.5
 
 def slot_key(n: int, phase: str) -> str:
     """The name of a script slot (after ``n`` robot actions, ``phase`` idle or holding) among a
-    run's draws (`tamp.sim.core.perturbation.PerturbationSample.jitter`)."""
+    run's draws (`tamp.perturbation.PerturbationSample.jitter`)."""
     return f"after {n} {phase}"
 
 

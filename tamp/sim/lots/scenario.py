@@ -33,7 +33,7 @@ import numpy as np
 from tamp import scenarios
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
-from tamp.sim.core.perturbation import NONE, Applied, Perturbation, check_seed, parse_perturbation
+from tamp.perturbation import NONE, Applied, Perturbation, check_seed, parse_perturbation
 from tamp.sim.lots.catalogue import CLASSES
 
 CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
@@ -315,7 +315,7 @@ def _safety(s: Fields, control: ControlSettings) -> SafetySettings:
 
 
 def perturbed(scenario: CellScenario, seed: int) -> tuple[CellScenario, Applied]:
-    """``scenario`` as run ``seed`` sees it (`tamp.sim.core.perturbation`): each object moved
+    """``scenario`` as run ``seed`` sees it (`tamp.perturbation`): each object moved
     by its drawn offset inside its workspace (redrawn up to `REDRAWS` times when it would
     stick out or overlap another object, moved or still nominal, else kept nominal with a
     note: so the start stays valid), and the sample kept for what the diagram applies

@@ -111,7 +111,7 @@ class LotsSimResult:
     recording: str | None = None
     safety_stops: list[SafetyStop] = field(default_factory=list)
     seed: int = 0
-    perturbation: dict | None = None  # `tamp.sim.core.perturbation.Applied.to_json()`
+    perturbation: dict | None = None  # `tamp.perturbation.Applied.to_json()`
 
     @property
     def cause(self) -> str | None:

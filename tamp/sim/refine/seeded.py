@@ -1,5 +1,5 @@
 """Seeded runs of a refinement program (``tamp refine --seed N``, ``tamp campaign --kind
-refine``): the program file's ``perturbation`` section (`tamp.sim.core.perturbation`) drawn
+refine``): the program file's ``perturbation`` section (`tamp.perturbation`) drawn
 for one seed and applied to the program.
 
 The refinement workcell simulates the ``robot`` field only: each robot's start pose
@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from tamp.refine.program import Program
-from tamp.sim.core.perturbation import NONE, Applied, Perturbation, check_seed, read_perturbation
+from tamp.perturbation import NONE, Applied, Perturbation, check_seed, read_perturbation
 
 #: the ``perturbation`` fields this workcell simulates
 PERTURBED = ("robot",)

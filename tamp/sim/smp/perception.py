@@ -40,7 +40,7 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 
 from tamp.sim.core.camera import backproject
 from tamp.sim.core.messages import GraspRequest
-from tamp.sim.core.perturbation import stream
+from tamp.perturbation import stream
 from tamp.sim.lots.perception import Observation, ViewRequest
 from tamp.sim.smp.robot import ObjectKind
 

@@ -1,7 +1,7 @@
 """One seeded run of an SMP-MRO scenario: its perturbation sample applied (no Drake import).
 
 `perturb(scenario, seed)` draws ``scenario.perturbation`` for ``seed``
-(`tamp.sim.core.perturbation`) and returns a new `SimScenario` with
+(`tamp.perturbation`) and returns a new `SimScenario` with
 - every object standing at the start moved by its drawn offset (x, y, yaw); an offset that
   would put it outside the workspace, onto another object (moved or still nominal) or under
   the robot is redrawn (up to `REDRAWS` times, then the object keeps its nominal pose, with
@@ -19,7 +19,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from tamp.sim.core.perturbation import Applied, check_seed
+from tamp.perturbation import Applied, check_seed
 from tamp.sim.smp.robot import ROBOT
 from tamp.sim.smp.scenario import RunConditions, SimObject, SimScenario
 from tamp.world.events import AtTick, AtTime

@@ -106,7 +106,7 @@ class SimResult:
     grasp: str = "weld"
     perception: str = "truth"
     seed: int | None = None  # set by a seeded run (`simulate.run_seeded`, ``--seed``)
-    perturbation: dict | None = None  # `tamp.sim.core.perturbation.Applied.to_json()`
+    perturbation: dict | None = None  # `tamp.perturbation.Applied.to_json()`
 
     @property
     def ok(self) -> bool:

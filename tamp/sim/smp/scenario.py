@@ -25,7 +25,7 @@ same entries from flags. Example (``tamp/scenarios/sim/case3.yaml``)::
     fail: []                           # as --fail, e.g. "Pick(O2)" or "Pick(O2)x2"
     grasp: weld                        # weld | friction (the fingers hold it, SAP contact)
     perception: truth                  # truth (plant poses) | camera (RGB-D on the robot)
-    perturbation: {objects: {xy: 0.02}}   # tamp.sim.core.perturbation, drawn per --seed
+    perturbation: {objects: {xy: 0.02}}   # tamp.perturbation, drawn per --seed
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ from tamp import scenarios
 from tamp.demo import Demonstration, load_demonstration
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
-from tamp.sim.core.perturbation import NONE, Perturbation, parse_perturbation
+from tamp.perturbation import NONE, Perturbation, parse_perturbation
 from tamp.sim.smp.placement import Body, blocker
 from tamp.sim.smp.robot import OBJECT_KINDS, ROBOT, ObjectKind
 from tamp.world.events import AfterAction, Appear, AtTick, AtTime, Fail, parse_appear, parse_fail

@@ -10,7 +10,7 @@ import yaml
 from tamp.errors import InputError
 from tamp.refine.loader import load_program
 from tamp.scenarios import resolve
-from tamp.sim.core.perturbation import Perturbation, PoseSpread
+from tamp.perturbation import Perturbation, PoseSpread
 from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.scenario import load_cell_scenario, perturbed, rectangles_overlap
 from tamp.sim.refine.seeded import perturbed_program, program_perturbation

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from tamp.errors import InputError
-from tamp.sim.core.perturbation import Perturbation, PoseSpread
+from tamp.perturbation import Perturbation, PoseSpread
 from tamp.sim.smp.perturb import perturb
 from tamp.sim.smp.robot import ROBOT
 from tamp.sim.smp.scenario import RunConditions, load_scenario

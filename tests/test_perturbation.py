@@ -8,7 +8,7 @@ import pytest
 from tamp.errors import InputError
 from tamp.fileio import Fields
 from tamp.sim.core.outcome import CAUSES, run_cause
-from tamp.sim.core.perturbation import (
+from tamp.perturbation import (
     MAX_ATTEMPTS,
     NONE,
     NORMAL_CLIP,
