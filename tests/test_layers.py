@@ -22,6 +22,7 @@ RANK = {
     "tamp.fileio": 0.5,
     "tamp.scenarios": 0.5,
     "tamp.perturbation": 0.5,
+    "tamp.schema": 0.6,
     "tamp.world": 1,
     "tamp.ltl": 2,
     "tamp.demo": 2,
