@@ -148,3 +148,84 @@ def test_the_comparison_itself():
     assert _compare(["...", "c", "e"], actual) is not None
     assert _compare(["...", "d", "e"], actual) is None
     assert _compare(["a", "...", "x"], actual) is not None
+
+
+# --- the architecture page stays true --------------------------------------------------------
+
+ARCHITECTURE = ROOT / "docs" / "architecture.md"
+
+
+def _section(text: str, title: str) -> str:
+    """The body of the ``## title`` section of a Markdown page."""
+    m = re.search(rf"^## {re.escape(title)}\n(.*?)(?=^## |\Z)", text, re.M | re.S)
+    assert m, f"docs/architecture.md has no '## {title}' section"
+    return m.group(1)
+
+
+def _top_level_packages() -> set[str]:
+    names = {"verification"}
+    for p in (ROOT / "tamp").iterdir():
+        if p.is_dir() and (p / "__init__.py").exists():
+            names.add(f"tamp.{p.name}")
+        elif p.suffix == ".py" and p.name != "__init__.py":
+            names.add(f"tamp.{p.stem}")
+    return names
+
+
+def _layer_table():
+    """RANK and PEERS of tests/test_layers.py (loaded by path: it is the one source)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("_layers", ROOT / "tests" / "test_layers.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.RANK, module.PEERS
+
+
+def _tiers(text: str) -> dict[str, int]:
+    tiers = {}
+    for line in _section(text, "Import arrows").splitlines():
+        m = re.match(r"\|\s*(\d+)\s*\|(.*)\|\s*$", line)
+        if m:
+            for name in re.findall(r"`([\w.]+)`", m.group(2)):
+                tiers[name] = int(m.group(1))
+    return tiers
+
+
+def test_architecture_names_every_top_level_package():
+    text = ARCHITECTURE.read_text(encoding="utf-8")
+    tiers = _tiers(text)
+    missing = sorted(n for n in _top_level_packages() if f"`{n}`" not in text)
+    assert not missing, f"docs/architecture.md does not name {missing}"
+    untiered = sorted(_top_level_packages() - set(tiers))
+    assert not untiered, f"docs/architecture.md's tier table lacks {untiered}"
+
+
+def test_architecture_arrows_match_the_layer_ranks():
+    """The tier table orders the packages exactly as RANK does, and the peer imports it
+    allows within a tier are RANK's same-rank PEERS."""
+    text = ARCHITECTURE.read_text(encoding="utf-8")
+    tiers = _tiers(text)
+    rank, peers = _layer_table()
+    rank = {k: v for k, v in rank.items() if k != "tamp"}
+    assert set(tiers) == set(rank), (
+        f"tier table {sorted(set(tiers) - set(rank))} vs RANK {sorted(set(rank) - set(tiers))}"
+    )
+    wrong = [
+        (a, b)
+        for a in rank
+        for b in rank
+        if (tiers[a] < tiers[b]) != (rank[a] < rank[b])
+        or (tiers[a] == tiers[b]) != (rank[a] == rank[b])
+    ]
+    assert not wrong, f"docs/architecture.md orders these pairs unlike RANK: {wrong[:5]}"
+    stated = re.search(
+        r"Imports allowed between packages of one tier:(.*?)\.\s*$",
+        _section(text, "Import arrows"),
+        re.M | re.S,
+    )
+    assert stated, "docs/architecture.md does not state the imports allowed within a tier"
+    doc_peers = set(re.findall(r"`([\w.]+)` → `([\w.]+)`", stated.group(1)))
+    assert doc_peers or stated.group(1).strip() == "none"
+    same_rank = {(a, b) for a, b in peers if rank.get(a) == rank.get(b)}
+    assert doc_peers == same_rank
