@@ -3,7 +3,7 @@ Ray, or a cluster with the same code) or one after the other in this process, su
 a success rate with its Wilson interval, a task-time distribution, failure causes with their
 seeds, and plots.
 
-Layout: `kinds` (what can run: kind -> one-run function, imported lazily), `run` (one run:
+Layout: `kinds` (what can run: the registered workcells, `tamp.sim.core.workcell`), `run` (one run:
 `Job` -> `RunRecord`, done where it runs), `engines` (Ray / in-process, with the per-run
 time limit), `campaign` (`run_campaign`: files, summary), `stats` (Wilson interval,
 distributions, causes), `plots`. Ray is an optional dependency (``pip install
@@ -12,20 +12,21 @@ distributions, causes), `plots`. Ray is an optional dependency (``pip install
 
 from tamp.campaign.campaign import CampaignResult, CampaignSpec, run_campaign
 from tamp.campaign.engines import LocalEngine, RayEngine, make_engine
-from tamp.campaign.kinds import KINDS, Kind, register, resolve_scenario
+from tamp.campaign.kinds import Workcell, get_kind, kinds, register, resolve_scenario
 from tamp.campaign.run import Job, RunRecord, execute
 from tamp.campaign.stats import wilson_interval
 
 __all__ = [
-    "KINDS",
     "CampaignResult",
     "CampaignSpec",
     "Job",
-    "Kind",
     "LocalEngine",
     "RayEngine",
     "RunRecord",
+    "Workcell",
     "execute",
+    "get_kind",
+    "kinds",
     "make_engine",
     "register",
     "resolve_scenario",

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tamp.campaign.kinds import Kind, import_target
+from tamp.campaign.kinds import Workcell
 from tamp.campaign.run import STATUSES, Job, RunRecord
 from tamp.campaign.stats import Distribution, group_causes, success_by_size, wilson_interval
 from tamp.errors import InputError
@@ -27,21 +27,27 @@ MAX_SEED = 2**63 - 1  # the simulations' seed range (`numpy` seed sequences)
 
 @dataclass(frozen=True)
 class CampaignSpec:
-    """What to run: ``runs`` seeds from ``seed`` of ``scenario`` (a file of ``kind``)."""
+    """What to run: ``runs`` seeds from ``seed`` of ``scenario`` (a file of workcell
+    ``kind``); ``options``: the workcell's campaign options as (dest, value) strings."""
 
-    kind: Kind
+    kind: Workcell
     scenario: Path
     runs: int
     seed: int = 0
     time_limit: float = 600.0  # wall s per run
     max_sim_time: float | None = None
     record: bool = True
-    options: tuple[tuple[str, str], ...] = ()  # (name, value) of the kind's own options
+    options: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
+        from tamp.sim.core.workcell import campaign_options
+
+        allowed = {o.dest: o for o in campaign_options(self.kind)}
         for name, _ in self.options:
-            if name not in self.kind.options:
-                raise InputError(f"not an option of kind {self.kind.name}", field=f"--{name}")
+            if name not in allowed:
+                raise InputError(
+                    f"not an option of kind {self.kind.name}", field="--" + name.replace("_", "-")
+                )
         if self.runs < 1:
             raise InputError(f"must be at least 1, got {self.runs}", field="--runs")
         if self.seed < 0 or self.seed + self.runs - 1 > MAX_SEED:
@@ -69,7 +75,7 @@ class CampaignSpec:
     def jobs(self) -> list[Job]:
         return [
             Job(
-                self.kind.runner,
+                self.kind,
                 str(self.scenario),
                 s,
                 self.max_sim_time,
@@ -81,7 +87,8 @@ class CampaignSpec:
 
     def replay(self, seed: int) -> str:
         """The command that reruns one seed of this campaign."""
-        extra = "".join(f" --{name} {value}" for name, value in self.options)
+        spelling = {o.dest: o.spelling for o in self.kind.options}
+        extra = "".join(f" {spelling[name]} {value}" for name, value in self.options)
         return self.kind.replay.format(scenario=self.scenario, seed=seed) + extra
 
 
@@ -152,7 +159,13 @@ class CampaignResult:
 
 def check_scenario(spec: CampaignSpec) -> None:
     """Load and validate the scenario here, before any run (`InputError`: exit 2)."""
-    import_target(spec.kind.check)(str(spec.scenario), **dict(spec.options))
+    spec.kind.load(str(spec.scenario), **_load_options(spec))
+
+
+def _load_options(spec: CampaignSpec) -> dict[str, str]:
+    """The spec's options that the workcell's loader takes (its load-stage options)."""
+    stage = {o.dest: o.stage for o in spec.kind.options}
+    return {k: v for k, v in spec.options if stage.get(k) == "load"}
 
 
 def run_campaign(

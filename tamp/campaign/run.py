@@ -1,7 +1,7 @@
 """One run of a campaign: what is sent to a worker (`Job`), what comes back (`RunRecord`),
 and `execute`, the function every engine calls where the run happens.
 
-`execute` is the whole of a run: it imports the kind's runner there (so a Ray worker builds
+`execute` is the whole of a run: it runs the workcell's seeded run there (so a Ray worker builds
 its own Drake diagram; nothing Drake-made crosses a process boundary), times it, and turns
 what happened into one of four statuses: ``success``, ``failure`` (the simulation's verdict,
 or a `TampError` such as a refused plan), ``timeout`` (no result within the sim-time limit,
@@ -12,7 +12,6 @@ driver's ``--out`` even when the worker is on another machine.
 
 from __future__ import annotations
 
-import logging
 import os
 import tempfile
 import time
@@ -30,12 +29,12 @@ _FROM_RUNNER = {"SUCCESS": "success", "FAILURE": "failure", "TIMEOUT": "timeout"
 class Job:
     """One seeded run to do: plain data, cheap to pickle."""
 
-    runner: str  # "module:function" (`tamp.campaign.kinds.Kind.runner`)
+    workcell: Any  # the `tamp.sim.core.workcell.Workcell` (plain data: pickled by reference)
     scenario: str  # file path (resolved on the driver)
     seed: int
     max_sim_time: float | None = None
     record: bool = True  # keep the recording when the run does not succeed
-    options: tuple[tuple[str, str], ...] = ()  # the kind's own runner options
+    options: tuple[tuple[str, str], ...] = ()  # the workcell's campaign options
 
 
 @dataclass
@@ -92,7 +91,7 @@ def timed_out(seed: int, limit: float, wall_time: float) -> RunRecord:
 
 
 def from_runner(seed: int, out: Mapping[str, Any], wall_time: float) -> RunRecord:
-    """Normalise a runner's dict (`tamp.campaign.kinds` contract) into a record."""
+    """Normalise a run's JSON (`tamp.sim.core.workcell.RunResult.to_json`) into a record."""
     raw = str(out.get("status", "")).upper()
     if raw not in _FROM_RUNNER:
         return crashed(seed, f"runner returned status {out.get('status')!r}", wall_time)
@@ -115,8 +114,8 @@ def from_runner(seed: int, out: Mapping[str, Any], wall_time: float) -> RunRecor
 def execute(job: Job) -> RunRecord:
     """Run ``job`` here (a Ray task or this process) and return its record; never raises
     for a run's own fault (see the module docstring)."""
-    from tamp.campaign.kinds import import_target
     from tamp.errors import InputError, TampError
+    from tamp.sim.core.workcell import run_seeded
 
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
     os.environ.setdefault("MPLBACKEND", "Agg")
@@ -124,10 +123,8 @@ def execute(job: Job) -> RunRecord:
     with tempfile.TemporaryDirectory(prefix="tamp-run-") as tmp:
         record = str(Path(tmp) / f"seed_{job.seed}.html") if job.record else None
         try:
-            runner = import_target(job.runner)
-            # pydrake (imported by now) sets its logger up on import: one Meshcat URL per run
-            logging.getLogger("drake").setLevel(logging.WARNING)
-            out = runner(
+            out = run_seeded(
+                job.workcell,
                 job.scenario,
                 job.seed,
                 record=record,

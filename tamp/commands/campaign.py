@@ -34,7 +34,7 @@ def register(subparsers) -> None:
         description=__doc__.splitlines()[0],
     )
     p.add_argument("scenario", metavar="SCENARIO", help="scenario file or packaged name")
-    p.add_argument("--kind", choices=("smp-mro", "lots", "refine"), help="default: inferred")
+    p.add_argument("--kind", choices=kind_names(), help="the workcell (default: inferred)")
     p.add_argument("--runs", type=int, required=True, help="number of runs (seeds S..S+N-1)")
     p.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--address", help="Ray cluster to use (default: RAY_ADDRESS, else a local Ray)")
@@ -46,15 +46,8 @@ def register(subparsers) -> None:
         "--time-limit", type=float, default=600.0, help="wall s per run before it is killed"
     )
     p.add_argument("--max-sim-time", type=float, help="override the scenario's sim-time limit")
-    p.add_argument(
-        "--interference", metavar="EVENTS.yaml", help="lots: the person's interference script"
-    )
-    p.add_argument(
-        "--scenario",
-        dest="cell",
-        metavar="CELL.yaml",
-        help="lots: the workcell scenario (default: the packaged one named like the task)",
-    )
+    for option in campaign_flags():
+        option.add_to(p)
     p.add_argument("--out", metavar="DIR", help="output folder (default build/campaign/NAME)")
     p.add_argument("--no-record", action="store_true", help="no recordings of failed runs")
     p.add_argument(
@@ -62,6 +55,35 @@ def register(subparsers) -> None:
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=run)
+
+
+def kind_names() -> tuple[str, ...]:
+    """The registered workcells (`tamp.sim.core.workcell`)."""
+    from tamp.sim.core.workcell import CELL_PACKAGES
+
+    return tuple(CELL_PACKAGES)
+
+
+def campaign_flags() -> list:
+    """Every workcell's campaign options, one flag each (dest ``opt_<dest>``: a flag shared
+    by two cells means the same thing in both)."""
+    import dataclasses
+
+    from tamp.sim.core.workcell import campaign_options, workcells
+
+    seen: dict[str, object] = {}
+    for cell in workcells().values():
+        for o in campaign_options(cell):
+            if o.spelling not in seen:
+                seen[o.spelling] = dataclasses.replace(
+                    o,
+                    dest="opt_" + o.dest,
+                    flag=o.spelling,
+                    help=f"{cell.name}: {o.help}",
+                    default=None,
+                    required=False,
+                )
+    return list(seen.values())
 
 
 def engine_of(args: argparse.Namespace):
@@ -98,10 +120,15 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"must be in [0, 1], got {args.min_success}", field="--min-success")
     kind, path = resolve_scenario(args.scenario, args.kind)
     options: tuple[tuple[str, str], ...] = ()
-    if args.interference is not None:
-        options += (("interference", str(resolve(args.interference, "lots"))),)
-    if args.cell is not None:
-        options += (("scenario", str(resolve(args.cell, "lots_sim"))),)
+    mine = {o.spelling: o for o in kind.options if o.campaign}
+    for flag in campaign_flags():
+        value = getattr(args, flag.dest)
+        if value is None:
+            continue
+        if flag.spelling not in mine:
+            raise InputError(f"not an option of kind {kind.name}", field=flag.spelling)
+        o = mine[flag.spelling]
+        options += ((o.dest, str(resolve(value, o.folder)) if o.folder else str(value)),)
     spec = CampaignSpec(
         kind,
         path,

@@ -1,10 +1,10 @@
-"""The test-only kind (`faulty.FAKE`) registered for the campaign tests, and its file."""
+"""The test-only workcell (`faulty.FAKE`) registered for the campaign tests, and its file."""
 
 from __future__ import annotations
 
 import pytest
 
-from tamp.campaign.kinds import KINDS, register
+from tamp.campaign.kinds import register, unregister
 from tests.campaign.faulty import FAKE
 
 
@@ -12,7 +12,7 @@ from tests.campaign.faulty import FAKE
 def fake_kind():
     register(FAKE)
     yield FAKE
-    KINDS.pop(FAKE.name, None)
+    unregister(FAKE.name)
 
 
 @pytest.fixture

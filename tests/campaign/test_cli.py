@@ -41,12 +41,11 @@ def test_bad_input_exits_2_naming_the_field(argv, field, capsys, tmp_path):
 def test_a_lots_campaign_runs_in_the_workcell_it_names():
     """``--scenario CELL`` reaches the check, every run and the replay command."""
     from tamp.campaign import CampaignSpec, resolve_scenario
-    from tamp.campaign.checks import check_lots
     from tamp.scenarios import resolve
 
     kind, task = resolve_scenario("tower.yaml", None)
     cell = str(resolve("tower_perturbed", "lots_sim"))
-    check_lots(str(task), scenario=cell)  # the perturbed cell matches the task
+    kind.load(str(task), scenario=cell)  # the perturbed cell matches the task
     spec = CampaignSpec(kind, task, 2, seed=4, options=(("scenario", cell),))
     assert spec.replay(5) == f"tamp simulate lots --task {task} --seed 5 --scenario {cell}"
     assert all(dict(job.options)["scenario"] == cell for job in spec.jobs())

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from tamp import scenarios
-from tamp.campaign.kinds import KINDS, get_kind, import_target, resolve_scenario
+from tamp.campaign.kinds import get_kind, kinds, resolve_scenario
 from tamp.errors import InputError
 
 
@@ -33,13 +33,13 @@ def test_user_files_by_their_key(tmp_path):
     ):
         f = tmp_path / f"{kind}.yaml"
         f.write_text(text)
-        assert resolve_scenario(str(f), None) == (KINDS[kind], f)
+        assert resolve_scenario(str(f), None) == (kinds()[kind], f)
     odd = tmp_path / "odd.yaml"
     odd.write_text("version: 1\nname: x\n")
     with pytest.raises(InputError, match="give --kind") as e:
         resolve_scenario(str(odd), None)
     assert e.value.field == "--kind" and e.value.file == str(odd)
-    assert resolve_scenario(str(odd), "lots") == (KINDS["lots"], odd)  # --kind decides
+    assert resolve_scenario(str(odd), "lots") == (kinds()["lots"], odd)  # --kind decides
 
 
 def test_unknown_and_ambiguous(fake_kind, tmp_path, monkeypatch):
@@ -54,7 +54,10 @@ def test_unknown_and_ambiguous(fake_kind, tmp_path, monkeypatch):
         resolve_scenario("case3.yaml", None)
 
 
-def test_every_kind_names_importable_functions():
-    for kind in KINDS.values():
-        assert callable(import_target(kind.runner)) and callable(import_target(kind.check))
+def test_every_kind_is_a_registered_workcell():
+    from tamp.sim.core.workcell import CELL_PACKAGES, Workcell
+
+    assert tuple(kinds()) == tuple(CELL_PACKAGES) == ("smp-mro", "lots", "refine")
+    for name, kind in kinds().items():
+        assert isinstance(kind, Workcell) and kind.name == name
         assert "{seed}" in kind.replay and "{scenario}" in kind.replay

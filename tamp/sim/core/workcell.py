@@ -14,6 +14,7 @@ without building anything (``tamp --help``, a campaign's driver, validation of f
 from __future__ import annotations
 
 import importlib
+import logging
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -138,8 +139,9 @@ class Option:
 
     ``dest`` is the keyword the cell's `Workcell.load` (``stage="load"``) or `Workcell.run`
     (``stage="run"``) takes; ``flag`` its command-line spelling (default ``--dest`` with
-    dashes). ``campaign``: the option is passed on by campaigns too (as a string: a file or a
-    name). The CLI builds its parser from these declarations only (`add_to`)."""
+    dashes). ``campaign``: the option is passed on by campaigns too (as a string: a file, or
+    a packaged name resolved in ``folder``). The CLI builds its parser from these
+    declarations only (`add_to`)."""
 
     dest: str
     help: str
@@ -152,6 +154,7 @@ class Option:
     action: str | None = None  # None (a value) | append | store_true
     required: bool = False
     campaign: bool = False
+    folder: str | None = None  # packaged folder a name resolves in (`tamp.scenarios.resolve`)
 
     @property
     def spelling(self) -> str:
@@ -278,11 +281,20 @@ def run_seeded(
     and the diagram is built there. The entry point of every campaign kind."""
     wc = get(cell) if isinstance(cell, str) else cell
     load_opts, run_opts = split_options(wc, options)
+    _quiet_drake()
     loaded = wc.load(scenario, **load_opts)
     result = wc.run(
         loaded, seed=seed, record=record, max_sim_time=max_sim_time, verify=verify, **run_opts
     )
     return result.to_json()
+
+
+def _quiet_drake() -> None:
+    """Drake's logger at WARNING (pydrake sets it up on import; a run would print one
+    Meshcat URL each)."""
+    import pydrake  # noqa: F401
+
+    logging.getLogger("drake").setLevel(logging.WARNING)
 
 
 def split_options(cell: Workcell, options: dict[str, Any]) -> tuple[dict, dict]:
