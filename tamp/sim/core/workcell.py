@@ -139,9 +139,10 @@ class Option:
 
     ``dest`` is the keyword the cell's `Workcell.load` (``stage="load"``) or `Workcell.run`
     (``stage="run"``) takes; ``flag`` its command-line spelling (default ``--dest`` with
-    dashes). ``campaign``: the option is passed on by campaigns too (as a string: a file, or
-    a packaged name resolved in ``folder``). The CLI builds its parser from these
-    declarations only (`add_to`)."""
+    dashes; a spelling without dashes is a positional argument). ``campaign``: campaigns pass
+    the option on too (as a string: a file, or a packaged name resolved in ``folder``). The
+    CLI builds its parser from these declarations only (`add_to`).
+    """
 
     dest: str
     help: str
@@ -175,6 +176,13 @@ class Option:
                     kwargs[key] = getattr(self, key)
             if self.required:
                 kwargs["required"] = True
+        if not self.spelling.startswith("-"):  # a positional argument
+            del kwargs["dest"]
+            kwargs.pop("required", None)
+            if self.default is not None or not self.required:
+                kwargs["nargs"] = "?"
+            parser.add_argument(self.dest, **kwargs)
+            return
         parser.add_argument(self.spelling, **kwargs)
 
 
