@@ -28,14 +28,14 @@ os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
 
 def run_drake(scenario, time_step: float) -> dict:
     from tamp.rg import plan
-    from tamp.sim.smp.builder import build_diagram
     from tamp.sim.smp.runner import SimRunner
     from tamp.sim.smp.simulate import make_tree
+    from tamp.sim.smp.station import build_station
 
     sc = dataclasses.replace(scenario, time_step=time_step)
     tree = make_tree(sc, plan(sc.demo, sc.cost))
     t0 = time.perf_counter()
-    system = build_diagram(sc, tree)
+    system = build_station(sc, tree)
     runner = SimRunner(system)
     build = time.perf_counter() - t0
     res = runner.run()

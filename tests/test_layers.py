@@ -32,7 +32,11 @@ RANK = {
     "tamp.refine": 3,
     "tamp.grasp": 3,
     "verification": 4,
-    "tamp.sim": 5,
+    "tamp.sim.core": 5,  # what the workcells share ranks below them
+    "tamp.sim.smp": 5.5,
+    "tamp.sim.lots": 5.5,
+    "tamp.sim.refine": 5.5,
+    "tamp.sim": 5.5,  # the package's own __init__
     "tamp.campaign": 6,
     "tamp.commands": 7,
     "tamp": 0,  # the package's own __init__
@@ -84,6 +88,29 @@ def test_layers_import_only_downwards():
                 continue
             if RANK[dst] > RANK[src] or (RANK[dst] == RANK[src] and (src, dst) not in PEERS):
                 bad.append(f"{path.relative_to(ROOT)}:{line}: {src} imports {target}")
+    assert not bad, "\n".join(bad)
+
+
+def _sim_part(module: str) -> str | None:
+    """``core`` or the workcell (``smp``, ``lots``, ...) of a ``tamp.sim.<part>...`` module."""
+    parts = module.split(".")
+    return parts[2] if len(parts) > 2 and parts[:2] == ["tamp", "sim"] else None
+
+
+def test_a_workcell_never_imports_another_and_core_imports_none():
+    """What two workcells share lives in ``tamp.sim.core``: a cell imports core, never another
+    cell, and core imports no cell (whatever ranks ``RANK`` gives them)."""
+    bad = []
+    for module, path in _modules():
+        src = _sim_part(module)
+        if src is None:
+            continue
+        for target, line in _imports(path):
+            dst = _sim_part(target)
+            if dst is None or dst == src or dst == "core":
+                continue
+            what = "core imports the cell" if src == "core" else "one cell imports another"
+            bad.append(f"{path.relative_to(ROOT)}:{line}: {what}: {target}")
     assert not bad, "\n".join(bad)
 
 

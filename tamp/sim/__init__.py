@@ -5,9 +5,12 @@
 messages, the `BtExecutor` LeafSystem that ticks the very behavior tree of `tamp.bt`
 through `PortWorld`, the chunked runner and Meshcat recording. ``tamp.sim.smp`` is the
 SMP-MRO workcell (§V: a youBot-like mobile manipulator, bottles, area markers; Cases 1-3);
-the LOTS and refinement workcells sit beside it.
+the LOTS (``tamp.sim.lots``) and refinement (``tamp.sim.refine``) workcells sit beside it.
+A cell never imports another cell; what two cells share lives in ``core``. Each cell names
+its files by role: ``scenario`` (its scenario files), ``station`` (the Drake diagram,
+``build_station``), ``skills`` (the skill LeafSystem) and ``simulate`` (the run and its result).
 
 This is the only package (with the grasp renderer) that imports Drake; import the
-submodules directly (``from tamp.sim.smp.builder import build_diagram``) so that importing
+submodules directly (``from tamp.sim.smp.station import build_station``) so that importing
 ``tamp.sim`` itself stays cheap.
 """

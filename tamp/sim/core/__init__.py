@@ -1,4 +1,7 @@
 """What every Drake workcell shares: model data (`models`), the offline parser (`parsing`),
-port messages (`messages`), the BT executor system (`executor`), the chunked runner
-(`runner`), Meshcat views and recordings (`recording`), seeded perturbations
-(`perturbation`), run causes (`outcome`) and RGB-D cameras with seeded depth noise (`camera`)."""
+the SAP plant (`plant`), port messages (`messages`: skills and views), the BT executor system
+(`executor`), the chunked runner (`runner`), Meshcat views and recordings (`recording`), run
+causes (`outcome`), RGB-D cameras with seeded depth noise (`camera`), the label-image detector
+(`perception`) and the timing of a run's parts (`timing`). It ranks below the cells: nothing
+here imports ``tamp.sim.smp``, ``tamp.sim.lots`` or ``tamp.sim.refine``; what is a cell's own
+(its object classes, its workspaces) is passed in."""

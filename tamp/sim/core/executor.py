@@ -7,7 +7,7 @@ over the system's ports and state:
 
 - ``observe()``  -> the ``world_state`` input (from the `WorldStateEstimator`);
 - ``start(a)``   -> a new `SkillCommand` with the next id, kept in state and sent on the
-  ``skill_command`` output to the `SkillController`;
+  ``skill_command`` output to the cell's skill controller (e.g. `YouBotSkillController`);
 - ``poll(h)``    -> the ``skill_status`` input when it reports command ``h`` (RUNNING until
   the controller picks the command up and finishes it; the result is sticky);
 - ``cancel(h)``  -> the same command with ``cancel=True``. The log says why: HALTED when the

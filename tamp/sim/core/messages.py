@@ -1,18 +1,35 @@
 """Values that travel on the abstract ports between the LeafSystems (no Drake import).
 
-    BtExecutor --SkillCommand--> SkillController --SkillStatus--> BtExecutor
-    SkillController --GraspRequest--> grasp switch (weld constraints) and WorldStateEstimator
+Skills (every workcell):
+
+    BtExecutor --SkillCommand--> skill controller --SkillStatus--> BtExecutor
+    skill controller --GraspRequest--> grasp switch (weld constraints) and WorldStateEstimator
 
 A command carries an id; the controller reports the status of the id it is working on,
 so the executor never mistakes the result of an earlier skill for the current one.
+
+Views (the cells with a camera, `tamp.sim.core.perception`):
+
+    skills or pose estimator --ViewRequest--> Perception --Observation--> skills, controller
+
+An `Observation` holds what a detector would give (per-class counts, `Detection`s, the
+`TargetCrop` a grasp network reads, remembered instances hidden now as `Seen`), never a
+plant pose. Every message is frozen; the port values return themselves from
+``__deepcopy__``, so Drake's copies of port values and state cost nothing.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
 
 from tamp.world.geometry import Area
 from tamp.world.interface import Status
+
+if TYPE_CHECKING:
+    from pydrake.math import RigidTransform
 
 
 @dataclass(frozen=True)
@@ -71,3 +88,77 @@ class GraspRequest:
 
     def __deepcopy__(self, memo: dict) -> GraspRequest:
         return self
+
+
+@dataclass(frozen=True)
+class ViewRequest:
+    """Ask for one view: id (0 = none), the workspace looked at (``side``: a name the cell
+    chooses; perception remembers what it saw per name), what to find in it, and where the
+    camera is (the robot's own kinematics of its measured joints, never a plant pose).
+    Without ``camera_pose`` perception counts what it sees and remembers nothing."""
+
+    id: int = 0
+    side: str = ""
+    target: str | None = None  # class to find for a grasp (then the colour image is rendered)
+    track: int | None = None  # instance tracked so far (its detector id)
+    camera_pose: RigidTransform | None = None  # X_WC when the view was asked for
+
+    def __deepcopy__(self, memo: dict) -> ViewRequest:
+        return self
+
+
+@dataclass(frozen=True)
+class Detection:
+    """One instance in view: detector id (label), class, pixel area, centroid, median depth."""
+
+    label: int
+    cls: str
+    pixels: int
+    u: float
+    v: float
+    depth: float
+
+
+@dataclass(frozen=True)
+class Seen:
+    """An instance as perception last saw it: detector id, class, and the world point of its
+    centroid (back-projected through its median depth: about the middle of its top)."""
+
+    label: int
+    cls: str
+    position: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class TargetCrop:
+    """The grasp network's input around the target: square crop (``origin`` = its top-left
+    pixel in the full image) of colour, depth and the target's mask."""
+
+    detection: Detection
+    origin: tuple[int, int]
+    rgb: np.ndarray
+    depth: np.ndarray
+    mask: np.ndarray
+
+
+@dataclass(frozen=True)
+class Observation:
+    """The answer to view request ``id`` (rendered at sim ``time``)."""
+
+    id: int = 0
+    time: float = 0.0
+    side: str = ""
+    counts: dict[str, int] = field(default_factory=dict)
+    detections: tuple[Detection, ...] = ()
+    in_hand: tuple[str, ...] = ()  # classes seen closer than hand_depth (in the gripper)
+    target: TargetCrop | None = None
+    occupied: np.ndarray | None = None  # object pixels on the table (full image, bool)
+    #: remembered instances of this workspace not seen now because something hides them
+    #: (counted in ``counts``, not in ``detections``)
+    occluded: tuple[Seen, ...] = ()
+    #: share of the image the held object covers (it hangs 6.5 cm beside the camera's axis
+    #: and hides a patch of the workspace behind it)
+    hand_cover: float = 0.0
+
+    def __deepcopy__(self, memo: dict) -> Observation:
+        return self  # immutable (arrays are read-only): Drake's state copies cost nothing

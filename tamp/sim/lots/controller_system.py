@@ -12,7 +12,7 @@ abstract state and ticks it once per periodic unrestricted update against a `Por
 - ``cancel(h)``  -> the same command with ``cancel=True``.
 
 The controller's skills are the ``lots_arm`` domain's (``LookAt(l)``, ``Pick(k, l)``,
-``Place(l)``, ``Wait(l)``) and the cell's `SkillController` speaks that vocabulary itself
+``Place(l)``, ``Wait(l)``) and the cell's `PandaSkillController` speaks that vocabulary itself
 (``Place(waste)`` is its ``Discard()``, ``Wait(l)`` a look and a hold), so nothing is
 translated here and the skill timing stays in the one skill layer.
 
@@ -30,8 +30,7 @@ from dataclasses import dataclass, field
 from tamp.lots.cell import SIDES, view_state
 from tamp.lots.controller import LotsController
 from tamp.sim.core.executor import ActionLog, ControllerSystem, PortWorld
-from tamp.sim.core.messages import SkillCommand
-from tamp.sim.lots.perception import Observation
+from tamp.sim.core.messages import Observation, SkillCommand
 from tamp.world.actions import Action
 from tamp.world.interface import Status
 from tamp.world.state import WorldState

@@ -15,9 +15,8 @@ from typing import Protocol
 
 from pydrake.systems.analysis import Simulator
 
-from tamp.sim.core.messages import SkillCommand, SkillStatus
-from tamp.sim.lots.builder import LotsCell
-from tamp.sim.lots.perception import Observation
+from tamp.sim.core.messages import Observation, SkillCommand, SkillStatus
+from tamp.sim.lots.station import LotsStation
 from tamp.world.events import parse_call
 from tamp.world.interface import Status
 
@@ -47,7 +46,7 @@ class DriverStats:
 class CellDriver:
     """The workcell's skills behind start / poll / cancel (one skill at a time)."""
 
-    def __init__(self, cell: LotsCell, *, tick: float = 0.05):
+    def __init__(self, cell: LotsStation, *, tick: float = 0.05):
         self.cell = cell
         self.tick = tick
         self.simulator = Simulator(cell.diagram)

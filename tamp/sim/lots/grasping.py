@@ -21,10 +21,10 @@ import numpy as np
 from tamp.grasp.pinhole import pixel_to_camera
 from tamp.grasp.predict import to_world
 from tamp.grasp.rect import GraspRect, angle_difference
+from tamp.sim.core.messages import TargetCrop
 from tamp.sim.core.models import models_dir
-from tamp.sim.lots.perception import TargetCrop
+from tamp.sim.core.timing import Stopwatch
 from tamp.sim.lots.scenario import DEFAULT_WEIGHTS, GraspSettings
-from tamp.sim.lots.timing import Stopwatch
 
 MAX_OPENING = 0.08  # the gripper's opening (2 x 0.04 m)
 #: torch intra-op threads for the network inside the workcell. The simulation runs in the

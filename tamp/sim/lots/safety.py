@@ -46,12 +46,12 @@ from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I
 
 from tamp.sim.core.camera import backproject
+from tamp.sim.core.messages import Observation, ViewRequest
 from tamp.sim.core.parsing import make_parser
 from tamp.sim.lots.catalogue import (
     ARM,
     HAND_LABEL,  # the person's hand's render label
 )
-from tamp.sim.lots.perception import Observation, ViewRequest
 from tamp.sim.lots.scenario import SafetySettings
 
 CAUSES = ("hand_near", "speed_limit", "accel_limit", "command_rate")

@@ -1,6 +1,6 @@
 """``tamp simulate lots``: a LOTS task run by the LOTS controller inside the Drake workcell.
 
-    build_lots_diagram: the workcell diagram (`build_diagram`) as a subsystem, and
+    build_lots_diagram: the workcell station (`build_station`) as a subsystem, and
       LotsControllerSystem:  cell.observation, cell.skill_status ─► controller
                              controller.skill_command ─► cell.skill_command
 
@@ -29,7 +29,6 @@ from tamp.lots.task import Event, Task
 from tamp.sim.core.executor import ActionLog
 from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
 from tamp.sim.core.runner import make_simulator, run_in_chunks
-from tamp.sim.lots.builder import LotsCell, build_diagram
 from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.controller_system import PERIOD, LotsControllerSystem
 from tamp.sim.lots.person import (
@@ -49,6 +48,7 @@ from tamp.sim.lots.scenario import (
     CellScenario,
     perturbed,
 )
+from tamp.sim.lots.station import LotsStation, build_station
 from tamp.world.interface import Status
 
 #: how far the simulator runs between checks of the controller's result (sim s)
@@ -62,7 +62,7 @@ class LotsDiagram:
     """The workcell with the LOTS controller wired in."""
 
     diagram: Diagram
-    cell: LotsCell
+    cell: LotsStation
     controller: LotsControllerSystem
 
 
@@ -77,7 +77,7 @@ def build_lots_diagram(
     """The cell diagram of ``scenario`` driven by ``controller`` (observation and skill status
     in, skill command out: nothing else reaches the controller). ``person``: interference
     events a scripted person carries out in the cell (`tamp.sim.lots.person`)."""
-    cell = build_diagram(scenario, meshcat=meshcat, person=person)
+    cell = build_station(scenario, meshcat=meshcat, person=person)
     builder = DiagramBuilder()
     sub = builder.AddSystem(cell.diagram)
     ctrl = builder.AddSystem(LotsControllerSystem(controller, period=period))
@@ -195,7 +195,7 @@ def with_network(scenario: CellScenario, network: str | None) -> CellScenario:
     return dataclasses.replace(scenario, grasp=grasp)
 
 
-def plant_counts(cell: LotsCell, plant_context) -> tuple[dict[str, dict[str, int]], list[str]]:
+def plant_counts(cell: LotsStation, plant_context) -> tuple[dict[str, dict[str, int]], list[str]]:
     """Counts per class in W^A, W^B and the waste basket from the objects' plant poses, and
     the objects lying in none of them (held, on the floor, elsewhere on the table)."""
     plant, scenario = cell.plant, cell.scenario

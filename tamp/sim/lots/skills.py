@@ -1,5 +1,7 @@
-"""The LOTS workcell's skills as one LeafSystem: a `SkillCommand` in, joint targets, view
-requests and a `SkillStatus` out (the same messages as the SMP-MRO workcell, `tamp.sim.core`).
+"""The LOTS workcell's skills as one LeafSystem, `PandaSkillController` (it drives the
+Panda-like 7-DoF arm of `tamp.sim.lots.catalogue.ArmSpec`): a `SkillCommand` in, joint
+targets, view requests and a `SkillStatus` out (the same messages as the SMP-MRO workcell,
+`tamp.sim.core.messages`).
 
 Skills (arguments are strings, as in `tamp.world.actions.Action`):
 
@@ -54,13 +56,12 @@ from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 from tamp.grasp.pinhole import pixel_to_camera
 from tamp.lots.cell import WASTE, lots_domain
 from tamp.sim.core.camera import backproject
-from tamp.sim.core.messages import SkillCommand, SkillStatus
+from tamp.sim.core.messages import Observation, SkillCommand, SkillStatus, ViewRequest
+from tamp.sim.core.timing import Stopwatch
 from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner, near_grasp
 from tamp.sim.lots.kinematics import ArmKinematics, down, hand_yaw_for_closing, pose_error
-from tamp.sim.lots.perception import Observation, ViewRequest
 from tamp.sim.lots.scenario import CellScenario
-from tamp.sim.lots.timing import Stopwatch
 from tamp.world.interface import Status
 
 SKILLS = ("LookAt", "Pick", "PickAt", "Place", "Discard", "Wait")
@@ -159,7 +160,7 @@ def min_jerk(s: float) -> float:
     return s**3 * (10 - 15 * s + 6 * s * s)
 
 
-class SkillController(LeafSystem):
+class PandaSkillController(LeafSystem):
     """Runs the workcell's skills; see the module docstring."""
 
     def __init__(

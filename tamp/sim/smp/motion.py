@@ -1,7 +1,7 @@
 """Reference trajectories for the skills (no Drake import): base paths with velocity and
 acceleration limits, smooth joint-space moves, and where the base stands to work on a place.
 
-A `Segment` is what the SkillController keeps in its state: a start time, a duration, a
+A `Segment` is what the `YouBotSkillController` keeps in its state: a start time, a duration, a
 start and end configuration of the 10 robot joints, and a time-scaling profile; the
 desired joint positions and velocities at any time come from `Segment.sample`.
 Base motions follow a polyline (grid A* around the objects, shortened by line-of-sight)

@@ -1,7 +1,8 @@
 """Object poses from the youBot's camera (``perception: camera``), not from the plant.
 
-    RgbdSensor (mast camera on the base) ─► [DepthNoise] ─► Perception (the LOTS workcell's
-    detector: label + depth image -> detections) ─► ObjectPoseEstimator ─► body_poses
+    RgbdSensor (mast camera on the base) ─► [DepthNoise] ─► Perception (the shared
+    detector, `tamp.sim.core.perception`: label + depth image -> detections)
+      ─► ObjectPoseEstimator ─► body_poses
     ObjectPoseEstimator.view_request ─► Perception          (one view every period)
 
 `ObjectPoseEstimator` asks for one view per period and turns every detection into an
@@ -38,10 +39,9 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import EventStatus, LeafSystem
 
-from tamp.sim.core.camera import backproject
-from tamp.sim.core.messages import GraspRequest
 from tamp.perturbation import stream
-from tamp.sim.lots.perception import Observation, ViewRequest
+from tamp.sim.core.camera import backproject
+from tamp.sim.core.messages import GraspRequest, Observation, ViewRequest
 from tamp.sim.smp.robot import ObjectKind
 
 #: the detections' pixels lie on the object's near side: its centre is this many radii farther

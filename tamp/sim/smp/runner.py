@@ -4,7 +4,7 @@ It advances the simulator in chunks of one controller period (`tamp.sim.core.run
 
 Weld toggling. A weld constraint's active status lives in the plant's context and is not an
 output of any system, so no LeafSystem event can switch it. Between chunks the runner reads
-the SkillController's ``grasp`` output and switches the matching weld on (or every weld
+the `YouBotSkillController`'s ``grasp`` output and switches the matching weld on (or every weld
 off) with `MultibodyPlant.SetConstraintActiveStatus`. The controller asks for a weld only
 once the fingers have closed at the grasp pose, and waits a dwell longer than one chunk
 before it lifts, so the weld is always on when the lift starts (FIELD_NOTES: a weld
@@ -44,10 +44,10 @@ from pydrake.multibody.math import SpatialVelocity
 from tamp.sim.core.executor import ActionLog
 from tamp.sim.core.outcome import run_cause
 from tamp.sim.core.runner import make_simulator, run_in_chunks
-from tamp.sim.smp.builder import SimSystem
 from tamp.sim.smp.ik import grasp_transform
 from tamp.sim.smp.placement import Body, blocker, free_spot, why_not_in
 from tamp.sim.smp.robot import ROBOT
+from tamp.sim.smp.station import SmpStation
 from tamp.world.events import AfterAction, Appear, AtTick, AtTime, format_call
 from tamp.world.interface import Status
 
@@ -161,9 +161,9 @@ class SimResult:
 
 
 class SimRunner:
-    """Runs a built `SimSystem` to the end of its task."""
+    """Runs a built `SmpStation` to the end of its task."""
 
-    def __init__(self, system: SimSystem, *, realtime_rate: float = 0.0):
+    def __init__(self, system: SmpStation, *, realtime_rate: float = 0.0):
         """``realtime_rate``: 0 runs as fast as possible; 1.0 paces a live Meshcat view."""
         self.system = system
         self.simulator = make_simulator(system.diagram, realtime_rate=realtime_rate)
@@ -184,8 +184,8 @@ class SimRunner:
     # -- between-step work -------------------------------------------------------------------
     def _sync_grasp(self) -> None:
         s = self.system
-        ctl_context = s.controller.GetMyContextFromRoot(self.root)
-        req = s.controller.grasp_port.Eval(ctl_context)
+        ctl_context = s.skills.GetMyContextFromRoot(self.root)
+        req = s.skills.grasp_port.Eval(ctl_context)
         want = None if req.obj is None else (req.obj, req.variant)
         if want == self.active or not s.welds:  # friction grasps: nothing to switch
             return
@@ -331,7 +331,7 @@ class SimRunner:
         why = self.goal_check(poses)
         failures = [w for w in why.values() if w is not None]
         status, reason = judge(ex.result, tree_reason, failures, limit)
-        skill_failures = list(s.controller.failures(s.controller.GetMyContextFromRoot(self.root)))
+        skill_failures = list(s.skills.failures(s.skills.GetMyContextFromRoot(self.root)))
         cause = run_cause(
             status,
             [c for _, _, c, _ in skill_failures],

@@ -77,7 +77,7 @@ def simulate_smp_mro(
     max_sim_time: float | None = None,
     realtime_rate: float = 0.0,
 ):
-    """Plan, verify, build and run; returns (`SimResult`, `Prepared`, `SimSystem`).
+    """Plan, verify, build and run; returns (`SimResult`, `Prepared`, `SmpStation`).
 
     ``seed``: the run's draw of the scenario's perturbation (`tamp.sim.smp.perturb`); the
     same seed gives the same run, bit for bit on one machine (sim times, poses, actions).
@@ -86,15 +86,15 @@ def simulate_smp_mro(
     (a local Meshcat server is started when ``meshcat`` is None).
     """
     from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
-    from tamp.sim.smp.builder import build_diagram
     from tamp.sim.smp.perturb import perturb
     from tamp.sim.smp.runner import SimRunner
+    from tamp.sim.smp.station import build_station
 
     prepared = prepare(scenario, verify=verify)
     scenario, applied = perturb(scenario, seed)
     if record is not None and meshcat is None:
         meshcat = new_meshcat()
-    system = build_diagram(scenario, prepared.policy, meshcat=meshcat)
+    system = build_station(scenario, prepared.policy, meshcat=meshcat)
     runner = SimRunner(system, realtime_rate=realtime_rate)
     if record is not None:
         start_recording(system.visualizer)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform
 
-from tamp.sim.lots.builder import build_diagram
 from tamp.sim.lots.driver import CellDriver
 from tamp.sim.lots.scenario import load_cell_scenario
+from tamp.sim.lots.station import build_station
 from tamp.world.interface import Status
 from tests.sim.lots.helpers import write_scenario
 
@@ -19,7 +19,7 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def building():
     """The packaged model-building scene (W^A: saw, 2 scissors, hammer; W^B empty)."""
-    return build_diagram(load_cell_scenario("model_building"))
+    return build_station(load_cell_scenario("model_building"))
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +29,7 @@ def block_cell(tmp_path_factory):
         tmp_path_factory.mktemp("cell"),
         [{"class": "body", "workspace": "A", "xy": [0.0, 0.0], "yaw": 0}],
     )
-    return build_diagram(load_cell_scenario(path))
+    return build_station(load_cell_scenario(path))
 
 
 def test_diagram_is_named_and_exports_its_ports(building):
@@ -230,7 +230,7 @@ def test_a_perturbed_cell_adds_depth_noise_and_a_drawn_grasp_failure_is_retried(
 
     scenario, applied = perturbed(load_cell_scenario("tower_perturbed"), 116)
     assert applied.skill_failures["Pick"] == [1]
-    cell = build_diagram(scenario)
+    cell = build_station(scenario)
     conn = cell.diagram.connection_map()
     readers = {
         k[0].get_name(): v[0].get_name()

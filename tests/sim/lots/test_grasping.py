@@ -104,8 +104,8 @@ def _scene(neighbour_u: int):
     ``neighbour_u`` (the closing line runs along u)."""
     from pydrake.math import RigidTransform
 
+    from tamp.sim.core.messages import Detection, TargetCrop
     from tamp.sim.lots.kinematics import down
-    from tamp.sim.lots.perception import Detection, TargetCrop
 
     depth = np.full((180, 180), 0.4, np.float32)  # the table
     mask = np.zeros((180, 180), bool)

@@ -11,9 +11,8 @@ from pydrake.systems.analysis import Simulator
 from tamp.lots.cell import visible_counts
 from tamp.lots.controller import LotsController
 from tamp.lots.task import load_task
-from tamp.sim.core.messages import SkillStatus
+from tamp.sim.core.messages import Observation, SkillStatus
 from tamp.sim.lots.controller_system import PERIOD, LotsControllerSystem, observed_state
-from tamp.sim.lots.perception import Observation
 from tamp.world.interface import Status
 
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform
 
-from tamp.sim.lots.builder import build_diagram
 from tamp.sim.lots.driver import CellDriver
 from tamp.sim.lots.scenario import load_cell_scenario
+from tamp.sim.lots.station import build_station
 from tamp.world.interface import Status
 from tests.sim.lots.helpers import write_scenario
 
@@ -36,7 +36,7 @@ def cell(tmp_path_factory):
             {"class": "scissors", "workspace": "B", "xy": HIDDEN_XY, "yaw": -90},
         ],
     )
-    return build_diagram(load_cell_scenario(path))
+    return build_station(load_cell_scenario(path))
 
 
 def test_a_scissors_hidden_by_the_held_hammer_is_still_counted(cell, monkeypatch):

@@ -206,11 +206,11 @@ def test_the_hand_carries_an_object_between_workspaces_and_parks(tmp_path):
 def test_the_persons_light_curtain_wakes_the_safety_monitor():
     """With a scripted person the monitor's ``person_present`` is the person's curtain (not
     an exported input); the controller side still gets nothing of the person."""
-    from tamp.sim.lots.builder import build_diagram
     from tamp.sim.lots.scenario import load_cell_scenario
+    from tamp.sim.lots.station import build_station
 
     task = load_task("tower")
-    cell = build_diagram(
+    cell = build_station(
         load_cell_scenario("tower"), person=load_events("tower_interference", task)
     )
     conn = cell.diagram.connection_map()

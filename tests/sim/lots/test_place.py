@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform
 
+from tamp.sim.core.messages import Detection, TargetCrop
 from tamp.sim.lots.kinematics import down
-from tamp.sim.lots.perception import Detection, TargetCrop
 from tamp.sim.lots.skills import reach_of
 
 

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform
 
-from tamp.sim.lots.builder import build_diagram
 from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.driver import CellDriver
 from tamp.sim.lots.scenario import load_cell_scenario
+from tamp.sim.lots.station import build_station
 from tamp.world.interface import Status
 
 from .helpers import BASE, write_scenario
@@ -26,8 +26,8 @@ PICK = "PickAt(A, 0.42, 0.25, 0)"
 
 def _driver(path) -> CellDriver:
     scenario = load_cell_scenario(path)
-    index = int(build_diagram(scenario).cell.bodies["hand"].index())  # the block's label
-    cell = build_diagram(scenario, hand_labels=frozenset({index}))
+    index = int(build_station(scenario).cell.bodies["hand"].index())  # the block's label
+    cell = build_station(scenario, hand_labels=frozenset({index}))
     d = CellDriver(cell)
     cell.diagram.GetInputPort("person_present").FixValue(d.context, [1.0])
     return d
@@ -103,7 +103,7 @@ def test_a_slow_command_stream_is_an_emergency_stop(tmp_path):
 def test_the_monitor_renders_nothing_of_its_own_without_a_hand(tmp_path):
     """It reads perception's frames in the same update (the sensor's cache: no second render)
     and renders nothing else while no hand is in view and no person is present."""
-    cell = build_diagram(load_cell_scenario(write_scenario(tmp_path, BLOCK)))
+    cell = build_station(load_cell_scenario(write_scenario(tmp_path, BLOCK)))
     d = CellDriver(cell)
     assert d.run("LookAt(A)").status is Status.SUCCESS
     assert d.run("LookAt(B)").status is Status.SUCCESS

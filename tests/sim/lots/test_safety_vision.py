@@ -23,10 +23,10 @@ from pydrake.systems.framework import DiagramBuilder
 
 from tamp.sim.core.camera import RENDERER
 from tamp.sim.core.parsing import make_parser
-from tamp.sim.lots.builder import add_wrist_camera, wrist_camera_config
 from tamp.sim.lots.catalogue import ARM, HAND_LABEL, READY
 from tamp.sim.lots.safety import EE_BODIES, GripperModel, distance_to_boxes, hand_points
 from tamp.sim.lots.scenario import load_cell_scenario
+from tamp.sim.lots.station import add_wrist_camera, wrist_camera_config
 
 pytestmark = pytest.mark.slow  # renders images
 RADIUS = 0.03

@@ -70,11 +70,11 @@ class Track:
 
 def verified_runner(path: Path):
     """(scenario, system, runner) for a scenario file: planned, verified, built, not run."""
-    from tamp.sim.smp.builder import build_diagram
     from tamp.sim.smp.runner import SimRunner
     from tamp.sim.smp.scenario import load_scenario
     from tamp.sim.smp.simulate import prepare
+    from tamp.sim.smp.station import build_station
 
     scenario = load_scenario(path)
-    system = build_diagram(scenario, prepare(scenario).policy)
+    system = build_station(scenario, prepare(scenario).policy)
     return scenario, system, SimRunner(system)

@@ -127,14 +127,12 @@ def test_one_diagram_runs_twice_in_two_contexts_alike(tmp_path):
     ctx_a = first.root
     found = system.executor.state(system.executor.GetMyContextFromRoot(ctx_a)).extra_areas
     assert any(name.startswith("free_auto") for name in found)
-    ctl_a = system.controller.areas(system.controller.GetMyContextFromRoot(ctx_a))
+    ctl_a = system.skills.areas(system.skills.GetMyContextFromRoot(ctx_a))
     assert set(found) <= set(ctl_a)
     # nothing of run 1 is left on the systems: a fresh context knows the built areas only
     fresh = system.diagram.CreateDefaultContext()
     for ctx in (fresh, untouched):
-        assert system.controller.areas(system.controller.GetMyContextFromRoot(ctx)) == dict(
-            system.areas
-        )
+        assert system.skills.areas(system.skills.GetMyContextFromRoot(ctx)) == dict(system.areas)
         assert system.executor.state(system.executor.GetMyContextFromRoot(ctx)).extra_areas == {}
 
     from tamp.sim.smp.runner import SimRunner

@@ -7,8 +7,8 @@ import math
 import pytest
 from pydrake.math import RigidTransform
 
-from tamp.sim.smp.builder import build_diagram
 from tamp.sim.smp.scenario import load_scenario
+from tamp.sim.smp.station import build_station
 from tamp.world.interface import Status
 from tamp.world.predicates import IsAreaFree, IsHandFree, IsObjectAt, IsRobotCloseTo
 
@@ -27,7 +27,7 @@ class Idle:
 @pytest.mark.parametrize("case", [1, 2, 3])
 def test_initial_world_state_matches_the_demonstration(case):
     scenario = load_scenario(packaged(f"case{case}.yaml"))
-    system = build_diagram(scenario, Idle())
+    system = build_station(scenario, Idle())
     root = system.diagram.CreateDefaultContext()
     est = system.estimator
     world = est.world_state_port.Eval(est.GetMyContextFromRoot(root))
@@ -54,7 +54,7 @@ def test_initial_world_state_matches_the_demonstration(case):
 
 def test_an_object_moved_in_the_plant_is_seen_there():
     scenario = load_scenario(packaged("case3.yaml"))
-    system = build_diagram(scenario, Idle())
+    system = build_station(scenario, Idle())
     root = system.diagram.CreateDefaultContext()
     plant_ctx = system.plant.GetMyMutableContextFromRoot(root)
     area = system.areas["L1"]

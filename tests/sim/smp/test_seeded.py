@@ -96,7 +96,7 @@ def test_camera_estimates_are_within_a_centimetre_and_drive_the_skills(tmp_path)
     assert result.perception == "camera"
     # the skill controller and the world-state estimator read the estimator's poses
     links = system.diagram.connection_map()
-    for system_in in (system.controller, system.estimator):
+    for system_in in (system.skills, system.estimator):
         src, _ = links[(system_in, system_in.body_poses_port.get_index())]
         assert src is est
     frames = system.diagram.GetSubsystemByName("perception")

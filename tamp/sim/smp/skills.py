@@ -1,4 +1,5 @@
-"""SkillController: runs MoveTo / Pick / Place on the simulated robot (SMP-MRO §V-A3).
+"""YouBotSkillController: runs MoveTo / Pick / Place on the youBot-like mobile manipulator
+(SMP-MRO §V-A3).
 
 A LeafSystem with a periodic unrestricted update (the controller period, e.g. 20 ms). Its
 abstract state holds the command it works on, the phase of the skill, the reference
@@ -136,7 +137,7 @@ class SkillFailure(Exception):
         self.cause = cause
 
 
-class SkillController(LeafSystem):
+class YouBotSkillController(LeafSystem):
     """MoveTo / Pick / Place skills driving the plant's PD-controlled actuators."""
 
     def __init__(

@@ -1,25 +1,34 @@
-"""Perception: what the wrist camera shows, as the LOTS controller and the grasp skill need it.
+"""Perception: what a robot's camera shows, as a detector would report it.
 
-The paper detects objects with YOLO in the RGB image; here the camera's *label image*
-stands in for the detector: every pixel carries the id of the body it shows (Drake's
-`RgbdSensor`), and a fixed map from those ids to object classes plays the role of the
-detector's class output. What the controller receives is only what a detector would give:
+Every workcell with a camera uses it: the LOTS arm's wrist camera (the LOTS controller counts
+per class, the grasp skill gets the target's crop) and the SMP-MRO youBot's mast camera (the
+object pose estimator back-projects the detections). The cell injects what is its own: the map
+from render labels to object classes (``classes``), the image size and period, the depth
+below which pixels are in the gripper (``hand_depth``), the intrinsics (to remember what was
+seen), and, with each `ViewRequest`, the name of the workspace looked at and the camera's pose
+from its own kinematics. The messages are in `tamp.sim.core.messages`.
+
+Zhou et al. (IEEE T-ASE 2023) detect objects with YOLO in the RGB image; here the camera's
+*label image* stands in for the detector: every pixel carries the id of the body it shows
+(Drake's `RgbdSensor`), and the fixed map from those ids to object classes plays the role of
+the detector's class output. What a consumer receives is only what a detector would give:
 per class, the instances in view (pixel area, centroid, depth), never a plant pose.
 
 Counting (Zhou et al. §III-B: the observed state is the count per class of the visible
 workspace): an instance counts when at least ``min_pixels`` of its pixels lie farther than
-``hand_depth`` (0.12 m) from the camera (nearer pixels are in the gripper). For a grasp, the target
-(the instance of the requested class tracked so far, else the one nearest the image centre)
-comes with a square crop of colour, depth and its mask around it: the grasp network's input.
+``hand_depth`` (0.12 m) from the camera (nearer pixels are in the gripper). For a grasp, the
+target (the instance of the requested class tracked so far, else the one nearest the image
+centre) comes with a square crop of colour, depth and its mask around it: the grasp network's
+input.
 
-Occlusion is not absence: the object the gripper holds hangs in front of the camera (the camera
-sits 6.5 cm off the gripper's axis) and hides part of the workspace. Perception therefore keeps,
-per workspace, what it last saw there (`Seen`: each instance's class and the world point of
-its centroid, back-projected through its depth, the intrinsics and the camera pose the skills
-give with the request, from the arm's own kinematics). At a new view of that workspace, a
-remembered instance that is not seen now is kept (counted, and reported as occluded) when its
-point is hidden: out of the image, or covered by something nearer than it (the gripper, the
-held object); one whose point lies in plain view is gone (`recall`). An instance seen in the
+Occlusion is not absence: an object the gripper holds can hang in front of a wrist camera
+(the LOTS arm's sits 6.5 cm off the gripper's axis) and hide part of the workspace.
+Perception therefore keeps, per workspace, what it last saw there (`Seen`: each instance's
+class and the world point of its centroid, back-projected through its depth, the intrinsics
+and the camera pose given with the request). At a new view of that workspace, a remembered
+instance that is not seen now is kept (counted, and reported as occluded) when its point is
+hidden: out of the image, or covered by something nearer than it (the gripper, the held
+object); one whose point lies in plain view is gone (`recall`). An instance seen in the
 gripper is forgotten everywhere: it lies in no workspace.
 
 Rendering is the budget (~15-20 ms per image kind at 320x180 on 2 cores): the sensor renders
@@ -42,85 +51,13 @@ from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I, ImageRgba8U
 
 from tamp.grasp.pinhole import camera_to_pixel
 from tamp.sim.core.camera import backproject
-from tamp.sim.lots.timing import Stopwatch
+from tamp.sim.core.messages import Detection, Observation, Seen, TargetCrop, ViewRequest
+from tamp.sim.core.timing import Stopwatch
 
 #: a remembered point counts as covered where the image shows something this much nearer (m)
 OCCLUSION_TOLERANCE = 0.02
 #: half-size of the patch around a remembered point's pixel that is checked for cover (m)
 OCCLUSION_WINDOW = 0.015
-
-
-@dataclass(frozen=True)
-class ViewRequest:
-    """Ask for one view: id (0 = none), the workspace looked at, what to find in it, and
-    where the camera is (the arm's own kinematics: `ArmKinematics.camera_pose` of the measured
-    joints). Without ``camera_pose`` perception counts what it sees and remembers nothing."""
-
-    id: int = 0
-    side: str = ""
-    target: str | None = None  # class to find for a grasp (then the colour image is rendered)
-    track: int | None = None  # instance tracked so far (its detector id)
-    camera_pose: RigidTransform | None = None  # X_WC when the view was asked for
-
-    def __deepcopy__(self, memo: dict) -> ViewRequest:
-        return self
-
-
-@dataclass(frozen=True)
-class Detection:
-    """One instance in view: detector id (label), class, pixel area, centroid, median depth."""
-
-    label: int
-    cls: str
-    pixels: int
-    u: float
-    v: float
-    depth: float
-
-
-@dataclass(frozen=True)
-class Seen:
-    """An instance as perception last saw it: detector id, class, and the world point of its
-    centroid (back-projected through its median depth: about the middle of its top)."""
-
-    label: int
-    cls: str
-    position: tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class TargetCrop:
-    """The grasp network's input around the target: square crop (``origin`` = its top-left
-    pixel in the full image) of colour, depth and the target's mask."""
-
-    detection: Detection
-    origin: tuple[int, int]
-    rgb: np.ndarray
-    depth: np.ndarray
-    mask: np.ndarray
-
-
-@dataclass(frozen=True)
-class Observation:
-    """The answer to view request ``id`` (rendered at sim ``time``)."""
-
-    id: int = 0
-    time: float = 0.0
-    side: str = ""
-    counts: dict[str, int] = field(default_factory=dict)
-    detections: tuple[Detection, ...] = ()
-    in_hand: tuple[str, ...] = ()  # classes seen closer than hand_depth (in the gripper)
-    target: TargetCrop | None = None
-    occupied: np.ndarray | None = None  # object pixels on the table (full image, bool)
-    #: remembered instances of this workspace not seen now because something hides them
-    #: (counted in ``counts``, not in ``detections``)
-    occluded: tuple[Seen, ...] = ()
-    #: share of the image the held object covers (it hangs 6.5 cm beside the camera's axis
-    #: and hides a patch of the workspace behind it)
-    hand_cover: float = 0.0
-
-    def __deepcopy__(self, memo: dict) -> Observation:
-        return self  # immutable (arrays are read-only): Drake's state copies cost nothing
 
 
 @dataclass(frozen=True)
@@ -302,7 +239,8 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 
 
 class Perception(LeafSystem):
-    """Answers `ViewRequest`s from the wrist camera's label, depth (and colour) images."""
+    """Answers `ViewRequest`s from a camera's label, depth (and colour) images (module
+    docstring: what the cell injects through the arguments)."""
 
     def __init__(
         self,

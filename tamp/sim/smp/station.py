@@ -1,9 +1,11 @@
-"""Builds the SMP-MRO simulation diagram from a `SimScenario` (one function, one Diagram).
+"""The SMP-MRO station: `build_station` builds the Drake diagram of a `SimScenario` (one
+function, one named Diagram) and returns its handles (`SmpStation`).
 
     MultibodyPlant + SceneGraph  (models/sdf: floor, youBot-like robot, objects, area discs)
       body_poses ─► WorldStateEstimator ─► world_state ─► BtExecutor ─► skill_command
-      skill_command, robot state, body_poses ─► SkillController ─► desired_state (PD actuators)
-      SkillController.grasp ─► WorldStateEstimator, and the weld switch of `SimRunner`
+      skill_command, robot state, body_poses ─► YouBotSkillController ─► desired_state (PD)
+      YouBotSkillController.grasp ─► WorldStateEstimator, and the weld switch of `SimRunner`
+    mast RgbdSensor ─► Perception ─► ObjectPoseEstimator ─► body_poses (``perception: camera``)
     MeshcatVisualizer (optional)
 
 Plant settings come from Drake's `MultibodyPlantConfig` (discrete SAP solver, needed by
@@ -40,16 +42,16 @@ from tamp.sim.core.executor import BtExecutor, Policy
 from tamp.sim.core.models import model_url, sdf_path, with_friction
 from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.core.recording import add_visualizer
-from tamp.sim.smp.controller import SkillController
 from tamp.sim.smp.estimator import WorldStateEstimator
 from tamp.sim.smp.ik import grasp_transform
 from tamp.sim.smp.robot import CAMERA, HOME_ARM, ROBOT, grasped_kinds
 from tamp.sim.smp.scenario import SimScenario
+from tamp.sim.smp.skills import YouBotSkillController
 from tamp.world.geometry import Area
 
 
 @dataclass
-class SimSystem:
+class SmpStation:
     """The built diagram and the handles the runner, tests and notebooks need."""
 
     diagram: Diagram
@@ -59,7 +61,7 @@ class SimSystem:
     bodies: dict[str, Any]  # object id -> RigidBody
     welds: dict[tuple[str, int], Any]  # (object id, variant) -> MultibodyConstraintId
     executor: BtExecutor
-    controller: SkillController
+    skills: YouBotSkillController
     estimator: WorldStateEstimator
     areas: dict[str, Area]
     visualizer: Any = None
@@ -78,9 +80,9 @@ def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
 
 
 def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodies, kinds, palm):
-    """The mast camera, depth noise, the LOTS detector and the pose estimator (wired)."""
+    """The mast camera, depth noise, the detector and the pose estimator (wired)."""
     from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config, look_at
-    from tamp.sim.lots.perception import Perception
+    from tamp.sim.core.perception import Perception
     from tamp.sim.smp.perception import ObjectPoseEstimator, prior_poses
 
     base = plant.GetBodyByName(ROBOT.base_body, robot)
@@ -135,7 +137,7 @@ def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodie
     return estimator
 
 
-def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None) -> SimSystem:
+def build_station(scenario: SimScenario, policy: Policy, *, meshcat: Any = None) -> SmpStation:
     """The named Diagram of ``scenario`` with ``policy`` (the grown BT) in the BtExecutor."""
     builder = DiagramBuilder()
     plant, scene_graph, parser = add_sap_plant(
@@ -219,8 +221,8 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
             workspace=scenario.workspace,
         )
     )
-    controller = builder.AddSystem(
-        SkillController(
+    skills = builder.AddSystem(
+        YouBotSkillController(
             period=scenario.controller_period,
             bodies={k: int(b.index()) for k, b in bodies.items()},
             kinds=kinds,
@@ -243,16 +245,16 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
     if scenario.perception == "camera":  # object poses from images, not from the plant
         perception = _add_camera(builder, plant, scene_graph, scenario, robot, bodies, kinds, palm)
         builder.Connect(poses, perception.body_poses_in)
-        builder.Connect(controller.grasp_port, perception.grasp_port)
+        builder.Connect(skills.grasp_port, perception.grasp_port)
         poses = perception.body_poses_port
     builder.Connect(poses, estimator.body_poses_port)
-    builder.Connect(poses, controller.body_poses_port)
-    builder.Connect(plant.get_state_output_port(robot), controller.robot_state_port)
-    builder.Connect(controller.grasp_port, estimator.grasp_port)
+    builder.Connect(poses, skills.body_poses_port)
+    builder.Connect(plant.get_state_output_port(robot), skills.robot_state_port)
+    builder.Connect(skills.grasp_port, estimator.grasp_port)
     builder.Connect(estimator.world_state_port, executor.world_state_port)
-    builder.Connect(controller.status_port, executor.skill_status_port)
-    builder.Connect(executor.command_port, controller.command_port)
-    builder.Connect(controller.desired_state_port, plant.get_desired_state_input_port(robot))
+    builder.Connect(skills.status_port, executor.skill_status_port)
+    builder.Connect(executor.command_port, skills.command_port)
+    builder.Connect(skills.desired_state_port, plant.get_desired_state_input_port(robot))
 
     visualizer = None
     if meshcat is not None:
@@ -260,7 +262,7 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
 
     diagram = builder.Build()
     diagram.set_name(f"smp_mro_{scenario.name}")
-    return SimSystem(
+    return SmpStation(
         diagram=diagram,
         plant=plant,
         scenario=scenario,
@@ -268,7 +270,7 @@ def build_diagram(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
         bodies=bodies,
         welds=welds,
         executor=executor,
-        controller=controller,
+        skills=skills,
         estimator=estimator,
         areas=areas,
         visualizer=visualizer,

@@ -1,8 +1,9 @@
 """Where a workcell run's time goes: wall and process-CPU seconds of named parts.
 
-The workcell's Python parts (camera renders, perception, the grasp network, the skills'
+A workcell's Python parts (camera renders, perception, a grasp network, the skills'
 differential IK) each keep a `Stopwatch`; what the whole run cost minus those parts is the
-plant's step (contact, SAP) and the framework. Stopwatches are measurements, never
+plant's step (contact, SAP) and the framework (`breakdown`; which parts a cell has is the
+cell's to say, e.g. `tamp.sim.lots.station.cell_parts`). Stopwatches are measurements, never
 simulation state: they live on the systems, not in the Context, and a run's results do
 not depend on them. Process CPU time counts every thread of the process (the renderer's and
 torch's too), so on a machine shared with other jobs it measures what the run itself costs,
@@ -56,17 +57,3 @@ def breakdown(total_wall: float, total_cpu: float, parts: dict[str, Stopwatch]) 
         row["wall_share"] = round(row["wall"] / total_wall, 3) if total_wall > 0 else 0.0
         row["cpu_share"] = round(row["cpu"] / total_cpu, 3) if total_cpu > 0 else 0.0
     return out
-
-
-def cell_parts(cell) -> dict[str, Stopwatch]:
-    """The non-overlapping timed parts of a built workcell (`tamp.sim.lots.builder.LotsCell`):
-    camera renders, perception's analysis, the grasp network, and the skills' own update
-    (differential IK, view handlers: their update time without the network calls)."""
-    sk, net = cell.skills.control, cell.planner.network
-    skills = Stopwatch(max(sk.wall - net.wall, 0.0), max(sk.cpu - net.cpu, 0.0), sk.calls)
-    return {
-        "render": cell.perception.render,
-        "perception": cell.perception.analysis,
-        "network": net,
-        "skills": skills,
-    }

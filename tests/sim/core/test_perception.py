@@ -1,17 +1,13 @@
-"""Perception and grasp post-processing on synthetic arrays (no simulation)."""
+"""The shared detector (`tamp.sim.core.perception`) on synthetic arrays (no simulation): counts,
+targets, crops, and what it remembers of a workspace it cannot see all of."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
-from pydrake.math import RigidTransform
+from pydrake.math import RigidTransform, RotationMatrix
 
-from tamp.grasp.rect import GraspRect
-from tamp.sim.lots.grasping import dilate, on_mask, snap_to_mask
-from tamp.sim.lots.kinematics import down
-from tamp.sim.lots.perception import (
+from tamp.sim.core.perception import (
     analyse,
     choose_target,
     crop_square,
@@ -19,8 +15,6 @@ from tamp.sim.lots.perception import (
     hidden,
     recall,
 )
-from tamp.sim.lots.scenario import Workspace
-from tamp.sim.lots.skills import free_spot
 
 EMPTY = 32766  # RenderLabel.kEmpty
 
@@ -67,43 +61,13 @@ def test_crop_square_stays_in_the_image():
     assert crop_square(180, (180, 320), 310, 10) == (140, 0)
 
 
-def test_snap_moves_a_grasp_beside_a_bar_onto_it():
-    mask = np.zeros((100, 100), bool)
-    mask[45:55, 10:90] = True  # a horizontal bar
-    # the centre 20 px above the bar, closing vertically (angle 90 deg), opening 50 px
-    g = GraspRect(40.0, 30.0, math.pi / 2, 50.0, 10.0)
-    assert on_mask(g, mask) is None
-    s = snap_to_mask(g, mask)
-    assert (s.x, s.y) == pytest.approx((40.0, 49.5), abs=0.5)
-    assert abs(math.sin(s.angle)) == pytest.approx(1.0)  # the network's angle is kept
-    # closing along the bar from beside it never reaches the bar: rejected
-    assert snap_to_mask(GraspRect(40.0, 20.0, 0.0, 50.0, 10.0), mask) is None
-    assert on_mask(GraspRect(40.0, 50.0, 0.0, 50.0, 10.0), mask) is not None
-
-
-def test_dilate():
-    m = np.zeros((5, 5), bool)
-    m[2, 2] = True
-    assert dilate(m, 1).sum() == 9 and dilate(m, 2).sum() == 25
-
-
-def test_free_spot_avoids_objects():
-    w = Workspace("B", (0.5, -0.25), (0.34, 0.34))
-    K = (231.4, 231.4, 159.5, 89.5)
-    X_WC = RigidTransform(down(0.0), [0.5, -0.25, 0.47])
-    occupied = np.zeros((180, 320), bool)
-    assert free_spot(w, occupied, X_WC, K) == (0.5, -0.25)
-    occupied[60:120, 130:190] = True  # an object in the middle of the view
-    x, y = free_spot(w, occupied, X_WC, K)
-    assert w.contains(x, y, margin=0.05)
-    assert math.hypot(x - 0.5, y + 0.25) > 0.12
-
-
 # ---- occlusion is not absence: what perception remembers of a workspace ---------------------
 
 K = (231.4, 231.4, 159.5, 89.5)
 TABLE = 0.47  # the camera's height over the table at the look pose
-X_LOOK = RigidTransform(down(0.0), [0.5, -0.25, TABLE])
+#: the camera looking straight down, image right along world +x, image down along world -y
+LOOKING_DOWN = RotationMatrix(np.diag([1.0, -1.0, -1.0]))
+X_LOOK = RigidTransform(LOOKING_DOWN, [0.5, -0.25, TABLE])
 
 
 def view(objects: dict[int, tuple[slice, slice]], held: tuple[slice, slice] | None = None):
@@ -144,7 +108,7 @@ def test_a_remembered_instance_hidden_by_the_held_object_is_kept_as_occluded():
     )
     # the robot comes back holding the hammer, whose band covers the corner: the scissors'
     # pixels show the hammer 8 cm away; the scissors stays in memory, reported occluded
-    assert Workspace("B", (0.5, -0.25), (0.34, 0.34)).contains(x, y)
+    assert abs(x - 0.5) <= 0.17 and abs(y + 0.25) <= 0.17  # in W^B (0.34 m square)
     hammer_band = (slice(110, 180), slice(180, 320))
     label, depth = view({8: SAW}, held=hammer_band)
     label[SCISSORS][depth[SCISSORS] > 0.1] = 5  # nothing of it is left uncovered
@@ -188,10 +152,3 @@ def test_hidden_out_of_the_image_behind_the_camera_and_under_a_patch():
     # an object lying there 2 cm tall is no cover for a point on its top
     _, depth = view({5: (slice(80, 100), slice(150, 170))})
     assert not hidden((0.5, -0.25, 0.02), depth, X_LOOK, K)
-
-
-def test_free_spot_keeps_away_from_hidden_objects():
-    w = Workspace("B", (0.5, -0.25), (0.34, 0.34))
-    occupied = np.zeros((180, 320), bool)
-    x, y = free_spot(w, occupied, X_LOOK, K, avoid=((0.61, -0.36),))
-    assert math.hypot(x - 0.61, y + 0.36) > 0.25

@@ -1,11 +1,13 @@
-"""Builds the LOTS workcell diagram from a `CellScenario` (the manipulation course's station
-idiom: one function, one named Diagram, exported ports).
+"""The LOTS station: `build_station` builds the workcell's Drake diagram from a
+`CellScenario` (the manipulation course's station idiom: one function, one named Diagram,
+exported ports) and returns its handles (`LotsStation`).
 
     MultibodyPlant + SceneGraph (tamp.sim.lots.plant: table, arm, baskets, objects)
       wrist RgbdSensor (CameraConfig, VTK over EGL) ─► color/depth/label ─► Perception
-      Perception.observation ─► SkillController ─► ArmCommandStream (1 kHz) ─► SafetyMonitor
-        ─► desired_state (the arm's PD actuators); SafetyMonitor.stopped ─► SkillController.hold
-      SkillController.view_request ─► Perception
+      Perception.observation ─► PandaSkillController ─► ArmCommandStream (1 kHz)
+        ─► SafetyMonitor ─► desired_state (the arm's PD actuators)
+      SafetyMonitor.stopped ─► PandaSkillController.hold
+      PandaSkillController.view_request ─► Perception
     PersonSystem (optional, tamp.sim.lots.person) ─► the hand's desired state, carry forces
     exported: skill_command, person_present (in; the person's curtain when scripted);
       skill_status, observation, view_request, arm_state, safety_stopped (out)
@@ -14,7 +16,7 @@ idiom: one function, one named Diagram, exported ports).
 The camera is configured through Drake's `CameraConfig` (D435 colour intrinsics at a reduced
 resolution) but added as a plain `RgbdSensor`, not through `ApplyCameraConfig`: that adds an
 `RgbdSensorDiscrete` whose zero-order hold renders at ``fps`` whatever happens; a plain
-sensor renders only when Perception evaluates its ports (see `tamp.sim.lots.perception`).
+sensor renders only when Perception evaluates its ports (see `tamp.sim.core.perception`).
 Nothing outside the plant reads object poses: the skills see the arm's state and the
 camera's answers only (a test checks the diagram's connections).
 """
@@ -33,21 +35,22 @@ from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
 from tamp.lots.task import Event
 from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config
+from tamp.sim.core.perception import Perception
 from tamp.sim.core.recording import add_visualizer
+from tamp.sim.core.timing import Stopwatch
 from tamp.sim.lots.catalogue import ARM, HAND_LABEL
 from tamp.sim.lots.command import ArmCommandStream
 from tamp.sim.lots.grasping import GraspPlanner
 from tamp.sim.lots.kinematics import ArmKinematics
-from tamp.sim.lots.perception import Perception
 from tamp.sim.lots.person import add_person, staged_objects
 from tamp.sim.lots.plant import CellPlant, add_cell_plant
 from tamp.sim.lots.safety import SafetyMonitor
 from tamp.sim.lots.scenario import CellScenario
-from tamp.sim.lots.skills import SkillController
+from tamp.sim.lots.skills import PandaSkillController
 
 
 @dataclass
-class LotsCell:
+class LotsStation:
     """The built diagram and the handles the driver, tests and notebooks need."""
 
     diagram: Diagram
@@ -56,7 +59,7 @@ class LotsCell:
     camera: RgbdSensor
     camera_config: CameraConfig
     perception: Perception
-    skills: SkillController
+    skills: PandaSkillController
     planner: GraspPlanner
     visualizer: object = None
     meshcat: Any = None
@@ -114,13 +117,13 @@ def noisy_depth(builder, scenario: CellScenario, depth_port):
     return noise.depth_out
 
 
-def build_diagram(
+def build_station(
     scenario: CellScenario,
     *,
     meshcat: Any = None,
     person: Sequence[Event] | None = None,
     hand_labels=frozenset({HAND_LABEL}),
-) -> LotsCell:
+) -> LotsStation:
     """The named Diagram of ``scenario``; drive it through ``skill_command`` (see `CellDriver`).
 
     ``person``: the events of an interference script: a scripted person's hand carries them
@@ -151,7 +154,7 @@ def build_diagram(
     kin = ArmKinematics(scenario.control.period)
     planner = GraspPlanner(scenario.grasp, intrinsics)
     skills = builder.AddSystem(
-        SkillController(scenario, kin, planner, cell.q0, cell.actuator_order)
+        PandaSkillController(scenario, kin, planner, cell.q0, cell.actuator_order)
     )
     builder.Connect(plant.get_state_output_port(cell.arm), skills.arm_state_port)
     builder.Connect(perception.observation_port, skills.observation_port)
@@ -181,7 +184,7 @@ def build_diagram(
         visualizer = add_visualizer(builder, scene_graph, meshcat)
     diagram = builder.Build()
     diagram.set_name(f"lots_cell_{scenario.name}")
-    return LotsCell(
+    return LotsStation(
         diagram,
         scenario,
         cell,
@@ -246,3 +249,17 @@ def fov_deg(intrinsics: tuple[float, float, float, float], width: int, height: i
         2 * math.degrees(math.atan(width / 2 / fx)),
         2 * math.degrees(math.atan(height / 2 / fy)),
     )
+
+
+def cell_parts(station: LotsStation) -> dict[str, Stopwatch]:
+    """The non-overlapping timed parts of a built station (`tamp.sim.core.timing.breakdown`
+    adds the rest): camera renders, perception's analysis, the grasp network, and the skills'
+    own update (differential IK, view handlers: their update time without the network calls)."""
+    sk, net = station.skills.control, station.planner.network
+    skills = Stopwatch(max(sk.wall - net.wall, 0.0), max(sk.cpu - net.cpu, 0.0), sk.calls)
+    return {
+        "render": station.perception.render,
+        "perception": station.perception.analysis,
+        "network": net,
+        "skills": skills,
+    }
