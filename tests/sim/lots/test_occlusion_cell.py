@@ -1,4 +1,4 @@
-"""Occlusion by the held object in the workcell (`tamp.sim.lots.perception.recall`): a look at
+"""Occlusion by the held object in the workcell (`tamp.sim.core.perception.recall`): a look at
 W^B with a hammer in the gripper still counts the scissors the hammer hides, the place keeps
 away from them, and an object taken away in plain view is gone (a short CellDriver run)."""
 
