@@ -18,15 +18,14 @@ from pathlib import Path
 
 from tamp.commands.output import print_json
 from tamp.errors import InputError
-
-SHIPPED_WEIGHTS = "hrgnet_synth_rgbd.pt"  # in models/weights (the tamp_models package)
+from tamp.grasp.networks import DEFAULT_NETWORK, FUSION_MODES, INPUT_CHANNELS, NETWORKS
 
 
 def default_weights() -> Path:
-    """The shipped HRG-Net weights, wherever tamp is installed."""
+    """The shipped weights of the default network (HRG-Net), wherever tamp is installed."""
     from tamp.sim.core.models import models_dir
 
-    return models_dir() / "weights" / SHIPPED_WEIGHTS
+    return models_dir() / NETWORKS[DEFAULT_NETWORK].weights
 
 
 def register(subparsers) -> None:
@@ -55,8 +54,8 @@ def register(subparsers) -> None:
 
     p = sub.add_parser("train", help="train a grasp network")
     _dataset_args(p)
-    p.add_argument("--model", choices=("hrgnet", "ggcnn", "grconvnet"), default="hrgnet")
-    p.add_argument("--input", choices=("d", "rgb", "rgbd"), default="rgbd")
+    p.add_argument("--model", choices=list(NETWORKS), default=DEFAULT_NETWORK)
+    p.add_argument("--input", choices=list(INPUT_CHANNELS), default="rgbd")
     p.add_argument("--out", default="runs/grasp", help="checkpoint folder (default runs/grasp)")
     p.add_argument("--epochs", type=int, default=10)
     p.add_argument("--batch-size", type=int, default=8)
@@ -70,7 +69,7 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--fusion",
-        choices=("full", "final", "none"),
+        choices=FUSION_MODES,
         default="full",
         help="HRG-Net layer fusion: repeated exchange + multi-resolution head (full, default), "
         "head only (final), or none: the full-resolution branch alone (Table IV ablation)",
@@ -134,7 +133,10 @@ def register(subparsers) -> None:
     p = sub.add_parser("predict", help="grasps in an image (pixels; world frame with a camera)")
     p.add_argument("image", help="RGB image (.png/.jpg) or depth image (.tiff, metres)")
     p.add_argument("--depth", help="depth image (.tiff, metres) when IMAGE is the RGB image")
-    p.add_argument("--weights", help=f"weights file (default: the shipped {SHIPPED_WEIGHTS})")
+    p.add_argument(
+        "--weights",
+        help=f"weights file (default: the shipped {NETWORKS[DEFAULT_NETWORK].weights_file})",
+    )
     p.add_argument("--camera", help="JSON with K (3x3) and X_WC (4x4), as `grasp synth` writes")
     p.add_argument("--intrinsics", nargs=4, type=float, metavar=("FX", "FY", "CX", "CY"))
     p.add_argument("--pose", nargs=16, type=float, metavar="X", help="X_WC, 16 numbers row-major")
@@ -224,7 +226,7 @@ def run_train(args) -> int:
         raise InputError(f"--nproc must be >= 1, got {args.nproc}")
     if args.no_fusion and args.fusion != "full":
         raise InputError(f"--no-fusion contradicts --fusion {args.fusion}")
-    if (args.no_fusion or args.fusion != "full") and args.model != "hrgnet":
+    if (args.no_fusion or args.fusion != "full") and not NETWORKS[args.model].fusion:
         raise InputError(f"--fusion/--no-fusion apply to HRG-Net only, not --model {args.model}")
     kind, path = _kind(args)
     kwargs = _model_args(args.model_arg)
@@ -317,7 +319,6 @@ def run_eval(args) -> int:
         optimize_for_cpu,
         time_inference,
     )
-    from tamp.grasp.models import INPUT_CHANNELS
     from tamp.grasp.splits import split_warnings
     from tamp.grasp.train import load_model
 

@@ -11,7 +11,7 @@ branch at half the resolution of the previous lowest one, all branches run in pa
 convolutions going down and 1x1 convolutions + bilinear upsampling going up). The head
 projects every branch, upsamples it to full resolution, sums and predicts the four maps.
 
-Layer fusion has three settings (:data:`FUSION_MODES`):
+Layer fusion has three settings (`tamp.grasp.networks.FUSION_MODES`):
 
 - ``"full"``: the network above.
 - ``"final"``: no exchange inside the network, the head alone sums the branches (HRNet's own
@@ -32,9 +32,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-MODELS = ("hrgnet", "ggcnn", "grconvnet")
-FUSION_MODES = ("full", "final", "none")
-INPUT_CHANNELS = {"d": 1, "rgb": 3, "rgbd": 4}
+from tamp.grasp.networks import FUSION_MODES, INPUT_CHANNELS, network
 
 
 def _conv_bn(cin: int, cout: int, k: int = 3, stride: int = 1, relu: bool = True) -> nn.Sequential:
@@ -179,7 +177,7 @@ class HRGNet(nn.Module):
     The head maps every branch to ``head_channels`` by a 1x1 convolution at its own
     resolution, upsamples and sums them at full resolution (HRNetV2-style aggregation at the
     cost of a sum instead of a concatenation), then a separable 3x3 and a 1x1 convolution
-    give the four output maps. ``fusion`` is one of :data:`FUSION_MODES` (module docstring);
+    give the four output maps. ``fusion`` is one of ``FUSION_MODES`` (module docstring);
     ``True``/``False`` mean ``"full"``/``"none"``.
     """
 
@@ -317,24 +315,18 @@ def full_kwargs(name: str, **kwargs) -> dict:
     changes."""
     import inspect
 
-    cls = {"hrgnet": HRGNet, "ggcnn": GGCNN, "grconvnet": GRConvNet}[name]
+    cls = network(name).model_class()
     params = list(inspect.signature(cls.__init__).parameters.values())[2:]  # self, in_channels
     out = {p.name: p.default for p in params} | kwargs
     return {k: list(v) if isinstance(v, tuple) else v for k, v in out.items()}
 
 
 def build_model(name: str, input_mode: str = "rgbd", **kwargs) -> nn.Module:
-    """A model by name (:data:`MODELS`) for an input mode of :data:`INPUT_CHANNELS`."""
+    """A model by name (`tamp.grasp.networks.NETWORKS`) for an input mode of
+    ``INPUT_CHANNELS``."""
     if input_mode not in INPUT_CHANNELS:
         raise ValueError(f"unknown input {input_mode!r}; expected one of {list(INPUT_CHANNELS)}")
-    cin = INPUT_CHANNELS[input_mode]
-    if name == "hrgnet":
-        return HRGNet(cin, **kwargs)
-    if name == "ggcnn":
-        return GGCNN(cin, **kwargs)
-    if name == "grconvnet":
-        return GRConvNet(cin, **kwargs)
-    raise ValueError(f"unknown model {name!r}; expected one of {list(MODELS)}")
+    return network(name).model_class()(INPUT_CHANNELS[input_mode], **kwargs)
 
 
 def parameter_count(model: nn.Module) -> int:

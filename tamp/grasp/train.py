@@ -39,6 +39,7 @@ import torch.nn.functional as F
 from tamp.grasp.datasets import Augment, GraspDataset
 from tamp.grasp.evaluate import evaluate, fit_width_calibration
 from tamp.grasp.models import build_model, full_kwargs, parameter_count
+from tamp.grasp.networks import DEFAULT_NETWORK, network
 from tamp.grasp.splits import SplitSpec, split_record
 
 
@@ -46,7 +47,7 @@ from tamp.grasp.splits import SplitSpec, split_record
 class TrainConfig:
     dataset: str
     path: str
-    model: str = "hrgnet"
+    model: str = DEFAULT_NETWORK
     input: str = "rgbd"
     out: str = "runs/grasp"
     size: int = 224
@@ -61,7 +62,7 @@ class TrainConfig:
     fold: int | None = None
     folds: int = 5
     seed: int = 0
-    fusion: str = "full"  # HRG-Net only: full, final or none (models.FUSION_MODES)
+    fusion: str = "full"  # HRG-Net only: full, final or none (networks.FUSION_MODES)
     augment: bool = True
     device: str = "auto"
     threads: int = 0
@@ -75,7 +76,7 @@ def split_spec(cfg: TrainConfig) -> SplitSpec:
 
 def model_kwargs(cfg: TrainConfig) -> dict:
     kw = dict(cfg.model_kwargs)
-    if cfg.model == "hrgnet":
+    if network(cfg.model).fusion:
         kw["fusion"] = cfg.fusion
     return kw
 

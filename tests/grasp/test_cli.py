@@ -145,9 +145,6 @@ def test_fusion_modes(jacquard_dir: Path, tmp_path: Path, capsys):
 
 
 def test_synth_writes_a_jacquard_set(tmp_path: Path, capsys):
-    import pytest
-
-    pytest.importorskip("pydrake")
     rc = main(["grasp", "synth", str(tmp_path / "s"), "--scenes", "2", "--views", "1",
                "--size", "48", "--seed", "3", "--json"])  # fmt: skip
     assert rc == 0

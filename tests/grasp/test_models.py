@@ -7,11 +7,12 @@ import pytest
 import torch
 
 from tamp.grasp.evaluate import optimize_for_cpu
-from tamp.grasp.models import INPUT_CHANNELS, MODELS, HRGNet, build_model, parameter_count
+from tamp.grasp.models import HRGNet, build_model, parameter_count
+from tamp.grasp.networks import INPUT_CHANNELS, NETWORKS
 
 
 @pytest.mark.slow  # heavy for the quick loop; make test runs it
-@pytest.mark.parametrize("name", MODELS)
+@pytest.mark.parametrize("name", list(NETWORKS))
 @pytest.mark.parametrize("mode", list(INPUT_CHANNELS))
 def test_four_maps_the_size_of_the_input(name, mode):
     torch.manual_seed(0)
@@ -153,7 +154,7 @@ def test_fusion_modes():
 
 
 @pytest.mark.slow  # heavy for the quick loop; make test runs it
-@pytest.mark.parametrize("name", MODELS)
+@pytest.mark.parametrize("name", list(NETWORKS))
 def test_cpu_inference_copy_gives_the_same_maps(name):
     """BatchNorm folded and channels-last: same outputs, ordinary layout out."""
     torch.manual_seed(0)
@@ -176,7 +177,7 @@ def test_cpu_inference_copy_gives_the_same_maps(name):
 
 
 def test_parameter_counts_are_small():
-    counts = {name: parameter_count(build_model(name, "rgbd")) for name in MODELS}
+    counts = {name: parameter_count(build_model(name, "rgbd")) for name in NETWORKS}
     assert 300_000 < counts["hrgnet"] < 600_000  # real time on a CPU
     assert 50_000 < counts["ggcnn"] < 100_000  # GG-CNN is ~62 k (depth input)
     assert 1_500_000 < counts["grconvnet"] < 2_500_000  # GR-ConvNet is ~1.9 M at 32 ch

@@ -35,7 +35,6 @@ def test_weights_file_is_small_and_describes_itself(predictor):
 def test_correct_grasps_on_new_scenes(predictor, tmp_path: Path, table: str):
     """On the plain beige table and on coloured mats like the LOTS workcell's (the weights
     are trained on ``--table mats``, whose scenes are three in four on a mat)."""
-    pytest.importorskip("pydrake")
     from tamp.grasp import formats
     from tamp.grasp.datasets import GraspDataset
     from tamp.grasp.evaluate import evaluate

@@ -60,7 +60,6 @@ def test_grasp_world_turns_with_the_object():
 
 @pytest.fixture(scope="module")
 def rendered(tmp_path_factory) -> Path:
-    pytest.importorskip("pydrake")
     from tamp.grasp.synthetic import SynthConfig, generate
 
     out = tmp_path_factory.mktemp("synth")
@@ -113,7 +112,6 @@ def test_mats_change_the_colour_under_the_objects_and_nothing_else(tmp_path: Pat
     """``table: mats`` (the LOTS workcell's coloured workspace mats): the same scenes, grasps
     and depth (within the mat's 1 mm) as the plain set of the same seed; only colours differ,
     and where they differ the camera sees the table plane, not an object."""
-    pytest.importorskip("pydrake")
     from tamp.grasp import formats
     from tamp.grasp.synthetic import SynthConfig, generate
 

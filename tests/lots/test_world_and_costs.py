@@ -16,6 +16,7 @@ from tamp.lots.product import ProductPlanner
 from tamp.lots.run import lots_world, run_task
 from tamp.lots.task import Event, Proposition, Task
 from tamp.world.interface import Status, World
+from verification import lots as vlots
 
 
 def execute(world, name, *args, person=None):
@@ -98,7 +99,6 @@ def test_per_action_costs_choose_the_cheaper_proposition():
 @pytest.mark.parametrize("task_name", ["example1", "tower", "model_building"])
 def test_tables_after_replanning_pass_the_verifier(task_name, request):
     """Peer oracle: `verification` checks every entry of the table rebuilt by Alg. 3."""
-    vlots = pytest.importorskip("verification.lots")
     task = request.getfixturevalue(task_name)
     # the object the automaton wants last is put into W^B first: an unforeseen W^B state
     c0 = LotsController(task)

@@ -33,18 +33,14 @@ import numpy as np
 from tamp import scenarios
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
+from tamp.grasp.networks import DEFAULT_NETWORK, NETWORKS
 from tamp.perturbation import NONE, Applied, Perturbation, check_seed, parse_perturbation
 from tamp.sim.lots.catalogue import CLASSES
 
 CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
-NETWORKS = ("hrgnet", "grconvnet", "ggcnn")
 SIDES = ("A", "B")
 #: Where each network's shipped weights are (relative to the repository's models/ folder).
-DEFAULT_WEIGHTS = {
-    "hrgnet": "weights/hrgnet_synth_rgbd.pt",
-    "grconvnet": "weights/grconvnet_synth_rgbd.pt",
-    "ggcnn": "weights/ggcnn_synth_rgbd.pt",
-}
+DEFAULT_WEIGHTS = {name: net.weights for name, net in NETWORKS.items()}
 #: The arm's comfortable reach on the table (Franka: 0.855 m from joint 2; keep a margin).
 REACH = (0.25, 0.75)
 BASKET_HALF = 0.12  # lots_waste_basket.sdf: 0.24 x 0.24 m
@@ -128,7 +124,7 @@ class GraspSettings:
     """Which network, its weights, the camera heights above the target of the descending
     views (the last is the paper's preset 0.2 m), attempts."""
 
-    network: str = "hrgnet"
+    network: str = DEFAULT_NETWORK
     weights: str | None = None
     view_heights: tuple[float, ...] = (0.34, 0.27, 0.2)
     attempts: int = 3
@@ -216,7 +212,7 @@ def load_cell_scenario(path: str | Path) -> CellScenario:
 
     g = f.sub("grasp", {})
     g.check_keys({"network", "weights", "view_heights", "attempts"})
-    network = g.str("network", "hrgnet", choices=NETWORKS)
+    network = g.str("network", DEFAULT_NETWORK, choices=NETWORKS)
     weights = g.str("weights") if g.has("weights") else None
     if weights is not None:
         local = Path(file).parent / weights
