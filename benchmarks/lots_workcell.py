@@ -23,7 +23,7 @@ plant's step (contact, SAP) and the framework. ``--task tower`` also runs the fu
 machine shared with other jobs the wall figures depend on the load (printed); the CPU
 figures are what the workcell itself costs.
 
-    python benchmarks/lots_workcell.py [--scenes 30] [--networks hrgnet grconvnet ggcnn]
+    python benchmarks/lots_workcell.py [--scenes 30] [--networks NET ...]
         [--task tower] [--time-steps 0.004 0.01] [--pick-timeout 60] [--threads 2]
         [--weights NET=PATH ...]
 
@@ -227,10 +227,12 @@ def summarise(network: str, picks: list[dict]) -> dict:
 
 
 def main() -> int:
+    from tamp.grasp.networks import NETWORKS
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", type=int, default=30, help="seeded scenes 0..N-1 (0: only --task)")
     ap.add_argument("--first", type=int, default=0, help="first scene seed")
-    ap.add_argument("--networks", nargs="+", default=["hrgnet", "grconvnet", "ggcnn"])
+    ap.add_argument("--networks", nargs="+", choices=list(NETWORKS), default=list(NETWORKS))
     ap.add_argument("--pick-timeout", type=float, default=60.0, help="sim seconds per pick")
     ap.add_argument("--task", default=None, help="also run this LOTS task (e.g. tower)")
     ap.add_argument("--time-steps", type=float, nargs="+", default=None)

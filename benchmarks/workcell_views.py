@@ -9,7 +9,7 @@ synthetic set's beige; and with the colour image in grey. A grasp counts when it
 on the target's mask. The synthetic training set (`tamp grasp synth`) has a beige-grey table;
 the workcell's objects lie on pale green and blue mats.
 
-    python benchmarks/workcell_views.py [--scenes 2 1 9] [--networks hrgnet grconvnet ggcnn]
+    python benchmarks/workcell_views.py [--scenes 2 1 9] [--networks NET ...]
         [--weights NET=PATH ...] [--top 5]
 
 Prints a table and one JSON line.
@@ -75,9 +75,11 @@ def on_target(grasps, mask: np.ndarray) -> int:
 
 
 def main() -> int:
+    from tamp.grasp.networks import NETWORKS
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", type=int, nargs="+", default=[2, 1, 9])
-    ap.add_argument("--networks", nargs="+", default=["hrgnet", "grconvnet", "ggcnn"])
+    ap.add_argument("--networks", nargs="+", choices=list(NETWORKS), default=list(NETWORKS))
     ap.add_argument("--weights", nargs="+", default=[], metavar="NET=PATH")
     ap.add_argument("--top", type=int, default=5)
     args = ap.parse_args()

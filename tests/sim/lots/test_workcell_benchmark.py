@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 import torch
 
+from tamp.grasp.networks import NETWORKS
 from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.scenario import load_cell_scenario, rectangles_overlap
 from tamp.sim.lots.timing import Stopwatch, breakdown, cell_parts
@@ -89,11 +90,10 @@ def test_scenes_are_seeded_valid_and_cycle_through_the_task_classes(bench):
 
 @pytest.mark.slow
 def test_one_pick_per_network_on_the_plant(bench):
-    pytest.importorskip("pydrake")
     base = load_cell_scenario("tower")
     scene, target, uid = bench.make_scene(base, 4)  # a tower body
     picks = {}
-    for net in ("hrgnet", "grconvnet", "ggcnn"):
+    for net in NETWORKS:
         p = picks[net] = bench.run_pick(scene, target, uid, net, timeout=40.0)
         assert p["network_calls"] >= 4 and p["frames"] >= 5
         assert p["success"] == (p["status"] == "SUCCESS" and p["target_z"] > bench.LIFTED)

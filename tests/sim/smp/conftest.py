@@ -8,8 +8,6 @@ import pytest
 
 os.environ["DRAKE_ALLOW_NETWORK"] = "meshcat"
 
-pytest.importorskip("pydrake")
-
 
 class CaseRuns:
     """Cache of (result, prepared, system, runner, track) per scenario file."""
