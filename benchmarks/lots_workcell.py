@@ -17,7 +17,7 @@ the plant shows the target lifted (more than 5 cm above the table); the time per
 the skill's sim time from start to end, including the retries.
 
 Timing: sim time, wall time, process CPU time (all threads), and the non-overlapping parts
-of `tamp.sim.lots.timing.cell_parts` (render, perception, network, skills); the rest is the
+of `tamp.sim.lots.station.cell_parts` (render, perception, network, skills); the rest is the
 plant's step (contact, SAP) and the framework. ``--task tower`` also runs the full LOTS task
 (`simulate_lots`) once per ``--time-steps`` value for the workcell's real-time factor. On a
 machine shared with other jobs the wall figures depend on the load (printed); the CPU
@@ -91,16 +91,16 @@ def run_pick(
 ) -> dict:
     """One ``Pick(target)`` in ``scene`` with ``network`` (its shipped weights, or the file
     ``weights``); what happened and what it cost."""
-    from tamp.sim.lots.builder import build_diagram
+    from tamp.sim.core.timing import breakdown
     from tamp.sim.lots.driver import CellDriver
     from tamp.sim.lots.grasping import dilate, on_mask, snap_to_mask
     from tamp.sim.lots.simulate import with_network
-    from tamp.sim.lots.timing import breakdown, cell_parts
+    from tamp.sim.lots.station import build_station, cell_parts
 
     scene = with_network(scene, network)
     if weights is not None:
         scene = dataclasses.replace(scene, grasp=dataclasses.replace(scene.grasp, weights=weights))
-    cell = build_diagram(scene)
+    cell = build_station(scene)
     cell.planner.record = True  # every view's crop and predictions (for the on-target count)
     driver = CellDriver(cell)
     w0, c0, t0 = time.perf_counter(), time.process_time(), driver.context.get_time()
@@ -141,9 +141,10 @@ def run_task(task_name: str, time_step: float) -> dict:
     """The full LOTS task in the workcell (camera running) at plant step ``time_step``."""
     from tamp.lots.controller import LotsController
     from tamp.lots.task import load_task
+    from tamp.sim.core.timing import Stopwatch, breakdown
     from tamp.sim.lots import simulate
     from tamp.sim.lots.scenario import load_cell_scenario
-    from tamp.sim.lots.timing import Stopwatch, breakdown, cell_parts
+    from tamp.sim.lots.station import cell_parts
 
     # time the LOTS controller's ticks (measurement only: a wrapper around the class method)
     ticks = Stopwatch()

@@ -40,15 +40,15 @@ def _bench():
 
 def record_views(scene_seeds, views: int = 4) -> dict[int, list[tuple]]:
     """(rgb, depth, mask) of the first ``views`` crops of each scene's pick (HRG-Net)."""
-    from tamp.sim.lots.builder import build_diagram
     from tamp.sim.lots.driver import CellDriver
     from tamp.sim.lots.scenario import load_cell_scenario
+    from tamp.sim.lots.station import build_station
 
     bench, base = _bench(), load_cell_scenario("tower")
     out = {}
     for s in scene_seeds:
         scene, target, _ = bench.make_scene(base, s)
-        cell = build_diagram(scene)
+        cell = build_station(scene)
         cell.planner.record = True
         CellDriver(cell).run(f"Pick({target})", timeout=30.0)
         crops = [c for c, _, _ in cell.planner.history][:views]

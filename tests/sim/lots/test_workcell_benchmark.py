@@ -1,10 +1,10 @@
-"""Where the workcell's time goes (`tamp.sim.lots.timing`), the grasp network's thread scope,
-and benchmarks/lots_workcell.py: its seeded scenes, and one pick per network (slow)."""
+"""Where the workcell's time goes (`tamp.sim.lots.station.cell_parts`), the grasp network's
+thread scope, and benchmarks/lots_workcell.py: its seeded scenes, and one pick per network
+(slow)."""
 
 from __future__ import annotations
 
 import importlib.util
-import time
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -13,9 +13,10 @@ import pytest
 import torch
 
 from tamp.grasp.networks import NETWORKS
+from tamp.sim.core.timing import Stopwatch
 from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.scenario import load_cell_scenario, rectangles_overlap
-from tamp.sim.lots.timing import Stopwatch, breakdown, cell_parts
+from tamp.sim.lots.station import cell_parts
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -27,27 +28,6 @@ def bench():
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
-
-
-def test_stopwatch_accumulates_wall_and_cpu():
-    sw = Stopwatch()
-    for _ in range(2):
-        with sw:
-            t = time.process_time()
-            while time.process_time() - t < 0.02:  # busy: CPU time advances too
-                pass
-    assert sw.calls == 2
-    assert sw.cpu >= 0.04 and sw.wall >= sw.cpu * 0.5
-    sw.reset()
-    assert (sw.wall, sw.cpu, sw.calls) == (0.0, 0.0, 0)
-
-
-def test_breakdown_gives_the_rest_to_physics_and_shares_sum_to_one():
-    parts = {"render": Stopwatch(1.0, 0.5, 3), "network": Stopwatch(2.0, 1.5, 4)}
-    out = breakdown(10.0, 4.0, parts)
-    assert out["physics"]["wall"] == 7.0 and out["physics"]["cpu"] == 2.0
-    assert out["render"]["wall_share"] == 0.1 and out["network"]["cpu_share"] == 0.375
-    assert sum(r["cpu_share"] for r in out.values()) == pytest.approx(1.0)
 
 
 def test_cell_parts_do_not_count_the_network_twice():

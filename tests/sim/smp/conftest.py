@@ -17,16 +17,16 @@ class CaseRuns:
 
     def get(self, name: str):
         if name not in self._runs:
-            from tamp.sim.smp.builder import build_diagram
             from tamp.sim.smp.runner import SimRunner
             from tamp.sim.smp.scenario import load_scenario, scenario_path
             from tamp.sim.smp.simulate import prepare
+            from tamp.sim.smp.station import build_station
 
             from .helpers import Track
 
             scenario = load_scenario(scenario_path(name))
             prepared = prepare(scenario)
-            system = build_diagram(scenario, prepared.policy)
+            system = build_station(scenario, prepared.policy)
             runner = SimRunner(system)
             track = Track()
 
