@@ -161,7 +161,9 @@ def run_task(task_name: str, time_step: float) -> dict:
         built["d"] = build(*a, **k)
         return built["d"]
 
-    scenario = dataclasses.replace(load_cell_scenario(task_name), time_step=time_step)
+    base = load_cell_scenario(task_name)
+    plant = dataclasses.replace(base.plant, time_step=time_step)
+    scenario = dataclasses.replace(base, plant=plant)
     LotsController.tick, simulate.build_lots_diagram = timed_tick, keep
     try:
         c0 = time.process_time()
@@ -280,7 +282,7 @@ def main() -> int:
         rows.append(summarise(net, picks) | {"weights": weights.get(net, "shipped")})
     tasks = []
     if args.task:
-        for step in args.time_steps or [base.time_step]:
+        for step in args.time_steps or [base.plant.time_step]:
             tasks.append(run_task(args.task, step))
 
     print(

@@ -92,7 +92,7 @@ def add_cell_plant(
     are added then. None: no person in the cell.
     """
     plant, scene_graph, parser = add_sap_plant(
-        builder, time_step=scenario.time_step, contact_model=scenario.contact_model
+        builder, time_step=scenario.plant.time_step, contact_model=scenario.plant.contact_model
     )
     (table,) = parser.AddModelsFromUrl(TABLE_URL)
     table_body = plant.GetBodyByName("lots_table", table)

@@ -81,7 +81,7 @@ def test_the_person_puts_an_object_down_clear_of_the_others_footprints():
     the plant non-finite). The spot now keeps the footprints apart."""
     from tamp.sim.lots.scenario import Workspace
 
-    w = Workspace("A", center=(0.5, 0.25), size=(0.34, 0.34))
+    w = Workspace(name="A", center=(0.5, 0.25), size=(0.34, 0.34))
     lying = [  # W^A when the wrench came in that run: class, x, y, yaw
         ("hammer", 0.387, 0.142, 0.105),
         ("scissors", 0.416, 0.261, math.pi),

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -9,6 +11,27 @@ from tamp.errors import InputError
 from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.scenario import load_cell_scenario, rectangles_overlap
 from tests.sim.lots.helpers import write_scenario
+from tests.sim.lots.snapshot import SNAPSHOT, normalise, packaged_files
+
+
+def snapshot_layout(loaded: dict) -> dict:
+    """A normalised scenario in the snapshot's layout (the snapshot was written by the loader
+    the typed one replaced): the ``plant`` section's fields at the top, no ``description``
+    (packaged files have none), and the never-set ``extra`` mapping."""
+    out = dict(loaded)
+    out.update(out.pop("plant"))
+    assert out.pop("description") == ""
+    out["extra"] = {}
+    return out
+
+
+def test_the_typed_loader_reads_every_packaged_file_as_the_snapshot_says():
+    want = json.loads(SNAPSHOT.read_text())
+    files = packaged_files()
+    assert sorted(p.name for p in files) == sorted(want)
+    for path in files:
+        got = json.loads(json.dumps(snapshot_layout(normalise(load_cell_scenario(path)))))
+        assert got == want[path.name], path.name
 
 
 def test_packaged_model_building_loads():

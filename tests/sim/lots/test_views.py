@@ -39,7 +39,7 @@ def test_dilate():
 
 
 def test_free_spot_avoids_objects():
-    w = Workspace("B", (0.5, -0.25), (0.34, 0.34))
+    w = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34))
     K = (231.4, 231.4, 159.5, 89.5)
     X_WC = RigidTransform(down(0.0), [0.5, -0.25, 0.47])
     occupied = np.zeros((180, 320), bool)
@@ -51,7 +51,7 @@ def test_free_spot_avoids_objects():
 
 
 def test_free_spot_keeps_away_from_hidden_objects():
-    w = Workspace("B", (0.5, -0.25), (0.34, 0.34))
+    w = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34))
     occupied = np.zeros((180, 320), bool)
     x, y = free_spot(w, occupied, X_LOOK, K, avoid=((0.61, -0.36),))
     assert math.hypot(x - 0.61, y + 0.36) > 0.25

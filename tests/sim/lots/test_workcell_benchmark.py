@@ -60,7 +60,7 @@ def test_scenes_are_seeded_valid_and_cycle_through_the_task_classes(bench):
     assert scenes[0][0].objects != bench.make_scene(base, 8)[0].objects  # same class, new pose
     w = base.workspaces["A"]
     for scene, target, uid in scenes:
-        assert scene.time_step == base.time_step and scene.grasp == base.grasp
+        assert scene.plant == base.plant and scene.grasp == base.grasp
         a, b = scene.objects
         assert a.id == uid and a.cls == target and b.cls != target
         corners = [CLASSES[o.cls].footprint.corners(*o.xy, o.yaw) for o in (a, b)]
