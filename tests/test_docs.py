@@ -229,3 +229,108 @@ def test_architecture_arrows_match_the_layer_ranks():
     assert doc_peers or stated.group(1).strip() == "none"
     same_rank = {(a, b) for a, b in peers if rank.get(a) == rank.get(b)}
     assert doc_peers == same_rank
+
+
+# --- links and commands in the docs ----------------------------------------------------------
+
+PAGES = [*DOCS, ROOT / "CHANGELOG.md"]
+_LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
+
+
+def _slug(heading: str) -> str:
+    """GitHub's anchor of a heading: lower case, punctuation dropped, spaces to hyphens."""
+    import unicodedata
+
+    text = heading.strip().lower()
+    kept = "".join(
+        c
+        for c in text
+        if c in " -" or unicodedata.category(c)[0] in "LMN" or unicodedata.category(c) == "Pc"
+    )
+    return kept.replace(" ", "-")
+
+
+def _anchors(page: Path) -> set[str]:
+    found: set[str] = set()
+    in_block = False
+    for line in page.read_text(encoding="utf-8").splitlines():
+        if line.startswith("```"):
+            in_block = not in_block
+        elif not in_block and line.startswith("#"):
+            slug = _slug(line.lstrip("#"))
+            n, candidate = 0, slug
+            while candidate in found:
+                n += 1
+                candidate = f"{slug}-{n}"
+            found.add(candidate)
+    return found
+
+
+def _outside_code(text: str) -> str:
+    """The page without its fenced blocks and inline code (links there are not links)."""
+    text = re.sub(r"^```.*?^```", "", text, flags=re.M | re.S)
+    return re.sub(r"`[^`\n]*`", "", text)
+
+
+def test_every_link_resolves():
+    """Every relative link of README.md, CHANGELOG.md and docs/*.md names a file of the
+    repository, and every #anchor a heading of the page it points to."""
+    bad = []
+    for page in PAGES:
+        for target in _LINK.findall(_outside_code(page.read_text(encoding="utf-8"))):
+            if re.match(r"[a-z]+:", target):  # http:, https:, mailto:
+                continue
+            path, _, anchor = target.partition("#")
+            dest = (page.parent / path).resolve() if path else page
+            if not dest.exists():
+                bad.append(f"{page.name}: {target}: no such file")
+            elif anchor and dest.suffix == ".md" and anchor not in _anchors(dest):
+                bad.append(f"{page.name}: {target}: no such heading")
+    assert not bad, "\n".join(bad)
+
+
+def _quoted_commands() -> list[tuple[str, str]]:
+    """Concrete ``tamp``/``tamp-verify`` command lines quoted in fenced blocks (``$``
+    examples and plain lines alike; backslash continuations joined). Synopses with
+    placeholders (``[...]``, ``a|b``, ``…``, ``KIND``) are skipped: they are not runnable."""
+    found = []
+    for page in DOCS:
+        in_block, pending = False, ""
+        for n, line in enumerate(page.read_text(encoding="utf-8").splitlines(), 1):
+            if line.startswith("```"):
+                in_block, pending = not in_block, ""
+                continue
+            if not in_block:
+                continue
+            text = pending + line.strip()
+            pending = ""
+            if text.endswith("\\"):
+                pending = text[:-1] + " "
+                continue
+            text = text.removeprefix("$ ")
+            if not re.match(r"tamp(-verify)? ", text):
+                continue
+            text = re.sub(r"\s+#.*$", "", text)
+            if re.search(r"[\[\]|…<>{}]|\.\.\.|\b[A-Z]{3,}\b", text):
+                continue
+            found.append((f"{page.name}:{n}", text))
+    return found
+
+
+@pytest.mark.parametrize("where,command", _quoted_commands(), ids=lambda v: str(v)[:60])
+def test_quoted_commands_parse(where, command):
+    """Every concrete command the docs quote is accepted by the CLI's own parser (names and
+    options exist, values have the right types); nothing is run."""
+    from tamp.commands.main import COMMANDS, build_parser
+    from tamp.commands.verify import make_parser
+
+    argv = shlex.split(command)
+    if argv[0] == "tamp":  # only the subcommand's own module: the others need not import
+        assert argv[1] in COMMANDS, f"{where}: no subcommand {argv[1]!r}"
+        parser = build_parser("tamp", [argv[1]], "tamp.commands")
+    else:
+        parser = make_parser()
+    try:
+        parser.parse_args(argv[1:])
+    except SystemExit as exc:
+        pytest.fail(f"{where}: `{command}` does not parse (exit {exc.code})")
