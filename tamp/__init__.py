@@ -1,6 +1,6 @@
 """tamp: task-and-motion planning for human-robot collaboration, with formal verification.
 
-Layers (see ARCHITECTURE in the README): ``tamp.world`` (shared symbolic world),
+Layers (docs/architecture.md has them all): ``tamp.world`` (shared symbolic world),
 ``tamp.demo`` (demonstration → goals + constraints), ``tamp.rg`` (reachability graph and
 search), ``tamp.bt`` (behavior trees), ``tamp.lots`` (LTL with local observation),
 ``tamp.grasp`` (HRG-Net), ``tamp.sim`` (Drake). Nothing outside ``tamp.sim`` and

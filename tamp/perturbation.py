@@ -1,4 +1,4 @@
-"""Seeded perturbations of a simulation run: one concept for every workcell (issue 18).
+"""Seeded perturbations of a simulation run: one concept for every workcell.
 
 A scenario file (SMP-MRO ``tamp/scenarios/sim``, LOTS ``lots_sim``, refinement programs) may
 carry a ``perturbation:`` section; it is parsed strictly here (`parse_perturbation`, errors

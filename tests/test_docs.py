@@ -334,3 +334,31 @@ def test_quoted_commands_parse(where, command):
         parser.parse_args(argv[1:])
     except SystemExit as exc:
         pytest.fail(f"{where}: `{command}` does not parse (exit {exc.code})")
+
+
+# --- no bookkeeping in the code's words or the docs ------------------------------------------
+
+#: References to the project's bookkeeping (seed files, issue numbers, notes kept outside the
+#: repository): the code and the docs cite the papers by authors and section instead, and state
+#: measured facts themselves.
+BOOKKEEPING = re.compile(r"seed 00|issue [0-9]|FIELD_NOTES|\.\./shared|design card")
+
+
+def test_no_bookkeeping_references():
+    """``grep -rn "seed 00\\|issue [0-9]\\|FIELD_NOTES\\|\\.\\./shared" tamp verification
+    README.md docs`` finds nothing (and no "design card")."""
+    files = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*"))]
+    for base in ("tamp", "verification"):
+        files += sorted((ROOT / base).rglob("*"))
+    hits = []
+    for path in files:
+        if not path.is_file() or "__pycache__" in path.parts:
+            continue
+        try:
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError:  # binary data (weights, images): no words to check
+            continue
+        for n, line in enumerate(text.splitlines(), 1):
+            if BOOKKEEPING.search(line):
+                hits.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()}")
+    assert not hits, "\n".join(hits)

@@ -1,7 +1,7 @@
 """Verification of plans against LTL, on Spot: traces, RG orders and graphs, BTs, LOTS tables.
 
-The design card: "a verification module checks plans against the LTL automata before they
-are simulated". `gate` is what the planner front ends call; `check_trace` checks one finite
+Every plan is checked against its LTL automaton before it is executed or simulated. `gate`
+is what the planner front ends call; `check_trace` checks one finite
 (LTLf) or lasso trace; `VerificationError` (exit 1) carries the counterexample.
 Depends on the data types of the planning layers, never on `tamp.sim` or Drake.
 """

@@ -1,7 +1,7 @@
 """The verification gate: what every front end runs before a plan executes or is simulated.
 
-ARCHITECTURE "Verification gate". One typed entry point per kind of plan; each returns the
-`Report` (what ``--json`` front ends print) or raises `VerificationError` (an
+See docs/architecture.md, "The verification gate". One typed entry point per kind of plan;
+each returns the `Report` (what ``--json`` front ends print) or raises `VerificationError` (an
 `InfeasibleError`: the CLIs exit 1) carrying the report and its counterexample:
 
 - `gate_order` — the RG planner's `tamp.rg.PlanResult`: the order trace against the LTL
@@ -86,8 +86,9 @@ def gate_table(controller: LotsController) -> Report:
 
 
 def gate_program(program: Program, *, subject: str | None = None) -> Report:
-    """Every execution of ``program`` against its ordering property (seed 002, Step 2's
-    safety): a refinement that lets some execution break it is refused."""
+    """Every execution of ``program`` against its ordering property (the safety of Step 2 of
+    Figueroa Heredia et al. 2018, §3.2): a refinement that lets some execution break it is
+    refused."""
     from verification.refine import check_program
 
     return _passed(Report([check_program(program, subject=subject)]))

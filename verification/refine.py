@@ -1,5 +1,6 @@
-"""Refined programs (seed 002): the ordering property holds on every execution of a program
-before it is simulated, or the refinement is refused with the counterexample.
+"""Refined programs (Figueroa Heredia et al., J. Robot. Mechatron. 2018): the ordering
+property holds on every execution of a program before it is simulated, or the refinement is
+refused with the counterexample.
 
 The executions of a program are the paths through the downsets of its event order
 (`tamp.refine.order.downsets`): each state is the set of events fired so far, which is

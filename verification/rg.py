@@ -1,6 +1,7 @@
-"""SMP-MRO plans (§IV-B): the chosen goal order, and the whole reachability graph.
+"""SMP-MRO plans (Nakamura & Sekiyama, IEEE Access, §IV-B): the chosen goal order, and the
+whole reachability graph.
 
-Encoding (ARCHITECTURE "Verification gate"): one proposition ``g_k`` per goal ``G_k``,
+Encoding (docs/architecture.md, "The verification gate"): one proposition ``g_k`` per goal ``G_k``,
 true once the goal has been reached (labels are cumulative: an RG node is the *set* of
 achieved goals, and a node is labelled with all of them). The demonstration's
 constraints become ``!g_j U g_i`` for every ``G_i ≤ G_j`` (G_j is not reached before G_i)

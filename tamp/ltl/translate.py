@@ -1,6 +1,6 @@
 """LTL → automaton, the one place that calls Spot's translator: options, cache and guard.
 
-Facts this module relies on (FIELD_NOTES, Spot 2.13):
+Facts of Spot 2.13 (pip ``spottl``) that this module relies on:
 
 - ``'BA'`` silently loses state-based acceptance in this build (its option parser drops the
   flag), so Büchi automata are made with ``'Buchi', 'SBAcc'`` plus the preference and the

@@ -1,6 +1,7 @@
 """What can happen during a run, said one way everywhere: flags, scenario files, verification.
 
-ARCHITECTURE "CLI": ``--appear OBJ@PLACE[@WHEN]`` and ``--fail ACTION[(ARGS)][xTIMES]``.
+The run vocabulary (docs/architecture.md, "Command line"): ``--appear OBJ@PLACE[@WHEN]`` and
+``--fail ACTION[(ARGS)][xTIMES]``.
 
 - PLACE is an area name (``L1``) or a point ``x,y[,z]`` in the robot frame (metres).
 - WHEN is a tick (``5``; ``0``: there from the start), a time ``t=SECONDS`` (simulated time;

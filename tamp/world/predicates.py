@@ -11,11 +11,11 @@ Choices where the paper is silent (written down here on purpose):
 - ``IsObjectAt(o, l)`` is false while ``o`` is held: a carried object is not *at* an area.
   It is also false while ``o`` rests on top of another object (`resting_on`), whatever its
   x and y: areas are places on the floor, and the Drake workcell judges success the same way
-  in 3-D (`tamp.sim.smp.placement.why_not_in`; issue 17: O0 pushed onto O_a at z = 0.25 m
-  must not look placed to the tree either). States carry centres, not sizes, so "on top" is
-  read from the centres: another unheld object closer than `STACK_RADIUS` in the plane (two
-  objects standing side by side are at least the sum of their footprint radii apart, 7 cm
-  for the packaged kinds) and more than `STACK_TOL` lower. Symbolic effects never stack
+  in 3-D (`tamp.sim.smp.placement.why_not_in`: an O0 pushed onto O_a, its centre at
+  z = 0.25 m, must not look placed to the tree either). States carry centres, not sizes, so
+  "on top" is read from the centres: another unheld object closer than `STACK_RADIUS` in
+  the plane (two objects standing side by side are at least the sum of their footprint radii
+  apart, 7 cm for the packaged kinds) and more than `STACK_TOL` lower. Symbolic effects never stack
   (they keep an object's height), so only observed plant states can make it false.
 - ``IsAreaFree(l)`` ignores the held object, which travels with the robot.
 - ``IsRobotCloseTo(ref, d)`` takes an object or area name; ``d`` defaults to the domain's

@@ -3,7 +3,8 @@
 `camera_config` describes a camera as Drake's `CameraConfig`; `add_rgbd_camera` adds a plain
 `RgbdSensor` of that config (it renders only when one of its image ports is evaluated: no
 zero-order hold rendering at a fixed rate) at a pose on a body, with a VTK renderer over EGL
-(headless; FIELD_NOTES). Every camera of every workcell is made by these two.
+(headless: Debian's ``libegl1`` is all it needs). Every camera of every workcell is made by
+these two.
 `backproject` turns a pixel and its depth into a world point (Drake's camera frame: +z
 along the optical axis, +x right, +y down).
 `DepthNoise` adds per-pixel Gaussian noise to a depth image, drawn from the run's seed and

@@ -1,4 +1,4 @@
-"""Why a simulated run failed, said the same way by every workcell (issue 18).
+"""Why a simulated run failed, said the same way by every workcell.
 
 A run's JSON has ``status`` (SUCCESS | FAILURE | TIMEOUT), ``cause`` (None on success, else
 one of `CAUSES`) and ``task_time`` (sim seconds), so a campaign can group failures without

@@ -20,10 +20,10 @@ Drake idioms, and why:
   (``carry_forces`` -> the plant's applied-spatial-force input): a critically damped spring
   (60 rad/s, scaled by the object's mass and smallest principal inertia, plus the object's
   weight) towards the pose the object had relative to the hand when it was taken. A weld
-  constraint would need its active flag toggled from outside the simulator (FIELD_NOTES: no
-  event can set it) and would snap the object to a pose fixed at build time; the force is an
-  output like any other and holds the object where the hand took it. The robot's own grasps
-  stay friction-only.
+  constraint would need its active flag toggled from outside the simulator (the flag lives in
+  the plant's context, where no event can set it) and would snap the object to a pose fixed
+  at build time; the force is an output like any other and holds the object where the hand
+  took it. The robot's own grasps stay friction-only.
 - State (abstract): the script's progress, the robot's action count, the queue of person
   actions, the current step and what is carried; changed only in a periodic unrestricted
   update (`PERIOD`). Outputs are computed in Calc callbacks.

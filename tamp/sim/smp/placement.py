@@ -5,7 +5,8 @@ Two questions the workcell asks of the plant, answered one way everywhere:
 - `why_not_in(...)`: does an object *rest in* an area? Its centre lies within the area's
   radius in the floor plane AND it stands upright on the floor (its centre at the object's
   half height, within `ON_FLOOR_TOL`). An object resting on top of another one is not in
-  the area, whatever its x and y (issue 17: O0 pushed onto O_a at z = 0.25 m). The Place
+  the area, whatever its x and y (an O0 pushed onto O_a rests with its centre at z = 0.25 m,
+  not 0.10 m, inside the area's circle: not placed). The Place
   skill's final check and the run's success (`tamp.sim.smp.runner`) both use it.
 - `blocker(...)` / `free_spot(...)`: is a place occupied for an object a person puts down
   there (another object's footprint overlaps its own and the other object is not held high

@@ -7,8 +7,8 @@ output of any system, so no LeafSystem event can switch it. Between chunks the r
 the `YouBotSkillController`'s ``grasp`` output and switches the matching weld on (or every weld
 off) with `MultibodyPlant.SetConstraintActiveStatus`. The controller asks for a weld only
 once the fingers have closed at the grasp pose, and waits a dwell longer than one chunk
-before it lifts, so the weld is always on when the lift starts (FIELD_NOTES: a weld
-switched on with the bodies apart snaps them together).
+before it lifts, so the weld is always on when the lift starts (a weld switched on with the
+bodies apart snaps them together in one step).
 
 Appearances. An object that "appears" (Case 3's O_a) waits outside the workspace; at its
 WHEN (`tamp.world.events`: a tick, a time, right after a named skill succeeds, or, without

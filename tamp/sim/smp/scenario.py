@@ -4,7 +4,7 @@ scripted skill failures. Loaded strictly (`tamp.fileio`): every error names the 
 the field and the CLI exits with status 2. No Drake import here.
 
 Appearances and failures are written as the command-line flags write them
-(`tamp.world.events`, ARCHITECTURE "CLI"): ``appear`` lists ``OBJ@PLACE[@WHEN]`` strings
+(`tamp.world.events`, the run vocabulary): ``appear`` lists ``OBJ@PLACE[@WHEN]`` strings
 (PLACE an area name or ``x,y``; WHEN a tick, ``t=SECONDS`` or ``after:Action(args)``;
 without WHEN the object appears when the robot first comes within reach of the place), and
 ``fail`` lists ``ACTION[(ARGS)][xTIMES]`` strings (the first TIMES attempts of the action
