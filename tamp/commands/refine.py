@@ -1,4 +1,4 @@
-"""``tamp refine TASK.yaml``: refine a two-robot program in the Drake simulation (seed 002).
+"""``tamp refine TASK.yaml``: refine a two-robot program in Drake (Figueroa Heredia et al. 2018).
 
     tamp refine TASK.yaml [--category I|II|III] [--json] [--gantt out.svg]
                           [--record out.html] [--out refined.yaml] [--no-verify] [--seed N]
