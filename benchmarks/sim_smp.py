@@ -32,8 +32,10 @@ def run_drake(scenario, time_step: float) -> dict:
     from tamp.sim.smp.simulate import make_tree
     from tamp.sim.smp.station import build_station
 
-    sc = dataclasses.replace(scenario, time_step=time_step)
-    tree = make_tree(sc, plan(sc.demo, sc.cost))
+    sc = dataclasses.replace(
+        scenario, plant=dataclasses.replace(scenario.plant, time_step=time_step)
+    )
+    tree = make_tree(sc, plan(sc.demo, sc.planner.cost))
     t0 = time.perf_counter()
     system = build_station(sc, tree)
     runner = SimRunner(system)
@@ -58,7 +60,7 @@ def run_symbolic(scenario) -> dict:
     from tamp.rg import plan
     from tamp.sim.smp.simulate import make_tree, verification_events
 
-    tree = make_tree(scenario, plan(scenario.demo, scenario.cost))
+    tree = make_tree(scenario, plan(scenario.demo, scenario.planner.cost))
     world = SymbolicWorld(scenario.demo.initial_world(), events=verification_events(scenario))
     t0 = time.perf_counter()
     status = tree.run(world, step=world.step)
@@ -89,7 +91,7 @@ def main() -> int:
         verify = time.perf_counter() - t0
         for rep in range(args.repeat):
             row = {"case": case, "repeat": rep, "plan_verify_time": round(verify, 3)}
-            row["drake"] = run_drake(scenario, scenario.time_step)
+            row["drake"] = run_drake(scenario, scenario.plant.time_step)
             if not args.no_peer:
                 row["drake_5ms"] = run_drake(scenario, 0.005)
                 row["symbolic"] = run_symbolic(scenario)

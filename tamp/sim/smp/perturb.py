@@ -48,7 +48,7 @@ def perturb(scenario: SimScenario, seed: int) -> tuple[SimScenario, Applied]:
     for i, o in enumerate(scenario.objects):
         later = [p for p in scenario.objects[i + 1 :] if p.appear is None]
         if o.appear is not None:
-            objects.append(_jittered(o, sample.jitter(o.id), applied, scenario.bt_period))
+            objects.append(_jittered(o, sample.jitter(o.id), applied, scenario.executor.bt_period))
             continue
         moved = None
         if spec.objects.active:

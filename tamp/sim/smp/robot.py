@@ -2,7 +2,9 @@
 
 Numbers that skills, IK and the scenario checks need (joint names, PD gains, footprints,
 grasp heights), next to the SDFs they describe (``models/sdf/youbot.sdf``, ``bottle.sdf``,
-``obstacle.sdf``). No Drake import here, so scenario validation runs without Drake.
+``obstacle.sdf``). A scenario may declare object models of its own
+(`tamp.sim.smp.object_models`); they are `ObjectKind` s too. No Drake import here, so
+scenario validation runs without Drake.
 """
 
 from __future__ import annotations
@@ -10,8 +12,9 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
-from tamp.sim.core.models import model_url
+from tamp.sim.core.models import model_url, sdf_path
 
 
 @dataclass(frozen=True)
@@ -21,6 +24,8 @@ class ObjectKind:
     ``grasp_height`` is where the fingers close, above the object's centre (a top grasp:
     the palm stays clear of the object's top). ``radius`` is the footprint radius used for
     overlap checks and base path planning; ``half_width`` is what the fingers close on.
+    ``path``: the SDF of a model a scenario declares (None: the packaged
+    ``models/sdf/<name>.sdf``); ``colour``: the RGBA its visuals get (None: the SDF's).
     """
 
     name: str
@@ -30,10 +35,18 @@ class ObjectKind:
     half_width: float
     grasp_height: float
     mass: float
+    path: Path | None = None
+    colour: tuple[float, float, float, float] | None = None
+
+    @property
+    def sdf(self) -> Path:
+        """The model's SDF file."""
+        return sdf_path(self.name) if self.path is None else self.path
 
     @property
     def url(self) -> str:
-        return model_url(self.name)
+        """The model's URL for Drake's parser (``package://`` or ``file://``)."""
+        return model_url(self.name) if self.path is None else self.path.as_uri()
 
 
 #: friction grasps hold an object this much lower than welds (m): both finger pads

@@ -264,7 +264,7 @@ class SimRunner:
         if isinstance(when, AtTime):
             return t >= when.seconds
         if isinstance(when, AtTick):
-            return t >= when.tick * self.system.scenario.bt_period - 1e-9
+            return t >= when.tick * self.system.scenario.executor.bt_period - 1e-9
         if isinstance(when, AfterAction):
             return format_call(when.name, when.args) in done
         x, y, _ = self.robot_pose()  # no WHEN: when the robot first comes within reach
@@ -303,7 +303,7 @@ class SimRunner:
         path_every: float = 0.1,
     ) -> SimResult:
         s = self.system
-        limit = s.scenario.max_sim_time if max_sim_time is None else max_sim_time
+        limit = s.scenario.executor.max_sim_time if max_sim_time is None else max_sim_time
         ex_context = s.executor.GetMyContextFromRoot(self.root)
         self._appearances(self.root.get_time(), [])  # what is there from the start (tick 0)
         next_path = self.root.get_time()
@@ -321,7 +321,10 @@ class SimRunner:
             return ex.result is not None
 
         run = run_in_chunks(
-            self.simulator, chunk=s.scenario.controller_period, limit=limit, between=between
+            self.simulator,
+            chunk=s.scenario.executor.controller_period,
+            limit=limit,
+            between=between,
         )
         ex = s.executor.state(ex_context)
         tree_reason = ""

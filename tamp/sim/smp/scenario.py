@@ -1,15 +1,23 @@
 """Simulation scenario files (``tamp/scenarios/sim/*.yaml``): which demonstration, models,
 initial poses, plant and executor settings, objects that appear during execution, and
-scripted skill failures. Loaded strictly (`tamp.fileio`): every error names the file and
-the field and the CLI exits with status 2. No Drake import here.
+scripted skill failures. No Drake import here.
+
+The file is read by the typed loader (`tamp.schema`) into `ScenarioFile`, whose sections
+are dataclasses that state each field's default, bounds and unit once; relations between
+fields are their ``check`` methods. `load_scenario` then resolves it into a `SimScenario`
+(the demonstration loaded, its objects placed, appearances and failures checked against the
+scene, the start geometry checked). Every error names the file and the field
+(``FILE: field: reason``, `InputError`) and the CLI exits with status 2.
 
 Appearances and failures are written as the command-line flags write them
-(`tamp.world.events`, the run vocabulary): ``appear`` lists ``OBJ@PLACE[@WHEN]`` strings
-(PLACE an area name or ``x,y``; WHEN a tick, ``t=SECONDS`` or ``after:Action(args)``;
-without WHEN the object appears when the robot first comes within reach of the place), and
-``fail`` lists ``ACTION[(ARGS)][xTIMES]`` strings (the first TIMES attempts of the action
-fail; only ``Pick`` is simulated, as a lost grasp). `SimScenario.with_events` adds the
-same entries from flags. Example (``tamp/scenarios/sim/case3.yaml``)::
+(`tamp.world.events`): ``appear`` lists ``OBJ@PLACE[@WHEN]`` strings (PLACE an area name or
+``x,y``; WHEN a tick, ``t=SECONDS`` or ``after:Action(args)``; without WHEN the object
+appears when the robot first comes within reach of the place), and ``fail`` lists
+``ACTION[(ARGS)][xTIMES]`` strings (the first TIMES attempts of the action fail; only
+``Pick`` is simulated, as a lost grasp). `SimScenario.with_events` adds the same entries
+from flags. An object's ``model`` is a packaged one (``bottle``, ``obstacle``:
+`tamp.sim.smp.robot.OBJECT_KINDS`) or one the file declares under ``models:``
+(`tamp.sim.smp.object_models`). Example (``tamp/scenarios/sim/case3.yaml``)::
 
     version: 1
     name: case3
@@ -18,7 +26,7 @@ same entries from flags. Example (``tamp/scenarios/sim/case3.yaml``)::
     plant: {time_step: 0.01}
     executor: {bt_period: 0.1, controller_period: 0.02, max_sim_time: 300}
     base: {max_speed: 0.5, max_accel: 0.6, max_yaw_rate: 1.2, max_yaw_accel: 2.0}
-    workspace: {x: [-1.0, 4.0], y: [-2.0, 2.5]}
+    workspace: {x: [-1.0, 4.0], y: [-2.2, 2.8]}
     objects:                           # demonstration objects are bottles unless listed
       - {id: Oa, model: obstacle}      # no pose: it appears (below)
     appear: ["Oa@L1@after:Pick(O1)"]   # as --appear; an object not listed is a bottle
@@ -35,18 +43,21 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from tamp import scenarios
 from tamp.demo import Demonstration, load_demonstration
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
 from tamp.perturbation import NONE, Perturbation, parse_perturbation
+from tamp.rg.costs import COST_MODELS
+from tamp.schema import load_dataclass, spec
+from tamp.sim.smp.object_models import ObjectModel, declared_kinds
 from tamp.sim.smp.placement import Body, blocker
 from tamp.sim.smp.robot import OBJECT_KINDS, ROBOT, ObjectKind
 from tamp.world.events import AfterAction, Appear, AtTick, AtTime, Fail, parse_appear, parse_fail
 from tamp.world.geometry import Area, Point
 
-COSTS = ("distance", "time", "success")
 CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
 SIM_DIR = scenarios.ROOT / "sim"
 #: The skills whose failure the simulation can script: a Pick whose weld is not switched on.
@@ -55,6 +66,184 @@ GRASPS = ("weld", "friction")
 PERCEPTIONS = ("truth", "camera")
 #: the perturbation fields the SMP-MRO workcell simulates (`tamp.sim.smp.perturb`)
 PERTURBED = ("objects", "robot", "friction", "sensor", "timing", "skills")
+#: the model of an object the file does not list (the demonstration's, an appearing one)
+DEFAULT_MODEL = "bottle"
+#: the shortest plant step, and so the shortest tick of the controller and the tree (s)
+MIN_TIME_STEP = 0.0005
+#: the floor's half-extent (``models/sdf/floor.sdf``): a workspace lies within it
+FLOOR_HALF = 9.0
+
+
+@dataclass(frozen=True)
+class Planner:
+    """``planner:``: the RG search's edge cost (SMP-MRO §IV-B2, `tamp.rg.costs`)."""
+
+    cost: str = spec("distance", choices=COST_MODELS, help="edge weight of the RG search")
+
+
+@dataclass(frozen=True)
+class PlantSettings:
+    """``plant:``: the MultibodyPlant's discrete step and contact model (SAP solver,
+    `tamp.sim.core.plant.add_sap_plant`)."""
+
+    time_step: float = spec(0.01, min=MIN_TIME_STEP, max=0.02, unit="s", help="plant time step")
+    contact_model: str = spec("point", choices=CONTACT_MODELS, help="Drake contact model")
+
+
+@dataclass(frozen=True)
+class ExecutorSettings:
+    """``executor:``: how often the behaviour tree and the skill controller tick, and how
+    long a run may last."""
+
+    bt_period: float = spec(
+        0.1, min=MIN_TIME_STEP, max=1.0, unit="s", help="BT tick (>= controller_period)"
+    )
+    controller_period: float = spec(
+        0.02, min=MIN_TIME_STEP, max=0.1, unit="s", help="skill tick (>= plant.time_step)"
+    )
+    max_sim_time: float = spec(
+        300.0, min=0.0, strict_min=True, unit="s", help="simulated time before TIMEOUT"
+    )
+
+    def check(self, f: Fields) -> None:
+        if self.bt_period < self.controller_period:
+            raise f.error("bt_period", f"must be >= {self.controller_period}, got {self.bt_period}")
+
+
+@dataclass(frozen=True)
+class BaseLimits:
+    """``base:``: velocity and acceleration limits of the base trajectories (MoveTo and
+    approaches, `tamp.sim.smp.motion`)."""
+
+    max_speed: float = spec(0.5, min=0.0, strict_min=True, max=2.0, unit="m/s")
+    max_accel: float = spec(0.6, min=0.0, strict_min=True, max=5.0, unit="m/s^2")
+    max_yaw_rate: float = spec(1.2, min=0.0, strict_min=True, max=5.0, unit="rad/s")
+    max_yaw_accel: float = spec(2.0, min=0.0, strict_min=True, max=10.0, unit="rad/s^2")
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """``workspace:``: the floor rectangle the robot and the objects stay in (robot frame)."""
+
+    x: tuple[float, float] = spec(unit="m", help="[xmin, xmax], at least 1 m apart")
+    y: tuple[float, float] = spec(unit="m", help="[ymin, ymax], at least 1 m apart")
+
+    def check(self, f: Fields) -> None:
+        for key, (lo, hi) in (("x", self.x), ("y", self.y)):
+            if hi - lo < 1.0:
+                raise f.error(key, f"workspace must span at least 1 m, got [{lo}, {hi}]")
+            if lo < -FLOOR_HALF or hi > FLOOR_HALF:
+                raise f.error(
+                    key,
+                    f"workspace must lie within [-{FLOOR_HALF:g}, {FLOOR_HALF:g}] m (the floor)",
+                )
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(xmin, xmax, ymin, ymax)."""
+        return (self.x[0], self.x[1], self.y[0], self.y[1])
+
+
+@dataclass(frozen=True)
+class RobotSettings:
+    """``robot:``: where the robot starts (default: the demonstration's start)."""
+
+    start: tuple[float, float, float] | None = spec(None, unit="m, m, rad", help="x, y, yaw")
+
+
+@dataclass(frozen=True)
+class ObjectEntry:
+    """One entry of ``objects:``: a demonstration object's model or pose, or a new object
+    (with a pose, or without one when it appears: ``appear``)."""
+
+    id: str = spec(help="object id (a demonstration object's, or a new one)")
+    model: str = spec(DEFAULT_MODEL, help="a packaged model or one declared under models:")
+    pose: tuple[float, float, float] | None = spec(None, unit="m, m, rad", help="x, y, yaw")
+
+
+def _entries(parse: Any, what: str) -> Any:
+    """A ``spec(parse=...)`` reader of a list of flag strings (``appear``, ``fail``) with
+    the flags' own grammar; each error names ``key[i]``."""
+
+    def read(raw: Any, f: Fields, key: str) -> tuple:
+        out = []
+        for i, text in enumerate(f.items(key)):
+            field = f"{f.path}.{key}[{i}]" if f.path else f"{key}[{i}]"
+            if not isinstance(text, str):
+                raise InputError(f"expected {what} as a string", file=f.file, field=field)
+            out.append(parse(text, field=field, file=f.file))
+        return tuple(out)
+
+    return read
+
+
+def _perturbation(raw: Any, f: Fields, key: str) -> Perturbation:
+    return parse_perturbation(f, key)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ScenarioFile:
+    """A scenario file as written (module docstring), before it is resolved against its
+    demonstration (`load_scenario`)."""
+
+    name: str = spec(help="the scenario's name")
+    demonstration: str = spec(help="demonstration file: relative to this file, or packaged")
+    planner: Planner = spec(Planner)
+    plant: PlantSettings = spec(PlantSettings)
+    executor: ExecutorSettings = spec(ExecutorSettings)
+    base: BaseLimits = spec(BaseLimits)
+    workspace: Workspace = spec()
+    robot: RobotSettings = spec(RobotSettings)
+    models: dict[str, ObjectModel] = spec({}, help="object models of this file, by name")
+    objects: tuple[ObjectEntry, ...] = spec(())
+    appear: tuple[Appear, ...] = spec(
+        (), parse=_entries(parse_appear, "OBJ@PLACE[@WHEN]"), help="as --appear"
+    )
+    fail: tuple[Fail, ...] = spec(
+        (), parse=_entries(parse_fail, "ACTION[(ARGS)][xTIMES]"), help="as --fail"
+    )
+    grasp: str = spec("weld", choices=GRASPS, help="weld | friction (the fingers hold it)")
+    perception: str = spec(
+        "truth", choices=PERCEPTIONS, help="truth (plant poses) | camera (RGB-D on the robot)"
+    )
+    perturbation: Perturbation = spec(NONE, parse=_perturbation, help="tamp.perturbation")
+
+    def check(self, f: Fields) -> None:
+        """Relations across sections: periods no shorter than the plant step, unique
+        object ids of known models (a declared model's name not a packaged one's),
+        simulated failures only, each failure listed once."""
+        if self.executor.controller_period < self.plant.time_step:
+            raise f.sub("executor").error(
+                "controller_period",
+                f"must be >= {self.plant.time_step}, got {self.executor.controller_period}",
+            )
+        for name in self.models:
+            if name in OBJECT_KINDS:
+                raise f.sub("models").error(
+                    name,
+                    f"a packaged model has this name (packaged: {', '.join(OBJECT_KINDS)}): "
+                    "choose another",
+                )
+        known = list(OBJECT_KINDS) + list(self.models)
+        seen: set[str] = set()
+        for entry, where in zip(self.objects, f.items("objects", []), strict=True):
+            if entry.id in seen:
+                raise where.error("id", f"duplicate object {entry.id!r}")
+            seen.add(entry.id)
+            if entry.model not in known:
+                raise where.error(
+                    "model", f"unknown model {entry.model!r} (known: {', '.join(known)})"
+                )
+        self.perturbation.require(PERTURBED, "SMP-MRO")
+        for action in self.perturbation.skill_failure:
+            if action not in SIMULATED_FAILURES:
+                raise f.error(
+                    f"perturbation.skills.{action}",
+                    f"only {', '.join(SIMULATED_FAILURES)} failures (lost grasps) are simulated",
+                )
+        for i, fail in enumerate(self.fail):
+            if any((g.action, g.args) == (fail.action, fail.args) for g in self.fail[:i]):
+                raise InputError(f"{fail.action} is listed twice", file=f.file, field=f"fail[{i}]")
 
 
 @dataclass(frozen=True)
@@ -70,16 +259,6 @@ class SimObject:
     xy: tuple[float, float]
     yaw: float = 0.0
     appear: Appear | None = None
-
-
-@dataclass(frozen=True)
-class BaseLimits:
-    """Velocity and acceleration limits of the base trajectories (MoveTo and approaches)."""
-
-    max_speed: float = 0.5
-    max_accel: float = 0.6
-    max_yaw_rate: float = 1.2
-    max_yaw_accel: float = 2.0
 
 
 @dataclass(frozen=True)
@@ -100,25 +279,23 @@ class RunConditions:
 
 @dataclass(frozen=True)
 class SimScenario:
-    """A loaded, validated simulation scenario."""
+    """A loaded, validated simulation scenario: the file's sections as loaded, and what
+    they resolve to against the demonstration (objects, robot start, failures)."""
 
     name: str
     source: str
     demo: Demonstration
-    cost: str
-    time_step: float
-    contact_model: str
-    bt_period: float
-    controller_period: float
-    max_sim_time: float
+    planner: Planner
+    plant: PlantSettings
+    executor: ExecutorSettings
     base: BaseLimits
     workspace: tuple[float, float, float, float]  # xmin, xmax, ymin, ymax
     robot_start: tuple[float, float, float]
     objects: tuple[SimObject, ...]
-    failures: tuple[Fail, ...] = ()
-    grasp: str = "weld"  # weld | friction
-    perception: str = "truth"  # truth | camera
-    perturbation: Perturbation = NONE
+    failures: tuple[Fail, ...]
+    grasp: str  # weld | friction
+    perception: str  # truth | camera
+    perturbation: Perturbation
     conditions: RunConditions = RunConditions()
 
     def object(self, uid: str) -> SimObject:
@@ -164,7 +341,7 @@ class SimScenario:
             else:
                 index[a.obj] = len(objects)
                 objects.append(
-                    SimObject(a.obj, OBJECT_KINDS["bottle"], (math.nan, math.nan), 0.0, a)
+                    SimObject(a.obj, OBJECT_KINDS[DEFAULT_MODEL], (math.nan, math.nan), 0.0, a)
                 )
         out = dataclasses.replace(self, objects=tuple(objects))
         _check_start_places(out, {a.obj: ("--appear", None) for a in appear})
@@ -184,184 +361,91 @@ def load_scenario(path: str | Path) -> SimScenario:
     """Load and validate a simulation scenario; `InputError` names file and field."""
     data, file = load_yaml(scenario_path(path), kind="simulation scenario")
     f = Fields(data, file)
-    f.check_keys(
-        {
-            "version",
-            "name",
-            "demonstration",
-            "planner",
-            "plant",
-            "executor",
-            "base",
-            "workspace",
-            "robot",
-            "objects",
-            "appear",
-            "fail",
-            "grasp",
-            "perception",
-            "perturbation",
-        }
-    )
-    name = f.str("name")
-    demo = _demonstration(f, Path(file))
-
-    planner = f.sub("planner", {})
-    planner.check_keys({"cost"})
-    cost = planner.str("cost", "distance", choices=COSTS)
-
-    plant = f.sub("plant", {})
-    plant.check_keys({"time_step", "contact_model"})
-    time_step = plant.float("time_step", 0.01, min=0.0005, max=0.02)
-    contact = plant.str("contact_model", "point", choices=CONTACT_MODELS)
-
-    ex = f.sub("executor", {})
-    ex.check_keys({"bt_period", "controller_period", "max_sim_time"})
-    controller_period = ex.float("controller_period", 0.02, min=time_step, max=0.1)
-    bt_period = ex.float("bt_period", 0.1, min=controller_period, max=1.0)
-    max_sim_time = ex.float("max_sim_time", 300.0, min=0.0, strict_min=True)
-
-    b = f.sub("base", {})
-    b.check_keys({"max_speed", "max_accel", "max_yaw_rate", "max_yaw_accel"})
-    base = BaseLimits(
-        max_speed=b.float("max_speed", 0.5, min=0.0, strict_min=True, max=2.0),
-        max_accel=b.float("max_accel", 0.6, min=0.0, strict_min=True, max=5.0),
-        max_yaw_rate=b.float("max_yaw_rate", 1.2, min=0.0, strict_min=True, max=5.0),
-        max_yaw_accel=b.float("max_yaw_accel", 2.0, min=0.0, strict_min=True, max=10.0),
-    )
-
-    workspace = _workspace(f, demo)
-
-    robot = f.sub("robot", {})
-    robot.check_keys({"start"})
-    if robot.has("start"):
-        robot_start = robot.vector("start", 3)
+    sf = load_dataclass(ScenarioFile, f, extra_keys={"version"})
+    demo = _demonstration(f, sf.demonstration)
+    kinds = {**OBJECT_KINDS, **declared_kinds(sf.models, f)}
+    if sf.robot.start is not None:
+        robot_start = sf.robot.start
     else:
         rs = demo.robot_start
         robot_start = (rs.pos.x, rs.pos.y, rs.orientation.yaw())
-
-    objects = _objects(f, demo, workspace)
-    perturbation = parse_perturbation(f)
-    perturbation.require(PERTURBED, "SMP-MRO")
-    for action in perturbation.skill_failure:
-        if action not in SIMULATED_FAILURES:
-            raise f.error(
-                f"perturbation.skills.{action}",
-                f"only {', '.join(SIMULATED_FAILURES)} failures (lost grasps) are simulated",
-            )
     scenario = SimScenario(
-        name=name,
+        name=sf.name,
         source=file,
         demo=demo,
-        cost=cost,
-        time_step=time_step,
-        contact_model=contact,
-        bt_period=bt_period,
-        controller_period=controller_period,
-        max_sim_time=max_sim_time,
-        base=base,
-        workspace=workspace,
+        planner=sf.planner,
+        plant=sf.plant,
+        executor=sf.executor,
+        base=sf.base,
+        workspace=sf.workspace.bounds,
         robot_start=robot_start,
-        objects=objects,
-        grasp=f.str("grasp", "weld", choices=GRASPS),
-        perception=f.str("perception", "truth", choices=PERCEPTIONS),
-        perturbation=perturbation,
+        objects=_objects(sf, demo, kinds),
+        failures=(),
+        grasp=sf.grasp,
+        perception=sf.perception,
+        perturbation=sf.perturbation,
     )
-    scenario = _appearances(scenario, f)
-    scenario = dataclasses.replace(scenario, failures=_failures(scenario, f))
-    _check_geometry(scenario, f)
+    scenario = _appearances(scenario, sf, file)
+    for i, fail in enumerate(sf.fail):
+        _check_fail(scenario, fail, field=f"fail[{i}]", file=file)
+    scenario = dataclasses.replace(scenario, failures=sf.fail)
+    _check_geometry(scenario, sf)
     return scenario
 
 
-def _demonstration(f: Fields, file: Path) -> Demonstration:
-    ref = f.str("demonstration")
-    local = file.parent / ref
+def _demonstration(f: Fields, ref: str) -> Demonstration:
+    """The demonstration ``ref`` names: beside the scenario file, else a packaged one."""
+    local = Path(f.file).parent / ref
     path = local if local.exists() else scenarios.resolve(ref)
     if not Path(path).exists():
         raise f.error("demonstration", f"no demonstration file {ref!r}")
     return load_demonstration(path)
 
 
-def _workspace(f: Fields, demo: Demonstration) -> tuple[float, float, float, float]:
-    w = f.sub("workspace")
-    w.check_keys({"x", "y"})
-    x = w.vector("x", 2)
-    y = w.vector("y", 2)
-    for key, (lo, hi) in (("x", x), ("y", y)):
-        if hi - lo < 1.0:
-            raise w.error(key, f"workspace must span at least 1 m, got [{lo}, {hi}]")
-        if lo < -9.0 or hi > 9.0:
-            raise w.error(key, "workspace must lie within [-9, 9] m (the floor)")
-    return (x[0], x[1], y[0], y[1])
-
-
 def _objects(
-    f: Fields, demo: Demonstration, workspace: tuple[float, float, float, float]
+    sf: ScenarioFile, demo: Demonstration, kinds: dict[str, ObjectKind]
 ) -> tuple[SimObject, ...]:
     """Demonstration objects (bottles at P unless listed) and listed ones; an object with
     no pose gets one from ``appear`` (`_appearances`), until then its ``xy`` is NaN."""
-    listed: dict[str, Fields] = {}
-    for i, item in enumerate(f.items("objects", [])):
-        if not isinstance(item, Fields):
-            raise InputError("each object must be a mapping", file=f.file, field=f"objects[{i}]")
-        item.check_keys({"id", "model", "pose"})
-        uid = item.str("id")
-        if uid in listed:
-            raise item.error("id", f"duplicate object {uid!r}")
-        listed[uid] = item
-
+    listed = {entry.id: entry for entry in sf.objects}
     out: list[SimObject] = []
     for uid, p in demo.objects.items():
-        kind, xy, yaw = OBJECT_KINDS["bottle"], (p.x, p.y), 0.0
-        if uid in listed:
-            item = listed.pop(uid)
-            kind = _kind(item)
-            if item.has("pose"):
-                x, y, yaw = item.vector("pose", 3)
-                xy = (x, y)
+        kind, xy, yaw = kinds[DEFAULT_MODEL], (p.x, p.y), 0.0
+        entry = listed.pop(uid, None)
+        if entry is not None:
+            kind = kinds[entry.model]
+            if entry.pose is not None:
+                xy, yaw = entry.pose[:2], entry.pose[2]
         out.append(SimObject(uid, kind, xy, yaw))
-    for uid, item in listed.items():
+    for uid, entry in listed.items():
         xy, yaw = (math.nan, math.nan), 0.0
-        if item.has("pose"):
-            x, y, yaw = item.vector("pose", 3)
-            xy = (x, y)
-        out.append(SimObject(uid, _kind(item), xy, yaw))
+        if entry.pose is not None:
+            xy, yaw = entry.pose[:2], entry.pose[2]
+        out.append(SimObject(uid, kinds[entry.model], xy, yaw))
     return tuple(out)
 
 
-def _kind(item: Fields) -> ObjectKind:
-    model = item.str("model", "bottle")
-    if model not in OBJECT_KINDS:
-        raise item.error("model", f"unknown model {model!r} (known: {', '.join(OBJECT_KINDS)})")
-    return OBJECT_KINDS[model]
-
-
-def _appearances(s: SimScenario, f: Fields) -> SimScenario:
+def _appearances(s: SimScenario, sf: ScenarioFile, file: str) -> SimScenario:
     """The file's ``appear`` entries on the objects; every object without a pose needs one."""
     objects = {o.id: o for o in s.objects}
-    for i, text in enumerate(f.items("appear", [])):
+    for i, a in enumerate(sf.appear):
         field = f"appear[{i}]"
-        if not isinstance(text, str):
-            raise InputError("expected OBJ@PLACE[@WHEN] as a string", file=f.file, field=field)
-        a = parse_appear(text, field=field, file=f.file)
-        _check_appear(s, a, field=field, file=f.file)
+        _check_appear(s, a, field=field, file=file)
         old = objects.get(a.obj)
         if old is not None and old.appear is not None:
-            raise InputError(f"{a.obj} already appears", file=f.file, field=field)
+            raise InputError(f"{a.obj} already appears", file=file, field=field)
         if old is not None and not math.isnan(old.xy[0]):
             raise InputError(
-                f"{a.obj} has a pose (objects); give either pose or appear",
-                file=f.file,
-                field=field,
+                f"{a.obj} has a pose (objects); give either pose or appear", file=file, field=field
             )
-        kind = old.kind if old is not None else OBJECT_KINDS["bottle"]
+        kind = old.kind if old is not None else OBJECT_KINDS[DEFAULT_MODEL]
         objects[a.obj] = SimObject(a.obj, kind, (math.nan, math.nan), 0.0, a)
-    for j, item in enumerate(f.raw("objects", []) or []):
-        uid = item.get("id")
-        if objects[uid].appear is None and math.isnan(objects[uid].xy[0]):
+    for j, entry in enumerate(sf.objects):
+        o = objects[entry.id]
+        if o.appear is None and math.isnan(o.xy[0]):
             raise InputError(
-                f"object {uid} is not in the demonstration: it needs a pose or an appear entry",
-                file=f.file,
+                f"object {o.id} is not in the demonstration: it needs a pose or an appear entry",
+                file=file,
                 field=f"objects[{j}].pose",
             )
     return dataclasses.replace(s, objects=tuple(objects.values()))
@@ -397,22 +481,6 @@ def _check_appear(s: SimScenario, a: Appear, *, field: str, file: str | None) ->
             )
 
 
-def _failures(s: SimScenario, f: Fields) -> tuple[Fail, ...]:
-    out: list[Fail] = []
-    for i, text in enumerate(f.items("fail", [])):
-        field = f"fail[{i}]"
-        if not isinstance(text, str):
-            raise InputError(
-                "expected ACTION[(ARGS)][xTIMES] as a string", file=f.file, field=field
-            )
-        fail = parse_fail(text, field=field, file=f.file)
-        _check_fail(s, fail, field=field, file=f.file)
-        if any((g.action, g.args) == (fail.action, fail.args) for g in out):
-            raise InputError(f"{fail.action} is listed twice", file=f.file, field=field)
-        out.append(fail)
-    return tuple(out)
-
-
 def _check_fail(s: SimScenario, fail: Fail, *, field: str, file: str | None) -> None:
     """A failure the simulation can script: a lost grasp, ``Pick`` or ``Pick(<object>)``."""
     if fail.action not in SIMULATED_FAILURES:
@@ -431,16 +499,13 @@ def _check_fail(s: SimScenario, fail: Fail, *, field: str, file: str | None) -> 
             )
 
 
-def _check_geometry(s: SimScenario, f: Fields) -> None:
+def _check_geometry(s: SimScenario, sf: ScenarioFile) -> None:
     """Objects inside the workspace and apart, goals reachable, the robot clear of objects."""
     index = {o.id: i for i, o in enumerate(s.objects)}
+    listed = {entry.id: j for j, entry in enumerate(sf.objects)}
 
     def field(uid: str) -> str:
-        listed = [it for it in f.raw("objects", []) or [] if isinstance(it, dict)]
-        for j, it in enumerate(listed):
-            if it.get("id") == uid:
-                return f"objects[{j}]"
-        return f"demonstration (object {uid})"
+        return f"objects[{listed[uid]}]" if uid in listed else f"demonstration (object {uid})"
 
     placed = [o for o in s.objects if o.appear is None]
     for o in placed:
@@ -480,12 +545,7 @@ def _check_geometry(s: SimScenario, f: Fields) -> None:
             raise InputError(
                 f"robot start overlaps object {o.id}", file=s.source, field="robot.start"
             )
-    fields = {}
-    for i, text in enumerate(f.raw("appear", []) or []):
-        fields[parse_appear(text, field=f"appear[{i}]", file=s.source).obj] = (
-            f"appear[{i}]",
-            s.source,
-        )
+    fields = {a.obj: (f"appear[{i}]", s.source) for i, a in enumerate(sf.appear)}
     _check_start_places(s, fields)
 
 

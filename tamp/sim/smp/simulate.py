@@ -51,7 +51,7 @@ def prepare(scenario: SimScenario, *, verify: bool = True) -> Prepared:
     """Plan, build the tree, and pass the verification gate (the hook before simulation)."""
     from tamp.rg import plan as rg_plan
 
-    result = rg_plan(scenario.demo, scenario.cost)
+    result = rg_plan(scenario.demo, scenario.planner.cost)
     tree = make_tree(scenario, result)
     prepared = Prepared(scenario, result, tree)
     if verify:

@@ -19,7 +19,9 @@ Grasps (``grasp:`` of the scenario). ``weld``: weld constraints, two per graspab
 switched between simulation steps by `SimRunner` (see `tamp.sim.smp.runner`), never inside
 an event. ``friction``: no weld at all; the fingers squeeze the object (their PD force) and
 friction holds it, so a poor grasp slips. A run's drawn friction coefficient
-(`RunConditions.friction`) replaces the objects' SDF coefficients.
+(`RunConditions.friction`) replaces the objects' SDF coefficients. Each object is its kind's
+SDF (packaged, or declared by the scenario: `tamp.sim.smp.object_models.object_sdf`) as one
+model instance named by the object's id.
 """
 
 from __future__ import annotations
@@ -39,11 +41,12 @@ from pydrake.multibody.tree import PdControllerGains
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from tamp.sim.core.executor import BtExecutor, Policy
-from tamp.sim.core.models import model_url, sdf_path, with_friction
+from tamp.sim.core.models import model_url, sdf_path
 from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.smp.estimator import WorldStateEstimator
 from tamp.sim.smp.ik import grasp_transform
+from tamp.sim.smp.object_models import object_sdf
 from tamp.sim.smp.robot import CAMERA, HOME_ARM, ROBOT, grasped_kinds
 from tamp.sim.smp.scenario import SimScenario
 from tamp.sim.smp.skills import YouBotSkillController
@@ -141,7 +144,7 @@ def build_station(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
     """The named Diagram of ``scenario`` with ``policy`` (the grown BT) in the BtExecutor."""
     builder = DiagramBuilder()
     plant, scene_graph, parser = add_sap_plant(
-        builder, time_step=scenario.time_step, contact_model=scenario.contact_model
+        builder, time_step=scenario.plant.time_step, contact_model=scenario.plant.contact_model
     )
 
     (floor,) = parser.AddModelsFromUrl(model_url("floor"))
@@ -177,10 +180,7 @@ def build_station(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
     palm = plant.GetBodyByName(ROBOT.palm_body, robot)
     parser.SetAutoRenaming(True)
     for i, obj in enumerate(scenario.objects):
-        text = sdf_path(obj.kind.name).read_text()
-        text = text.replace(f'<model name="{obj.kind.name}">', f'<model name="{obj.id}">')
-        if scenario.conditions.friction is not None:  # the run's drawn coefficient
-            text = with_friction(text, scenario.conditions.friction)
+        text = object_sdf(obj.kind, obj.id, scenario.conditions.friction)
         (m,) = parser.AddModelsFromString(text, "sdf")
         body = plant.GetBodyByName(obj.kind.body, m)
         if obj.appear is None:
@@ -223,7 +223,7 @@ def build_station(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
     )
     skills = builder.AddSystem(
         YouBotSkillController(
-            period=scenario.controller_period,
+            period=scenario.executor.controller_period,
             bodies={k: int(b.index()) for k, b in bodies.items()},
             kinds=kinds,
             palm_body=int(palm.index()),
@@ -238,7 +238,7 @@ def build_station(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
             perception=scenario.perception,
         )
     )
-    executor = builder.AddSystem(BtExecutor(policy, period=scenario.bt_period))
+    executor = builder.AddSystem(BtExecutor(policy, period=scenario.executor.bt_period))
 
     poses = plant.get_body_poses_output_port()
     perception = None

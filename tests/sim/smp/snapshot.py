@@ -6,7 +6,8 @@ lists, sets as sorted lists, floats exact (JSON writes a float's shortest repr, 
 back to the same float; NaN, the position of an object that has not appeared yet, as the
 string ``"nan"``). The snapshot in ``data/packaged_scenarios.json`` was written by the
 loader this one replaced; ``test_scenario_snapshot.py`` checks that the present loader
-agrees on every packaged file.
+agrees on every packaged file. `recorded_layout` maps today's `SimScenario` onto the layout
+the snapshot was written in (the same values; only where they sit differs).
 
 Rewrite the snapshot (only when a packaged file changes on purpose)::
 
@@ -18,7 +19,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from pathlib import Path
+from pathlib import Path, PurePath
 from typing import Any
 
 from tamp import scenarios
@@ -50,6 +51,8 @@ def normalise(value: Any) -> Any:
         return sorted(items, key=lambda v: json.dumps(v, sort_keys=True))
     if isinstance(value, bool) or value is None or isinstance(value, int | str):
         return value
+    if isinstance(value, PurePath):
+        return str(value)
     number = float(value)  # a float or a NumPy scalar
     if math.isnan(number):
         return "nan"
@@ -58,11 +61,33 @@ def normalise(value: Any) -> Any:
     return number
 
 
+#: sections of today's `SimScenario` whose fields sat at its top level when it was recorded
+FLATTENED = ("planner", "plant", "executor")
+#: `ObjectKind` fields added since: a packaged model's are None (its file is the packaged
+#: one, its colour the SDF's)
+ADDED_KIND_FIELDS = ("path", "colour")
+
+
+def recorded_layout(scenario: dict[str, Any]) -> dict[str, Any]:
+    """A normalised `SimScenario` in the snapshot's layout (module docstring)."""
+    out = {k: v for k, v in scenario.items() if k not in FLATTENED}
+    for section in FLATTENED:
+        out.update(scenario[section])
+    objects = []
+    for o in scenario["objects"]:
+        kind = {k: v for k, v in o["kind"].items() if k not in ADDED_KIND_FIELDS}
+        if any(o["kind"].get(k) is not None for k in ADDED_KIND_FIELDS):
+            kind["added"] = {k: o["kind"][k] for k in ADDED_KIND_FIELDS}  # never recorded
+        objects.append({**o, "kind": kind})
+    out["objects"] = objects
+    return out
+
+
 def snapshot() -> dict[str, Any]:
-    """Every packaged scenario, normalised, by file name."""
+    """Every packaged scenario, normalised, in the recorded layout, by file name."""
     from tamp.sim.smp.scenario import load_scenario
 
-    return {p.name: normalise(load_scenario(p)) for p in packaged_files()}
+    return {p.name: recorded_layout(normalise(load_scenario(p))) for p in packaged_files()}
 
 
 if __name__ == "__main__":
