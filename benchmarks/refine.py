@@ -30,11 +30,21 @@ PAPER = {1: -0.703, 2: -0.736, 3: -0.542, 4: -0.642}  # reductions (Fig. 12, Fig
 def run_task(n: int, category: str | None) -> dict:
     from tamp.refine.architecture import default_architecture
     from tamp.refine.loader import load_program
-    from tamp.sim.refine.refinement import refine
+    from tamp.refine.refinement import refine
+    from tamp.sim.refine.simulate import simulate
+    from verification.gate import gate_program
+    from verification.refine import check_run
 
     program = load_program(f"task{n}")
     wall0, cpu0 = time.perf_counter(), time.process_time()
-    out = refine(program, default_architecture(), category=category)
+    out = refine(
+        program,
+        default_architecture(),
+        simulate,
+        gate=gate_program,
+        check_run=check_run,
+        category=category,
+    )
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
     sim = out.sim_time
     return {

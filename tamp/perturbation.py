@@ -6,7 +6,7 @@ name file and field) into a `Perturbation`. ``Perturbation.sample(seed)`` draws 
 `PerturbationSample` from ``numpy.random.default_rng``: the same seed gives the same sample
 bit for bit. Each workcell applies a sample to its own scenario (a new scenario, nothing
 mutated: `tamp.sim.smp.perturb.perturb`, `tamp.sim.lots.scenario.perturbed`,
-`tamp.sim.refine.seeded.perturbed_program`) and records what it applied as an `Applied`
+`tamp.sim.refine.simulate.perturbed_program`) and records what it applied as an `Applied`
 (JSON: the sampled values and the perturbation's ``size``, the largest start displacement
 of an object, so a campaign can plot success against it). No Drake import here.
 

@@ -158,3 +158,26 @@ def test_tamp_imports_without_ray():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
     assert "campaign" in proc.stdout
+
+
+def test_the_refinement_loop_imports_no_drake():
+    """`tamp.refine` (programs, state machines, the refinement loop and the measuring
+    interface it is given) runs without Drake: none of its import statements names pydrake
+    or the workcells (`tamp.sim`), and every module imports with pydrake unavailable."""
+    bad = []
+    for module, path in _modules():
+        if module != "tamp.refine" and not module.startswith("tamp.refine."):
+            continue
+        for target, line in _imports(path):
+            if target.split(".")[0] == "pydrake" or target.startswith("tamp.sim"):
+                bad.append(f"{path.relative_to(ROOT)}:{line}: imports {target}")
+    assert not bad, "\n".join(bad)
+    code = (
+        "import sys; sys.modules['pydrake'] = None\n"
+        "import importlib, pkgutil, tamp.refine\n"
+        "for m in pkgutil.walk_packages(tamp.refine.__path__, 'tamp.refine.'):\n"
+        "    importlib.import_module(m.name)\n"
+        "assert not any(n.startswith('tamp.sim') for n in sys.modules), 'tamp.sim imported'\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr

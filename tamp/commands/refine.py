@@ -4,10 +4,11 @@
                           [--record out.html] [--out refined.yaml] [--no-verify] [--seed N]
 
 Simulates the original program, then the program after each refinement phase
-(parallelized, speed-adjusted, rate-refined; `tamp.sim.refine.refinement`), and prints
-the measured task time of each, the rate found, the reduction and the refined program.
-Every program passes the LTL ordering gate before it is simulated. ``--seed N`` draws the
-program file's ``perturbation`` section (robot start poses; `tamp.sim.refine.seeded`).
+(parallelized, speed-adjusted, rate-refined; `tamp.refine.refinement`, every run measured
+by the Drake workcell's `tamp.sim.refine.simulate.simulate`), and prints the measured task
+time of each, the rate found, the reduction and the refined program. Every program passes
+the LTL ordering gate before it is simulated. ``--seed N`` draws the program file's
+``perturbation`` section (robot start poses; `tamp.sim.refine.simulate.perturbed_program`).
 Exit 0 on success, 1 when a program cannot finish or a refinement breaks the ordering
 property (with the counterexample), 2 on a bad file or option.
 """
@@ -54,7 +55,8 @@ def run(args: argparse.Namespace) -> int:
         if value:
             output_file(value, option, make_parents=parents)
     from tamp.perturbation import check_seed
-    from tamp.sim.refine.seeded import perturbed_program, program_perturbation
+    from tamp.sim.refine.scenario import load_scene
+    from tamp.sim.refine.simulate import perturbed_program, program_perturbation
 
     check_seed(args.seed)
     nominal = load_program(args.task)
@@ -62,16 +64,24 @@ def run(args: argparse.Namespace) -> int:
     arch = (
         load_architecture(program.architecture) if program.architecture else default_architecture()
     )
+    scene = load_scene(program.scene)
     if args.no_verify:
         warn_unverified("tamp refine", "each refined program")
 
-    from tamp.sim.refine.refinement import refine
+    from functools import partial
+
+    from tamp.refine.refinement import refine
+    from tamp.sim.refine.simulate import simulate
+    from verification.gate import gate_program
+    from verification.refine import check_run
 
     result = refine(
         program,
         arch,
+        partial(simulate, scene=scene),
+        gate=None if args.no_verify else gate_program,
+        check_run=check_run,
         category=args.category,
-        verify=not args.no_verify,
         record=args.record,
         progress=lambda m: progress(m, quiet=args.json),
     )

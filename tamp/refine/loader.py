@@ -5,7 +5,9 @@ Format::
     version: 1
     name: task4
     description: Open the folding chair lying on the floor (Fig. 9(d), Fig. 11).
-    scene: open_chair               # flip_briefcase | flip_scale | lift_scale | open_chair | table
+    scene: open_chair               # a packaged scene (flip_briefcase | flip_scale | lift_scale
+                                    # | open_chair | table) or a scene file relative to this
+                                    # file (tamp.sim.refine.scenario)
     architecture: arch.yaml         # optional; default: the packaged calibrated architecture
     communication:
       category: II                  # Table 1: I | II | III
@@ -28,6 +30,8 @@ Format::
             parallel_with: prev     # optional: starts with the previous behavior (Fig. 13)
             manipulates: true       # optional: manipulation starts here (Step 1)
             rate_hz: 23             # optional: this behavior's command rate P
+    perturbation:                   # optional, seeded runs only (tamp.perturbation)
+      robot: {xy: 0.01, yaw: 0.02}  # each robot's start pose, drawn per seed
 
 Every error is an `InputError` naming the file and the dotted field (CLI exit 2).
 """
@@ -40,8 +44,10 @@ from typing import Any
 
 import yaml
 
+from tamp import scenarios
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
+from tamp.perturbation import parse_perturbation
 from tamp.refine.program import (
     CATEGORIES,
     MODELS,
@@ -57,8 +63,8 @@ from tamp.refine.program import (
     event_id,
 )
 
-#: The simulated scenes (Fig. 9): which objects lie where.
-SCENES = ("flip_briefcase", "flip_scale", "lift_scale", "open_chair", "table")
+#: The packaged scenes' folder in `tamp.scenarios` (``tamp/scenarios/refine/scenes``).
+SCENES = "refine/scenes"
 
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 _EVENT_TOKEN = re.compile(r"\b([A-Za-z][A-Za-z0-9_]*\.[A-Za-z0-9_]+)\b")
@@ -85,12 +91,21 @@ _BEHAVIOR_KEYS = (
 )
 
 
+def scene_path(name_or_path: str | Path) -> Path:
+    """The file of a scene: a user path if it exists, else the packaged scene of that name
+    (`tamp.scenarios.resolve` in `SCENES`)."""
+    return scenarios.resolve(name_or_path, SCENES)
+
+
+def packaged_scenes() -> tuple[str, ...]:
+    """The names of the packaged scenes."""
+    return tuple(sorted(p.stem for p in (scenarios.ROOT / SCENES).glob("*.yaml")))
+
+
 def load_program(path: str | Path) -> Program:
     """Read and validate a program file (a path, or a packaged name such as ``task4``
     resolved by `tamp.scenarios.resolve`); any problem is an `InputError` (file, field)."""
-    from tamp.scenarios import resolve
-
-    data, file = load_yaml(resolve(path, "refine"), kind="refinement program")
+    data, file = load_yaml(scenarios.resolve(path, "refine"), kind="refinement program")
     f = Fields(data, file)
     f.check_keys(_KEYS)
     c = f.sub("communication")
@@ -132,14 +147,31 @@ def load_program(path: str | Path) -> Program:
             raise f.error("ordering", f"unknown event {token!r} (events: {sorted(events)})")
     return Program(
         name=f.str("name", Path(file).stem),
-        scene=f.str("scene", choices=SCENES),
+        scene=_scene(f, file),
         communication=comm,
         robots=robots,
         ordering=ordering,
         description=str(f.raw("description", "")).strip(),
         architecture=architecture,
         file=file,
+        perturbation=parse_perturbation(f),
     )
+
+
+def _scene(f: Fields, file: str) -> str:
+    """``scene``: the user's scene file (relative to the program file) when it exists, else
+    a packaged scene's name (the file's contents are read by the workcell)."""
+    ref = f.str("scene")
+    local = Path(file).parent / ref
+    if local.is_file():
+        return str(local)
+    if ref not in packaged_scenes():
+        raise f.error(
+            "scene",
+            f"no scene file {local} and no packaged scene {ref!r} "
+            f"(packaged: {', '.join(packaged_scenes())})",
+        )
+    return ref
 
 
 def _name(f: Fields, key: str) -> str:

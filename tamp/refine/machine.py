@@ -1,6 +1,7 @@
-"""One robot's state machine as the executor runs it (§2.2, Fig. 1, Fig. 13), without Drake.
+"""One robot's state machine as its main CPU runs it (§2.2, Fig. 1, Fig. 13), without Drake.
 
-`Machine.step` is what the `StateMachineExecutor` does once per sensor period:
+`Machine.step` is what the workcell's state-machine system
+(`tamp.sim.refine.skills.PioneerStateMachine`) does once per sensor period:
 
 1. **Events on delivered data.** A running behavior's event fires when its condition holds
    on the latest *delivered* sample of its sensor created after the behavior started
@@ -17,6 +18,14 @@
    published. Commands leave also while every section holds (the main CPU's cycle).
    When an event fires, its section holds where its delivered sensor says it is (base:
    odometry, arm: IMU), so the motion between the true crossing and the late event stays.
+
+What a machine puts out: a `Command` (absolute setpoints of the robot's joints, `JOINTS`
+order, to its actuators through the communication network) and its `Progress` (fired
+events, to the other robot's machine and the rate supervisor).
+
+The robots (Fig. 7) are Pioneer-like: a planar base (x, y, yaw), a lift lever that pitches
+(``arm_pitch``, up positive) and two prismatic paddles/fingers, each 0 .. `FINGER_MAX` from
+the centre line; a program's gripper motion changes the *opening*, the sum of both.
 """
 
 from __future__ import annotations
@@ -29,11 +38,48 @@ from tamp.refine.order import start_predecessors
 from tamp.refine.program import Behavior, Program, RobotProgram, event_id
 from tamp.refine.queues import Delivery
 from tamp.refine.timeline import BehaviorRecord
-from tamp.sim.refine.messages import Command, Progress
-from tamp.sim.refine.scene import FINGER_MAX, OPENING_START
+
+#: The joints a command sets, in its order (the models' joint names).
+JOINTS = (
+    "base_x",
+    "base_y",
+    "base_yaw",
+    "arm_pitch",
+    "finger_left_joint",
+    "finger_right_joint",
+)
+FINGER_MAX = 0.08  # m from the centre line, per finger
+OPENING_START = 2 * FINGER_MAX  # both grippers start fully open
 
 #: setpoint slots: base x, y, yaw, arm pitch, gripper opening
 X, Y, YAW, ARM, OPENING = range(5)
+
+
+@dataclass(frozen=True)
+class Command:
+    """The ``number``-th command of a robot (0: none yet), created at ``created``: absolute
+    setpoints of its joints (`JOINTS` order, each finger at half the opening)."""
+
+    number: int = 0
+    created: float = 0.0
+    setpoints: tuple[float, ...] = ()
+
+    def __deepcopy__(self, memo: dict) -> Command:
+        return self  # immutable: a Drake state copy costs nothing
+
+
+@dataclass(frozen=True)
+class Progress:
+    """What a robot's machine has done: fired events (id -> time), the behaviors running
+    now, whether every behavior's event fired, and the command rate it uses."""
+
+    fired: dict[str, float] = field(default_factory=dict)
+    running: tuple[str, ...] = ()
+    done: bool = False
+    rate: float = 0.0
+
+    def __deepcopy__(self, memo: dict) -> Progress:
+        return self
 
 
 @dataclass(frozen=True)
@@ -83,7 +129,7 @@ class Machine:
         return MachineState(setpoints=(x, y, yaw, 0.0, OPENING_START))
 
     def joint_setpoints(self, sp: tuple[float, ...]) -> tuple[float, ...]:
-        """Setpoints in `scene.JOINTS` order (each finger at half the opening)."""
+        """Setpoints in `JOINTS` order (each finger at half the opening)."""
         half = min(max(sp[OPENING] / 2, 0.0), FINGER_MAX)
         return (sp[X], sp[Y], sp[YAW], sp[ARM], half, half)
 

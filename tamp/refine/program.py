@@ -23,6 +23,8 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 
+from tamp.perturbation import NONE, Perturbation
+
 SECTIONS = ("base", "arm", "gripper")
 SENSORS = ("force", "imu", "odometry")
 CATEGORIES = ("I", "II", "III")
@@ -151,7 +153,10 @@ class Program:
     """Two robots' state machines plus the communication setting and the ordering property.
 
     ``ordering`` is an LTL formula over event ids (``R1.approach``) read with "has fired"
-    semantics: the proposition of an event is true from the moment it fires on.
+    semantics: the proposition of an event is true from the moment it fires on. ``scene``
+    names where the program runs: a packaged scene's name or the user's scene file
+    (`tamp.sim.refine.scenario`). ``perturbation`` is the file's ``perturbation:`` section,
+    drawn by seeded runs only (not part of the program: equal programs may differ in it).
     """
 
     name: str
@@ -162,6 +167,7 @@ class Program:
     description: str = ""
     architecture: str | None = None
     file: str | None = field(default=None, compare=False)
+    perturbation: Perturbation = field(default=NONE, compare=False)
 
     def robot(self, name: str) -> RobotProgram:
         for r in self.robots:

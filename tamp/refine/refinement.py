@@ -1,35 +1,41 @@
-"""The refinement of a program, phase by phase, every task time measured in simulation.
+"""The refinement of a program, phase by phase, every task time measured by execution.
 
-Phases (Fig. 3, Fig. 12):
+Figueroa Heredia et al. 2018 §3 (Fig. 3, Fig. 12). Phases:
 
 1. **original**: the program as given.
 2. **parallelized** (Step 1 + Step 2): `tamp.refine.steps.parallelize` on the durations
    the original run measured. The result is executed once; a parallelization after which
-   a collision appears in the plant that the original run did not have (a chassis touching
-   anything, a robot touching the other or the table: `Workcell.collision`) is reverted
-   (`revert`, latest first) and the program runs again without it.
+   a collision appears that the original run did not have (in the workcell: a chassis
+   touching anything, a robot touching the other or the table) is reverted (`revert`,
+   latest first) and the program runs again without it.
 3. **speed-adjusted** (Fig. 6(c)): `adjust_base_speed` on the parallelized run's
    durations.
-4. **rate-refined** (Fig. 5): a tuning run of the speed-adjusted program with the
-   `RateTuningSupervisor` searching each robot's rate online; the lower of the robots'
-   found rates is applied to both (`apply_rate`, Step 3: every speed scales by the same
-   ratio, the base's included), as in the paper, and the program runs again.
+4. **rate-refined** (Fig. 5): a tuning run of the speed-adjusted program, each robot's
+   rate searched online; the lower of the robots' found rates is applied to both
+   (`apply_rate`, Step 3: every speed scales by the same ratio, the base's included), as in
+   the paper, and the program runs again.
 
-Every program passes the ordering gate (`verification.gate.gate_program`) before it is
-simulated, and each measured run's event order is checked too (`Phase.run_holds`); a
-refinement that lets some execution break the task's ordering property is refused with
-the counterexample (`VerificationError`, exit 1). A program that cannot finish
-(`check_can_finish`, or an event that did not fire in the original run) is `InfeasibleError`.
+Nothing here simulates: every run comes from the `Measure` the caller gives
+(`tamp.refine.measure`; the Drake workcell's is `tamp.sim.refine.simulate.simulate`). The
+ordering property is checked the same way, by functions the caller gives (the verification
+layer's `gate_program` and `check_run`): every program passes the ``gate`` before it is
+measured (a refinement that lets some execution break the task's ordering property is
+refused with the counterexample: the gate raises), and each measured run's event order is
+checked too (`Phase.run_holds`). A program that cannot finish (`check_can_finish`, or an
+event that did not fire in a measured run, or a rate search that did not end) is
+`InfeasibleError`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Protocol
 
 from tamp.errors import InfeasibleError
 from tamp.refine.architecture import Architecture
+from tamp.refine.measure import Measure, Run
 from tamp.refine.order import check_can_finish
 from tamp.refine.program import Program
 from tamp.refine.steps import (
@@ -40,25 +46,39 @@ from tamp.refine.steps import (
     parallelize,
     revert,
 )
-from tamp.sim.refine.runner import Run, simulate
+
+
+class Gate(Protocol):
+    """Refuses ``program`` (raises, with the counterexample) when some execution of it breaks
+    its ordering property; ``subject`` names it in the report
+    (`verification.gate.gate_program`)."""
+
+    def __call__(self, program: Program, *, subject: str) -> object: ...
+
+
+class Verdict(Protocol):
+    holds: bool
+
+
+class RunCheck(Protocol):
+    """The verdict of one measured event ``order`` against ``program``'s ordering property
+    (`verification.refine.check_run`)."""
+
+    def __call__(self, program: Program, order: Sequence[str]) -> Verdict: ...
+
 
 PHASES = ("original", "parallelized", "speed-adjusted", "rate-refined")
 
 
 @dataclass
 class Phase:
-    """One phase: its program and the run that measured it."""
+    """One phase: its program, the (finished) run that measured it and whether the run's
+    event order satisfies the ordering property."""
 
     name: str
     program: Program
     run: Run
-    run_holds: bool | None = None  # the measured event order against the property
-
-    def __post_init__(self) -> None:
-        if self.run_holds is None and self.run.finished:
-            from verification.refine import check_run
-
-            self.run_holds = check_run(self.program, self.run.timeline.order()).holds
+    run_holds: bool
 
     @property
     def task_time(self) -> float:
@@ -155,36 +175,43 @@ def _not_finished(run: Run, what: str) -> InfeasibleError:
 def refine(
     program: Program,
     architecture: Architecture,
+    measure: Measure,
     *,
+    gate: Gate | None,
+    check_run: RunCheck,
     category: str | None = None,
-    verify: bool = True,
     record: str | Path | None = None,
     progress: Callable[[str], None] = lambda _: None,
 ) -> Refinement:
-    """The four phases of ``program`` (module docstring); ``record`` writes a Meshcat
-    animation of the refined program's run."""
-    from verification.gate import gate_program
+    """The four phases of ``program`` (module docstring), each run measured by ``measure``.
 
+    ``gate``: the ordering gate every program passes before it is measured (None: no gate,
+    the result says ``verified`` False); ``check_run``: the check of each measured event
+    order; ``category`` replaces the program's architecture category; ``record`` asks the
+    refined program's run for an animation."""
     if category is not None:
         program = program.with_category(category)
     check_can_finish(program)
 
     def gated(p: Program, phase: str) -> Program:
-        if verify:
-            gate_program(p, subject=f"{phase} program {p.name}")
+        if gate is not None:
+            gate(p, subject=f"{phase} program {p.name}")
         return p
 
     def run(p: Program, phase: str, **kw) -> Run:
         progress(f"simulating the {phase} program ...")
-        r = simulate(p, architecture, **kw)
+        r = measure(p, architecture, **kw)
         progress(f"  {phase}: {r.task_time:.1f} s (wall {r.wall_time:.1f} s)")
         return r
 
+    def phase(name: str, p: Program, r: Run) -> Phase:
+        if not r.finished:
+            raise _not_finished(r, name)
+        return Phase(name, p, r, check_run(p, r.timeline.order()).holds)
+
     original = run(gated(program, "original"), "original")
-    if not original.finished:
-        raise _not_finished(original, "original")
-    phases = [Phase("original", program, original)]
-    out = Refinement(phases, verified=verify)
+    phases = [phase("original", program, original)]
+    out = Refinement(phases, verified=gate is not None)
 
     p1, done = parallelize(program, original.timeline.durations())
     out.parallelized = list(done)
@@ -201,19 +228,15 @@ def refine(
         progress(f"  collision ({a}, {b}) at {t:.1f} s: reverting '{bad.describe()}'")
         p1 = revert(p1, bad)
         r1 = run(gated(p1, "parallelized"), "parallelized")
-    if not r1.finished:
-        raise _not_finished(r1, "parallelized")
-    phases.append(Phase("parallelized", p1, r1))
+    phases.append(phase("parallelized", p1, r1))
 
     p2, changes = adjust_base_speed(p1, r1.timeline.durations())
     out.speed_changes = changes
     r2 = run(gated(p2, "speed-adjusted"), "speed-adjusted")
-    if not r2.finished:
-        raise _not_finished(r2, "speed-adjusted")
-    phases.append(Phase("speed-adjusted", p2, r2))
+    phases.append(phase("speed-adjusted", p2, r2))
 
     progress("tuning the command rate (Fig. 5) ...")
-    tuning = simulate(p2, architecture, tune=True)
+    tuning = measure(p2, architecture, tune=True)
     found = tuning.found_rates()
     if len(found) != len(p2.robots):
         raise InfeasibleError(
@@ -226,7 +249,5 @@ def refine(
     for r in p2.robots:
         p3 = apply_rate(p3, r.name, out.rate_hz)
     r3 = run(gated(p3, "rate-refined"), "rate-refined", record=record)
-    if not r3.finished:
-        raise _not_finished(r3, "rate-refined")
-    phases.append(Phase("rate-refined", p3, r3))
+    phases.append(phase("rate-refined", p3, r3))
     return out

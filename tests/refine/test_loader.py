@@ -68,7 +68,7 @@ B = "robots/0/behaviors"
     [
         ("version", 2, "version", "unsupported version"),
         ("colour", "red", "colour", "unknown key"),
-        ("scene", "kitchen", "scene", "expected one of"),
+        ("scene", "kitchen", "scene", "no packaged scene 'kitchen'"),
         ("communication/category", "IV", "communication.category", "expected one of"),
         ("communication/command_rate_hz", -1, "communication.command_rate_hz", "must be >"),
         ("communication/base_speed", None, "communication.base_speed", "missing field"),
@@ -131,3 +131,31 @@ def test_parallel_group_shares_rate(tmp_path):
     p = load_program(write(tmp_path, data))
     assert p.robot("R1").groups() == [(0, 1), (2,), (3,)]
     assert p.robot("R1").gating(0) is False and p.robot("R1").gating(1) is True
+
+
+def test_the_perturbation_section_is_read_once_into_the_program(tmp_path):
+    """The loader parses ``perturbation:`` (`tamp.perturbation`) into the program: seeded
+    runs draw from ``Program.perturbation`` and never read the file again."""
+    from tamp.perturbation import NONE, PoseSpread
+
+    assert task(4).perturbation == NONE
+    f = write(tmp_path, _edit("perturbation", {"robot": {"xy": 0.02, "yaw": 0.05}}))
+    p = load_program(f)
+    assert p.perturbation.robot == PoseSpread("normal", 0.02, 0.05)
+    assert p.perturbation.source == str(f)
+    f.unlink()  # nothing reads it any more
+    assert p.perturbation.sample(3).robot_offset("R1") != (0.0, 0.0, 0.0)
+    assert p == task(4)  # the section is no part of the program's equality
+    f = write(tmp_path, _edit("perturbation", {"robot": {"xy": -1}}))
+    with pytest.raises(InputError) as exc:
+        load_program(f)
+    assert exc.value.field == "perturbation.robot.xy"
+
+
+def test_a_scene_is_a_packaged_name_or_a_file_beside_the_program(tmp_path):
+    assert task(4).scene == "open_chair"
+    (tmp_path / "scenes").mkdir()
+    (tmp_path / "scenes" / "mine.yaml").write_text("version: 1\n")  # read by the workcell
+    p = load_program(write(tmp_path, _edit("scene", "scenes/mine.yaml")))
+    assert p.scene == str(tmp_path / "scenes" / "mine.yaml")
+    assert reload(p, tmp_path).scene == p.scene

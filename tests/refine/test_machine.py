@@ -1,4 +1,4 @@
-"""The state machine the executor runs: events on delivered data, commands at P (no Drake)."""
+"""The state machine a robot runs: events on delivered data, commands at P (no Drake)."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import math
 
 import pytest
 
+from tamp.refine.machine import ARM, Machine
 from tamp.refine.queues import Delivery, Message
-from tamp.sim.refine.machine import ARM, Machine
 from tests.refine.helpers import task
 
 
@@ -70,7 +70,7 @@ def test_waits_for_the_other_robot_and_odometry_progress():
 
 
 def test_progress_is_along_the_start_heading():
-    from tamp.sim.refine.machine import progress
+    from tamp.refine.machine import progress
 
     b = task(4).robot("R1").behavior("approach")
     assert progress(b, (0.0, 0.0, math.pi / 2), (0.3, 0.5, math.pi / 2)) == pytest.approx(0.5)

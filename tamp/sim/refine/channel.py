@@ -28,9 +28,10 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 
 from tamp.refine.architecture import COMMAND
+from tamp.refine.machine import Command
 from tamp.refine.program import SENSORS
 from tamp.refine.queues import Delivery, Network, QueueState
-from tamp.sim.refine.messages import Command, Readings
+from tamp.sim.refine.messages import Readings
 
 
 @dataclass(frozen=True)
@@ -88,11 +89,14 @@ class Channel(LeafSystem):
         return context.get_abstract_state(self._state).get_value()
 
     def _calc_actuation(self, context, output) -> None:
+        """The desired state of the robot's PD actuators: the latest delivered command's
+        setpoints, zero velocities (the start pose before any command arrived)."""
         d = self.state(context).latest.get(COMMAND)
         if d is None:
             output.SetFromVector(self._actuation_start)
         else:
-            output.SetFromVector(d.message.value.actuation)
+            q = np.asarray(d.message.value.setpoints, dtype=float)
+            output.SetFromVector(np.concatenate([q, np.zeros_like(q)]))
 
     def _update(self, context, state) -> EventStatus:
         s = self.state(context)

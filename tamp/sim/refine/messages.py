@@ -1,16 +1,16 @@
 """Values on the refinement workcell's abstract ports (no Drake import).
 
-SensorReadings --Readings--> Channel --ChannelState (delivered samples)--> executor
-StateMachineExecutor --Command--> Channel --actuation (setpoints)--> plant
-StateMachineExecutor --Progress--> other executor, RateTuningSupervisor
-RateTuningSupervisor --RateOverride--> executors
+SensorReadings --Readings--> Channel --ChannelState (delivered samples)--> PioneerStateMachine
+PioneerStateMachine --Command--> Channel --actuation (setpoints)--> plant
+PioneerStateMachine --Progress--> the other robot's machine, RateTuningSupervisor
+RateTuningSupervisor --RateOverride--> both machines
+
+`Command` and `Progress` are what a state machine puts out (`tamp.refine.machine`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-
-import numpy as np
 
 
 @dataclass(frozen=True)
@@ -26,39 +26,6 @@ class Readings:
         return getattr(self, sensor)
 
     def __deepcopy__(self, memo: dict) -> Readings:
-        return self
-
-
-@dataclass(frozen=True)
-class Command:
-    """The ``number``-th command of a robot (0: none yet), created at ``created``: absolute
-    setpoints of its joints (`tamp.sim.refine.scene.JOINTS` order, fingers from the
-    opening)."""
-
-    number: int = 0
-    created: float = 0.0
-    setpoints: tuple[float, ...] = ()
-
-    @property
-    def actuation(self) -> np.ndarray:
-        """The desired state of the robot's PD actuators: the setpoints, zero velocities."""
-        return np.concatenate([self.setpoints, np.zeros(len(self.setpoints))])
-
-    def __deepcopy__(self, memo: dict) -> Command:
-        return self
-
-
-@dataclass(frozen=True)
-class Progress:
-    """What a robot's executor has done: fired events (id -> time), the behaviors running
-    now, whether every behavior's event fired, and the command rate it uses."""
-
-    fired: dict[str, float] = field(default_factory=dict)
-    running: tuple[str, ...] = ()
-    done: bool = False
-    rate: float = 0.0
-
-    def __deepcopy__(self, memo: dict) -> Progress:
         return self
 
 

@@ -1,103 +1,159 @@
-"""What the refinement workcell holds: the Pioneer-like robots' joints and the scenes' objects.
+"""What the refinement workcell loads besides the program: the scene (YAML, ``version: 1``).
 
-No Drake import: the numbers here are read by the builder (`tamp.sim.refine.builder`) and
-by the executor, which turns a program's section motions into joint setpoints.
+A scene (Figueroa Heredia et al. 2018, Fig. 9) declares the task's objects, where each lies
+and what the task must achieve with them, measured on the plant at the end of a run. A
+program names its scene (``scene:``, `tamp.refine.loader`): a packaged scene
+(``tamp/scenarios/refine/scenes/<name>.yaml``: flip_briefcase, flip_scale, lift_scale,
+open_chair, table) or the user's scene file, relative to the program file. The robots are
+the program's (``robots[].start``); Robot 1 starts on the -x side facing +x, Robot 2 on the
++x side facing -x, the objects between them. No Drake import here.
 
-Robots (``models/sdf/pioneer_lift.sdf``, ``pioneer_parallel.sdf``, Fig. 7): the base moves
-on planar joints (x, y, yaw) driven along its heading or about the vertical axis, the lift
-lever pitches (``arm_pitch``, up positive) and two prismatic paddles/fingers open and close
-(each 0 .. 0.08 m from the centre line; a program's gripper motion changes the *opening*,
-the sum of both). Every joint is a PD-controlled actuator of the plant (SAP, implicit).
+Format (the fields, their defaults and bounds are stated once, in the dataclasses below)::
 
-Scenes (Fig. 9): Robot 1 starts on the -x side facing +x, Robot 2 on the +x side facing -x
-(the programs' ``start``), the object between them.
+    version: 1
+    name: open_chair                  # default: the file's stem
+    description: The folded chair lying on the floor (Fig. 9(d)).
+    objects:
+      - model: folding_chair          # a packaged model (models/sdf/<name>.sdf), an .sdf or
+                                      # .urdf file relative to this file, or a
+                                      # package://tamp_models/... URL
+        name: folding_chair           # the object's name in the plant (default: the model's)
+        x: 0.0                        # m, its first body's origin in the world
+        y: 0.0
+        z: 0.0
+        yaw: 0.0                      # rad about the vertical (default 0)
+        fixed: false                  # true: welded to the world, scenery (default false)
+    goals:                            # all must hold for the task to succeed (default none)
+      - quantity: folding_chair.hinge # <object>.<revolute joint> (rad), <object>.tilt (rad
+                                      # between its up axis and the world's), <object>.rise
+                                      # (m its origin rose)
+        at_least: 0.35
+        at_most: 1.2                  # optional
+        what: the chair opened at its hinge
+
+A fixed object is scenery: a robot touching it is a collision (Step 2's check). Every
+error is an `InputError` naming the file and the dotted field (CLI exit 2); a goal naming a
+joint the object's model does not have is refused when the station is built.
 """
 
 from __future__ import annotations
 
-import math
+import dataclasses
+import re
 from dataclasses import dataclass
+from pathlib import Path
 
-JOINTS = (
-    "base_x",
-    "base_y",
-    "base_yaw",
-    "arm_pitch",
-    "finger_left_joint",
-    "finger_right_joint",
-)
-#: (kp, kd) of each joint's PD actuator
-GAINS = {
-    "base_x": (6000.0, 1200.0),
-    "base_y": (6000.0, 1200.0),
-    "base_yaw": (800.0, 150.0),
-    "arm_pitch": (400.0, 30.0),
-    "finger_left_joint": (600.0, 10.0),
-    "finger_right_joint": (600.0, 10.0),
-}
-FINGER_MAX = 0.08  # m from the centre line, per finger
-OPENING_START = 2 * FINGER_MAX  # both grippers start fully open
-#: bodies whose contact with anything is a collision (the gripper's contacts are intended)
-CHASSIS_BODIES = ("base_link", "arm_link")
-GRIPPER_MOUNT = "gripper_mount"  # the welded joint whose reaction force is the force sensor
+from tamp.errors import InputError
+from tamp.fileio import Fields, load_yaml
+from tamp.refine.loader import scene_path
+from tamp.refine.measure import Goal
+from tamp.schema import load_dataclass, spec
+from tamp.sim.core.models import PACKAGE, model_url, models_dir, sdf_path
+
+#: model files a scene may name (Drake's parser reads both)
+MODEL_SUFFIXES = (".sdf", ".urdf")
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
-@dataclass(frozen=True)
-class Placement:
-    """One object of a scene: model ``model`` at ``(x, y, z, yaw)``; ``fixed`` welds it."""
-
-    model: str
-    x: float
-    y: float
-    z: float
-    yaw: float = 0.0
-    fixed: bool = False
-
-
-#: Scene name -> its objects (the names the loader accepts, `tamp.refine.loader.SCENES`).
-SCENES: dict[str, tuple[Placement, ...]] = {
-    # briefcase lying flat, its 0.35 m side along the robots' line, its handle towards Robot 1
-    "flip_briefcase": (Placement("briefcase", 0.0, 0.0, 0.06, math.pi / 2),),
-    # the scale's carrying grip towards Robot 1
-    "flip_scale": (Placement("scale", 0.0, 0.0, 0.025, math.pi / 2),),
-    # the table is fixed; the scale lies on its top (0.28 m), overhanging its -x edge by
-    # 0.10 m on Robot 1's side (the fork gets under it there)
-    "lift_scale": (
-        Placement("table", 0.10, 0.0, 0.0, fixed=True),
-        Placement("scale", 0.0, 0.0, 0.305),
-    ),
-    # the lift scene's table alone (`table_collision.yaml`: Step 2's collision check)
-    "table": (Placement("table", 0.10, 0.0, 0.0, fixed=True),),
-    # the folded chair, free on the floor, its frames across the robots' line; Robot 1's
-    # fork hooks the latch under frame_b's handle bar (models/sdf/folding_chair.sdf)
-    "open_chair": (Placement("folding_chair", 0.0, 0.0, 0.0),),
-}
+def _model(raw: object, f: Fields, key: str) -> str:
+    """An object's ``model`` as Drake loads it: a ``package://`` URL or an absolute file."""
+    ref = f.str(key)
+    prefix = f"package://{PACKAGE}/"
+    if ref.startswith("package://"):
+        if not ref.startswith(prefix):
+            raise f.error(key, f"unknown package in {ref!r} (the known one: {prefix})")
+        if not (models_dir() / ref[len(prefix) :]).is_file():
+            raise f.error(key, f"no model file {ref!r}")
+        return ref
+    if ref.endswith(MODEL_SUFFIXES) or "/" in ref:
+        p = Path(f.file).parent / ref
+        if not p.is_file():
+            raise f.error(key, f"model file not found: {p}")
+        if p.suffix not in MODEL_SUFFIXES:
+            raise f.error(key, f"expected an {' or '.join(MODEL_SUFFIXES)} file, got {p.name}")
+        return str(p)
+    if not sdf_path(ref).is_file():
+        raise f.error(
+            key,
+            f"no packaged model {ref!r} (models/sdf/{ref}.sdf); a model of your own is an "
+            f"{' or '.join(MODEL_SUFFIXES)} file relative to the scene file",
+        )
+    return model_url(ref)
 
 
 @dataclass(frozen=True)
-class Goal:
-    """What a scene's task must achieve, read on the plant at the end of a run: the measured
-    ``quantity`` (`Outcome` names: ``<model>.tilt`` rad between the object's up axis and the
-    world's, ``<model>.rise`` m its origin rose, ``<model>.<joint>`` a joint's angle) is at
-    least ``at_least``."""
+class SceneObject:
+    """One object of a scene: its model, placed at ``(x, y, z, yaw)``, free or welded."""
 
-    quantity: str
-    at_least: float
-    what: str
+    model: str = spec(
+        parse=_model,
+        help="a packaged model name, an .sdf/.urdf file relative to the scene file, or a "
+        "package:// URL (stored as the URL or the absolute file)",
+    )
+    x: float = spec(unit="m")
+    y: float = spec(unit="m")
+    z: float = spec(unit="m")
+    name: str | None = spec(None, help="its name in the plant (default: the model's)")
+    yaw: float = spec(0.0, unit="rad")
+    fixed: bool = spec(False, help="welded to the world: scenery no robot may touch")
 
-    def met(self, value: float) -> bool:
-        return value >= self.at_least
+    def check(self, f: Fields) -> None:
+        if self.name is not None and not _NAME.match(self.name):
+            raise f.error("name", f"names are identifiers (letters, digits, _), got {self.name!r}")
 
 
-#: Scene name -> its goals (all must hold for the task to succeed).
-GOALS: dict[str, tuple[Goal, ...]] = {
-    # a flip: turned about a horizontal axis past its balance point over the far edge
-    # (briefcase 1.24 rad, scale 1.41 rad): standing on its side (pi / 2) or on its other face
-    "flip_briefcase": (Goal("briefcase.tilt", 1.45, "the briefcase turned over"),),
-    "flip_scale": (Goal("scale.tilt", 1.45, "the scale turned over"),),
-    "lift_scale": (
-        Goal("scale.tilt", 0.15, "the scale tilted up off the table"),
-        Goal("scale.rise", 0.02, "the scale's centre rose"),
-    ),
-    "open_chair": (Goal("folding_chair.hinge", 0.35, "the chair opened at its hinge"),),
-}
+@dataclass(frozen=True)
+class Scene:
+    """A scene (module docstring); ``objects`` have their names filled in."""
+
+    objects: tuple[SceneObject, ...] = spec(min_items=1)
+    goals: tuple[Goal, ...] = spec(())
+    name: str | None = spec(None, help="default: the file's stem")
+    description: str = spec("")
+    file: str | None = None
+
+    def object(self, name: str) -> SceneObject:
+        for o in self.objects:
+            if o.name == name:
+                return o
+        raise KeyError(name)
+
+
+def default_name(model: str) -> str:
+    """The name of a model's object when the scene gives none: the model file's stem."""
+    return Path(model.rpartition("/")[2]).stem
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """Read and validate a scene file (a path, or a packaged scene's name resolved by
+    `tamp.refine.loader.scene_path`); any problem is an `InputError` (file, field)."""
+    data, file = load_yaml(scene_path(name_or_path), kind="refinement scene")
+    f = Fields(data, file)
+    scene = load_dataclass(Scene, f, extra_keys=("version",))
+    objects = tuple(
+        dataclasses.replace(o, name=o.name or default_name(o.model)) for o in scene.objects
+    )
+    seen: set[str] = set()
+    for i, o in enumerate(objects):
+        if o.name in seen:
+            raise InputError(
+                f"two objects are named {o.name!r} (give one a name)",
+                file=file,
+                field=f"objects[{i}].name",
+            )
+        seen.add(o.name)
+    for i, g in enumerate(scene.goals):
+        obj = g.quantity.partition(".")[0]
+        if obj not in seen:
+            raise InputError(
+                f"no object {obj!r} in this scene (objects: {', '.join(sorted(seen))})",
+                file=file,
+                field=f"goals[{i}].quantity",
+            )
+    return dataclasses.replace(
+        scene,
+        objects=objects,
+        name=scene.name or Path(file).stem,
+        description=scene.description.strip(),
+        file=file,
+    )

@@ -1,62 +1,46 @@
-"""Runs one program in the workcell and measures it: a `Run` with the `Timeline`.
+"""The refinement workcell's runs: one program measured in simulation, and seeded runs.
 
-The simulator advances in chunks (`tamp.sim.core.runner.run_in_chunks`); between chunks
-the runner reads the plant's contact results (SceneGraph's contact surfaces and point
-pairs; `Workcell.collision` says which are collisions: a robot's chassis or lever touching
-anything, a robot touching the other robot or the fixed scenery), with the first time of
-each (Step 2 reverts a parallelization that causes one), and stops when both executors
-have fired every event, or, in a tuning run, when the supervisor's searches have ended.
-Nothing is computed from the program's numbers: start and end times are when the
-executors started behaviors and fired events in sim time. At the end it measures what
-the objects did (`tamp.sim.refine.outcome`: the chair's hinge angle, the scale's tilt).
+`simulate` is the workcell's `tamp.refine.measure.Measure`: it builds the station of a
+program in its scene and runs it to the end. The simulator advances in chunks
+(`tamp.sim.core.runner.run_in_chunks`); between chunks the loop reads the plant's contact
+results (SceneGraph's contact surfaces and point pairs; `RefineStation.collision` says
+which are collisions: a robot's chassis or lever touching anything, a robot touching the
+other robot or the fixed scenery), with the first time of each (Step 2 reverts a
+parallelization that causes one), and stops when both state machines have fired every
+event, or, in a tuning run, when the supervisor's searches have ended. Nothing is computed
+from the program's numbers: start and end times are when the machines started behaviors
+and fired events in sim time. At the end it measures what the objects did
+(`tamp.sim.refine.outcome`: the chair's hinge angle, the scale's tilt) against the scene's
+goals.
+
+Seeded runs (``tamp refine --seed N``, campaigns): the program file's ``perturbation``
+section (`Program.perturbation`, read by the loader) drawn for one seed and applied to the
+program. The workcell simulates the ``robot`` field only (`PERTURBED`): each robot's start
+pose ``(x, y, yaw)`` is moved by its own draw (`PerturbationSample.robot_offset`, keyed by
+the robot's name). The scene's objects lie where the scene puts them; a section asking for
+more is refused naming the field. A start moved onto the object shows as a collision or an
+unfinished run, which is what a perturbation is for.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+import dataclasses
 from pathlib import Path
+from typing import Any
 
+from tamp.perturbation import Applied, Perturbation, check_seed
 from tamp.refine.architecture import Architecture
+from tamp.refine.measure import Run
 from tamp.refine.program import Program
-from tamp.refine.steps import RateSearch
 from tamp.refine.timeline import Timeline
 from tamp.sim.core.runner import make_simulator, run_in_chunks
-from tamp.sim.refine.builder import Workcell, build_workcell, search_of
-from tamp.sim.refine.outcome import Outcome, measure, start_heights
+from tamp.sim.refine.outcome import measure, start_heights
+from tamp.sim.refine.scenario import Scene, load_scene
+from tamp.sim.refine.station import RefineStation, build_station, search_of
 
-CHUNK = 0.05  # s of sim time between the runner's checks
-
-
-@dataclass
-class Run:
-    """One simulated execution of a program."""
-
-    program: Program
-    timeline: Timeline
-    collisions: dict[tuple[str, str], float] = field(default_factory=dict)
-    searches: dict[str, RateSearch | None] = field(default_factory=dict)
-    max_wait: dict[str, float] = field(default_factory=dict)  # robot -> longest sensor wait
-    sim_time: float = 0.0
-    wall_time: float = 0.0
-    cpu_time: float = 0.0
-    recording: str | None = None
-    outcome: Outcome = field(default_factory=Outcome)  # what the objects did (the plant's)
-
-    @property
-    def finished(self) -> bool:
-        return self.timeline.finished
-
-    @property
-    def task_time(self) -> float:
-        return self.timeline.task_time
-
-    @property
-    def realtime_factor(self) -> float:
-        return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
-
-    def found_rates(self) -> dict[str, float]:
-        return {n: s.found for n, s in self.searches.items() if s is not None and s.done}
+CHUNK = 0.05  # s of sim time between the run loop's checks
+#: the ``perturbation`` fields this workcell simulates
+PERTURBED = ("robot",)
 
 
 def time_limit(program: Program, architecture: Architecture, tune: bool) -> float:
@@ -78,14 +62,18 @@ def simulate(
     tune: bool = False,
     max_sim_time: float | None = None,
     record: str | Path | None = None,
+    scene: Scene | None = None,
 ) -> Run:
-    """Build the workcell of ``program`` and run it to the end (module docstring)."""
+    """Build the station of ``program`` in its scene (``scene``: already loaded, else
+    `load_scene` of ``program.scene``) and run it to the end (module docstring)."""
+    if scene is None:
+        scene = load_scene(program.scene)
     meshcat = None
     if record is not None:
         from tamp.sim.core.recording import new_meshcat
 
         meshcat = new_meshcat()
-    cell = build_workcell(program, architecture, tune=tune, meshcat=meshcat)
+    cell = build_station(program, architecture, scene, tune=tune, meshcat=meshcat)
     simulator = make_simulator(cell.diagram)
     root = simulator.get_mutable_context()
     plant_ctx = cell.plant.GetMyContextFromRoot(root)
@@ -135,11 +123,11 @@ def simulate(
         from tamp.sim.core.recording import save_recording
 
         recording = save_recording(cell.visualizer, meshcat, record)
-    outcome = measure(cell.plant, plant_ctx, cell.objects, heights, cell.program.scene)
+    outcome = measure(cell.plant, plant_ctx, cell.objects, heights, scene.goals)
     return _result(cell, root, chunked, collisions, recording, outcome)
 
 
-def _result(cell: Workcell, root, chunked, collisions, recording, outcome) -> Run:
+def _result(cell: RefineStation, root, chunked, collisions, recording, outcome) -> Run:
     records = []
     rates = {}
     for name, e in cell.executors.items():
@@ -159,3 +147,76 @@ def _result(cell: Workcell, root, chunked, collisions, recording, outcome) -> Ru
         recording=recording,
         outcome=outcome,
     )
+
+
+def program_perturbation(program: Program) -> Perturbation:
+    """``program``'s ``perturbation`` section, refused (`InputError` naming the field) when
+    it asks for what this workcell does not simulate."""
+    program.perturbation.require(PERTURBED, "refinement")
+    return program.perturbation
+
+
+def perturbed_program(
+    program: Program, perturbation: Perturbation, seed: int
+) -> tuple[Program, Applied]:
+    """``program`` with each robot's start moved by run ``seed``'s draw (nothing mutated)."""
+    seed = check_seed(seed)
+    sample = perturbation.sample(seed)
+    applied = Applied(seed=seed)
+    robots = []
+    for r in program.robots:
+        dx, dy, dyaw = sample.robot_offset(r.name)
+        applied.robots[r.name] = (dx, dy, dyaw)
+        x, y, yaw = r.start
+        robots.append(dataclasses.replace(r, start=(x + dx, y + dy, yaw + dyaw)))
+    return dataclasses.replace(program, robots=tuple(robots)), applied
+
+
+def run_seeded(
+    program: str | Path,
+    seed: int,
+    *,
+    verify: bool = True,
+    max_sim_time: float | None = None,
+    record: str | None = None,
+) -> dict[str, Any]:
+    """ONE seeded simulation of the program file (or packaged name) ``program`` as given
+    (no refinement): ``status`` (SUCCESS when every event fired and the measured event order
+    satisfies the ordering property; TIMEOUT when some event never fired within the time
+    limit; FAILURE when the order breaks the property), ``cause``, ``task_time`` (sim s;
+    the time limit when unfinished), ``seed``, ``perturbation``, ``wall_time``,
+    ``collisions``. The entry point of ``tamp campaign --kind refine``."""
+    from tamp.refine.architecture import default_architecture, load_architecture
+    from tamp.refine.loader import load_program
+    from tamp.sim.core.outcome import run_cause
+    from verification.refine import check_run
+
+    loaded = load_program(program)
+    arch = load_architecture(loaded.architecture) if loaded.architecture else default_architecture()
+    moved, applied = perturbed_program(loaded, program_perturbation(loaded), seed)
+    if verify:
+        from verification.gate import gate_program
+
+        gate_program(moved, subject=f"program {moved.name}")
+    run = simulate(moved, arch, max_sim_time=max_sim_time, record=record)
+    holds = check_run(moved, run.timeline.order()).holds if run.finished else None
+    if not run.finished:
+        status = "TIMEOUT"
+    elif holds:
+        status = "SUCCESS"
+    else:
+        status = "FAILURE"
+    cause = run_cause(status, ["order_violated"] if holds is False else [], False)
+    return {
+        "program": moved.name,
+        "status": status,
+        "cause": cause,
+        "task_time": round(run.task_time if run.finished else run.sim_time, 3),
+        "sim_time": round(run.sim_time, 3),
+        "wall_time": round(run.wall_time, 3),
+        "run_satisfies_ordering": holds,
+        "collisions": [[a, b, round(t, 3)] for (a, b), t in sorted(run.collisions.items())],
+        "seed": applied.seed,
+        "perturbation": applied.to_json(),
+        "recording": run.recording,
+    }

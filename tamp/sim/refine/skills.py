@@ -1,10 +1,11 @@
-"""StateMachineExecutor: one robot's event-driven state machine as a LeafSystem (§2.2).
+"""PioneerStateMachine: what drives a Pioneer-like robot, its event-driven state machine as a
+LeafSystem (Figueroa Heredia et al. 2018 §2.2).
 
-Once per sensor period the system runs `tamp.sim.refine.machine.Machine.step` on what its
+Once per sensor period the system runs `tamp.refine.machine.Machine.step` on what its
 `Channel` has *delivered* (not on the plant's state), the other robot's fired events and
 the supervisor's rate, and keeps the result in its abstract state. Outputs: the latest
 ``command`` (to the Channel, which delivers it to the actuators) and its ``progress``
-(fired events, running behaviors; to the other executor and the supervisor).
+(fired events, running behaviors; to the other robot's machine and the supervisor).
 """
 
 from __future__ import annotations
@@ -12,13 +13,13 @@ from __future__ import annotations
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, LeafSystem
 
+from tamp.refine.machine import Command, Machine, MachineState, Progress
 from tamp.refine.program import Program
 from tamp.sim.refine.channel import ChannelState
-from tamp.sim.refine.machine import Machine, MachineState
-from tamp.sim.refine.messages import Command, Progress, RateOverride
+from tamp.sim.refine.messages import RateOverride
 
 
-class StateMachineExecutor(LeafSystem):
+class PioneerStateMachine(LeafSystem):
     """Fires robot ``robot``'s events on delivered data and publishes its commands at P."""
 
     def __init__(self, program: Program, robot: str, period: float, empty: ChannelState):

@@ -1,12 +1,19 @@
-"""Builds the refinement workcell's diagram from a program (one function, one Diagram).
+"""The refinement workcell's station: the diagram of a program in its scene (one Diagram).
 
     MultibodyPlant + SceneGraph (SAP; floor, two Pioneer-like robots, the scene's objects)
     per robot:  plant state, reaction forces, contact forces -> SensorReadings -> readings
-                readings, command -> Channel -> delivered -> StateMachineExecutor -> command
+                readings, command -> Channel -> delivered -> PioneerStateMachine -> command
                 Channel.actuation -> the robot's PD actuators (desired state)
-                the other executor's progress -> StateMachineExecutor.others
-    Channels' deliveries -> RateTuningSupervisor -> rates -> both executors
+                the other machine's progress -> PioneerStateMachine.others
+    Channels' deliveries -> RateTuningSupervisor -> rates -> both state machines
     MeshcatVisualizer (optional, `tamp.sim.core.recording`)
+
+Robots (``models/sdf/pioneer_lift.sdf``, ``pioneer_parallel.sdf``, Fig. 7): the base moves
+on planar joints (x, y, yaw) driven along its heading or about the vertical axis, the lift
+lever pitches (``arm_pitch``, up positive) and two prismatic paddles/fingers open and close
+(`tamp.refine.machine.JOINTS`). Every joint is a PD-controlled actuator of the plant (SAP,
+implicit; `GAINS`). The scene's objects (`tamp.sim.refine.scenario`) are added from their
+models, named as the scene names them, and welded to the world when fixed.
 
 The plant steps every `TIME_STEP`; the Channels, executors and the supervisor update on the
 same tick (the Channels take every sensor sample in between at its own time, so sensors
@@ -26,36 +33,50 @@ import numpy as np
 from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import PdControllerGains
+from pydrake.multibody.tree import PdControllerGains, RevoluteJoint
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
+from tamp.errors import InputError
 from tamp.refine.architecture import Architecture
+from tamp.refine.machine import FINGER_MAX, JOINTS, Machine
 from tamp.refine.program import Program
 from tamp.refine.steps import RateSearch
 from tamp.sim.core.models import model_url, sdf_path
 from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.refine.channel import Channel, ChannelState
-from tamp.sim.refine.executor import StateMachineExecutor
-from tamp.sim.refine.machine import Machine
-from tamp.sim.refine.scene import CHASSIS_BODIES, GAINS, GRIPPER_MOUNT, JOINTS, SCENES
+from tamp.sim.refine.scenario import Scene
 from tamp.sim.refine.sensors import SensorReadings
+from tamp.sim.refine.skills import PioneerStateMachine
 from tamp.sim.refine.supervisor import RateTuningSupervisor
 
 TIME_STEP = 0.01  # s, the plant's discrete step and the systems' tick
+#: (kp, kd) of each joint's PD actuator
+GAINS = {
+    "base_x": (6000.0, 1200.0),
+    "base_y": (6000.0, 1200.0),
+    "base_yaw": (800.0, 150.0),
+    "arm_pitch": (400.0, 30.0),
+    "finger_left_joint": (600.0, 10.0),
+    "finger_right_joint": (600.0, 10.0),
+}
+#: bodies whose contact with anything is a collision (the gripper's contacts are intended)
+CHASSIS_BODIES = ("base_link", "arm_link")
+GRIPPER_MOUNT = "gripper_mount"  # the welded joint whose reaction force is the force sensor
 
 
 @dataclass
-class Workcell:
-    """The built diagram and the handles the runner needs."""
+class RefineStation:
+    """The built diagram and the handles the run loop needs."""
 
     diagram: Diagram
     plant: MultibodyPlant
     program: Program
+    scene: Scene
     robots: dict[str, Any]  # robot name -> ModelInstanceIndex
-    executors: dict[str, StateMachineExecutor]
+    executors: dict[str, PioneerStateMachine]
     channels: dict[str, Channel]
     supervisor: RateTuningSupervisor
-    objects: dict[str, Any]  # model name -> ModelInstanceIndex
+    objects: dict[str, Any]  # object name -> ModelInstanceIndex
     chassis: dict[int, str] = field(default_factory=dict)  # body index -> "R1.base_link"
     names: dict[int, str] = field(default_factory=dict)  # body index -> readable name
     visualizer: Any = None
@@ -65,7 +86,7 @@ class Workcell:
 
     def collision(self, a: int, b: int) -> tuple[str, str] | None:
         """The contact of bodies ``a`` and ``b`` as a collision ``(robot body, other)``, or
-        None when it is intended: a chassis (`scene.CHASSIS_BODIES`) touching anything, a
+        None when it is intended: a chassis (`CHASSIS_BODIES`) touching anything, a
         robot touching the other robot or the fixed scenery are collisions; a gripper
         touching the task's objects (or the floor) is not."""
         for mine, other in ((a, b), (b, a)):
@@ -91,14 +112,16 @@ def _model_text(model: str, name: str) -> str:
     return sdf_path(model).read_text().replace(f'<model name="{model}">', f'<model name="{name}">')
 
 
-def build_workcell(
+def build_station(
     program: Program,
     architecture: Architecture,
+    scene: Scene,
     *,
     tune: bool = False,
     meshcat: Any = None,
-) -> Workcell:
-    """The diagram of ``program`` in its scene; ``tune`` runs Fig. 5 in the supervisor."""
+) -> RefineStation:
+    """The diagram of ``program`` in ``scene`` (the program's, `scenario.load_scene`);
+    ``tune`` runs Fig. 5 in the supervisor."""
     comm = program.communication
     period = TIME_STEP
     builder = DiagramBuilder()
@@ -112,7 +135,7 @@ def build_workcell(
     for r in program.robots:
         (m,) = parser.AddModelsFromString(_model_text(r.model, r.name), "sdf")
         robots[r.name] = m
-        start = dict(zip(JOINTS, (*r.start, 0.0, 0.08, 0.08), strict=True))
+        start = dict(zip(JOINTS, (*r.start, 0.0, FINGER_MAX, FINGER_MAX), strict=True))
         for j in JOINTS:
             plant.GetJointByName(j, m).set_default_positions([start[j]])
             kp, kd = GAINS[j]
@@ -120,9 +143,9 @@ def build_workcell(
         plant.mutable_gravity_field().set_enabled(m, False)
 
     objects, fixed = {}, []
-    for p in SCENES[program.scene]:
-        (m,) = parser.AddModelsFromString(_model_text(p.model, p.model), "sdf")
-        objects[p.model] = m
+    for i, p in enumerate(scene.objects):
+        m = _add_object(plant, parser, scene, i, taken=set(robots))
+        objects[p.name] = m
         body = plant.get_body(plant.GetBodyIndices(m)[0])
         X = RigidTransform(RotationMatrix.MakeZRotation(p.yaw), [p.x, p.y, p.z])
         if p.fixed:
@@ -131,6 +154,7 @@ def build_workcell(
         else:
             plant.SetDefaultFloatingBaseBodyPose(body, X)
     plant.Finalize()
+    _check_goals(plant, scene, objects)
 
     chassis, names, robot_of = {}, {}, {}
     scenery = frozenset(int(i) for m in fixed for i in plant.GetBodyIndices(m))
@@ -190,7 +214,7 @@ def build_workcell(
             )
         )
         empty = ChannelState(network.initial())
-        executor = builder.AddSystem(StateMachineExecutor(program, r.name, period, empty))
+        executor = builder.AddSystem(PioneerStateMachine(program, r.name, period, empty))
         builder.Connect(plant.get_state_output_port(m), sensors.state_port)
         builder.Connect(reaction, sensors.reaction_port)
         builder.Connect(plant.get_generalized_contact_forces_output_port(m), sensors.contact_port)
@@ -226,10 +250,11 @@ def build_workcell(
         visualizer = add_visualizer(builder, scene_graph, meshcat)
     diagram = builder.Build()
     diagram.set_name(f"refine_{program.name}")
-    return Workcell(
+    return RefineStation(
         diagram,
         plant,
         program,
+        scene,
         robots,
         executors,
         channels,
@@ -244,8 +269,55 @@ def build_workcell(
     )
 
 
-def search_of(workcell: Workcell, context) -> dict[str, RateSearch | None]:
+def _add_object(plant, parser, scene: Scene, i: int, taken: set[str]):
+    """Object ``i`` of ``scene`` added from its model (one model per file) and named as the
+    scene names it; ``taken``: the robots' names."""
+    o = scene.objects[i]
+    where = f"objects[{i}]"
+    if o.name in taken or o.name == "floor":
+        raise InputError(
+            f"{o.name!r} names a robot or the floor here", file=scene.file, field=f"{where}.name"
+        )
+    if o.model.startswith("package://"):
+        models = parser.AddModelsFromUrl(o.model)
+    else:
+        models = parser.AddModels(o.model)
+    if len(models) != 1:
+        raise InputError(
+            f"the model file holds {len(models)} models, expected one",
+            file=scene.file,
+            field=f"{where}.model",
+        )
+    (m,) = models
+    if plant.GetModelInstanceName(m) != o.name:
+        plant.RenameModelInstance(m, o.name)
+    return m
+
+
+def _check_goals(plant, scene: Scene, objects: dict[str, Any]) -> None:
+    """Every goal on a joint names a revolute joint of its object's model."""
+    for i, g in enumerate(scene.goals):
+        name, _, what = g.quantity.partition(".")
+        if what in ("tilt", "rise"):
+            continue
+        m = objects[name]
+        joint = plant.GetJointByName(what, m) if plant.HasJointNamed(what, m) else None
+        if not isinstance(joint, RevoluteJoint):
+            joints = [
+                plant.get_joint(j).name()
+                for j in plant.GetJointIndices(m)
+                if isinstance(plant.get_joint(j), RevoluteJoint)
+            ]
+            raise InputError(
+                f"{name} has no revolute joint {what!r} (its revolute joints: "
+                f"{', '.join(joints) or 'none'}; or tilt, rise)",
+                file=scene.file,
+                field=f"goals[{i}].quantity",
+            )
+
+
+def search_of(station: RefineStation, context) -> dict[str, RateSearch | None]:
     """The supervisor's searches in ``context`` (root context of the diagram)."""
-    sup = workcell.supervisor
+    sup = station.supervisor
     s = sup.state(sup.GetMyContextFromRoot(context))
     return {n: w.search for n, w in s.robots.items()}

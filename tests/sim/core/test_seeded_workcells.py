@@ -13,7 +13,7 @@ from tamp.scenarios import resolve
 from tamp.perturbation import Perturbation, PoseSpread
 from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.scenario import load_cell_scenario, perturbed, rectangles_overlap
-from tamp.sim.refine.seeded import perturbed_program, program_perturbation
+from tamp.sim.refine.simulate import perturbed_program, program_perturbation
 
 
 def lots_file(tmp_path, section) -> str:
@@ -155,7 +155,7 @@ def test_a_negative_seed_exits_2_before_any_work(argv, capsys):
 
 @pytest.mark.slow  # two short Drake simulations of the refinement workcell
 def test_refine_seeded_runs_repeat_per_seed(tmp_path):
-    from tamp.sim.refine.seeded import run_seeded
+    from tamp.sim.refine.simulate import run_seeded
     from tests.sim.refine.helpers import SHORT
 
     data = yaml.safe_load(SHORT.read_text())

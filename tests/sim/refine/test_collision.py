@@ -13,7 +13,7 @@ from tamp.refine.architecture import load_architecture
 from tamp.refine.loader import load_program
 from tamp.refine.steps import parallelize
 from tamp.scenarios import path
-from tamp.sim.refine.runner import simulate
+from tamp.sim.refine.simulate import simulate
 
 PROGRAM = "table_collision"
 

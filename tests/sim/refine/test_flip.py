@@ -15,7 +15,7 @@ def test_original_program_flips_the_object(task, obj):
     (tilt about pi, its centre back at its start height), and the scene's goal is met."""
     from tamp.refine.architecture import default_architecture
     from tamp.refine.loader import load_program
-    from tamp.sim.refine.runner import simulate
+    from tamp.sim.refine.simulate import simulate
 
     run = simulate(load_program(task), default_architecture())
     assert run.finished

@@ -131,6 +131,9 @@ def test_outcome_reads_the_hinge_and_the_tilt():
     """`outcome.measure` reads joint angles and object poses on the plant, and the scene's
     goals judge them (no program numbers involved)."""
     from tamp.sim.refine.outcome import measure, start_heights
+    from tamp.sim.refine.scenario import load_scene
+
+    goals = load_scene("open_chair").goals
 
     plant, model = load("folding_chair")
     ctx = plant.CreateDefaultContext()
@@ -140,13 +143,13 @@ def test_outcome_reads_the_hinge_and_the_tilt():
     heights = start_heights(plant, ctx, objects)
     hinge = plant.GetJointByName("hinge", model)
     hinge.set_angle(ctx, 0.2)
-    closed = measure(plant, ctx, objects, heights, "open_chair")
+    closed = measure(plant, ctx, objects, heights, goals)
     assert closed.values["folding_chair.hinge"] == pytest.approx(0.2)
     assert not closed.achieved and "hinge" in closed.failed()[0]
     hinge.set_angle(ctx, 0.6)
     tilted = RigidTransform(RotationMatrix.MakeYRotation(0.3), [0.0, 0.0, 0.05])
     plant.SetFreeBodyPose(ctx, frame_a, tilted)
-    opened = measure(plant, ctx, objects, heights, "open_chair")
+    opened = measure(plant, ctx, objects, heights, goals)
     assert opened.achieved and opened.failed() == []
     assert opened.values["folding_chair.tilt"] == pytest.approx(0.3)
     assert opened.values["folding_chair.rise"] == pytest.approx(0.05)
@@ -162,9 +165,11 @@ def test_objects_lie_still_in_the_workcell(task, body):
     from tamp.refine.architecture import default_architecture
     from tamp.refine.loader import load_program
     from tamp.sim.core.runner import make_simulator
-    from tamp.sim.refine.builder import build_workcell
+    from tamp.sim.refine.scenario import load_scene
+    from tamp.sim.refine.station import build_station
 
-    cell = build_workcell(load_program(task), default_architecture())
+    program = load_program(task)
+    cell = build_station(program, default_architecture(), load_scene(program.scene))
     sim = make_simulator(cell.diagram)
     sim.Initialize()
     ctx = cell.plant.GetMyContextFromRoot(sim.get_mutable_context())

@@ -9,7 +9,7 @@ import pytest
 from tamp.refine.architecture import ServiceTimes, default_architecture
 from tamp.refine.order import precedence
 from tamp.refine.steps import refine_rate
-from tamp.sim.refine.runner import simulate
+from tamp.sim.refine.simulate import simulate
 from tests.sim.refine.helpers import fast_architecture, short
 from verification.refine import check_run
 
