@@ -1,4 +1,5 @@
-"""Every shell example of README.md and docs/*.md is run and its output compared (issue 17).
+"""The docs stay true: every shell example of README.md and docs/*.md is run and its output
+compared; links resolve; quoted commands parse; docs/architecture.md matches the import ranks.
 
 An example is a fenced block line ``$ COMMAND`` followed by the output it shows. Rules, so
 that docs cannot drift silently:
