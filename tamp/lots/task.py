@@ -38,7 +38,8 @@ from tamp.fileio import Fields, load_yaml
 from tamp.scenarios import resolve
 
 SIDES = ("A", "B")
-_NAME = re.compile(r"^[a-z_][a-z0-9_]*$")
+#: what a class (and a proposition) is named: a lower-case identifier
+CLASS_NAME = _NAME = re.compile(r"^[a-z_][a-z0-9_]*$")
 
 
 @dataclass(frozen=True)

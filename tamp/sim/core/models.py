@@ -16,6 +16,7 @@ from pathlib import Path
 
 import tamp
 from tamp.errors import TampError
+from tamp.fileio import MAX_BYTES, Fields
 
 PACKAGE = "tamp_models"
 
@@ -59,3 +60,49 @@ def with_friction(sdf: str, mu: float) -> str:
     for tag in ("drake:mu_dynamic", "drake:mu_static"):
         sdf = re.sub(rf"<{tag}>[^<]*</{tag}>", f"<{tag}>{mu:.6f}</{tag}>", sdf)
     return sdf
+
+
+_MODEL_NAME = re.compile(r"""<model(\s+)name\s*=\s*(["'])[^"']*\2""")
+_URI = re.compile(r"<uri>\s*([^<]*?)\s*</uri>")
+
+
+def model_path(ref: str, folder: Path, f: Fields, key: str = "sdf") -> Path:
+    """The SDFormat file a scenario declares for a model of its own (``key: ref``): a
+    ``package://tamp_models/`` URL or a path relative to ``folder`` (the scenario's);
+    `InputError` at ``key`` when it is not such a file."""
+    if "://" in ref:
+        scheme, _, rest = ref.partition("://")
+        package, _, inner = rest.partition("/")
+        if scheme != "package":
+            raise f.error(key, f"expected a path or a package:// URL, got {ref!r}")
+        if package != PACKAGE:
+            raise f.error(key, f"unknown package {package!r} (known: {PACKAGE})")
+        path = models_dir() / inner
+    else:
+        path = folder / ref
+    if not path.is_file():
+        raise f.error(key, f"no model file {ref!r} (looked for {path})")
+    if path.suffix.lower() != ".sdf":
+        raise f.error(key, f"expected an SDFormat file (.sdf), got {ref!r}")
+    if path.stat().st_size > MAX_BYTES:
+        raise f.error(key, f"larger than {MAX_BYTES // (1024 * 1024)} MiB")
+    return path.resolve()
+
+
+def renamed_model(sdf: str, name: str) -> str:
+    """A model's SDF text with its (first) model named ``name``: one model instance per
+    object, each named by the object's id."""
+    return _MODEL_NAME.sub(lambda m: f'<model{m.group(1)}name="{name}"', sdf, count=1)
+
+
+def absolute_uris(sdf: str, folder: Path) -> str:
+    """A model's SDF text with each relative ``<uri>`` (a mesh beside the file) made an
+    absolute ``file://`` URI: the text is parsed from a string, without its folder."""
+
+    def absolute(m: re.Match) -> str:
+        uri = m.group(1)
+        if "://" in uri or uri.startswith("/") or not uri:
+            return m.group(0)
+        return f"<uri>{(folder / uri).resolve().as_uri()}</uri>"
+
+    return _URI.sub(absolute, sdf)

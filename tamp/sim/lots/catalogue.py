@@ -84,23 +84,43 @@ class Footprint:
 
 def read_footprint(path: Path) -> Footprint:
     """The box around all geometry (visual and collision) of an object SDF, in its frame;
-    a cylinder counts as its bounding box."""
-    root = ET.parse(path).getroot()
+    a cylinder or sphere counts as its bounding box. ValueError for other geometry (a mesh:
+    its extent is not in the SDF) or no geometry at all."""
+    return _footprint(ET.parse(path).getroot())
+
+
+def _footprint(root: ET.Element) -> Footprint:
     pts = []
     for geo_parent in [*root.iter("visual"), *root.iter("collision")]:
         pose = [float(v) for v in (geo_parent.findtext("pose") or "0 0 0 0 0 0").split()]
-        box = geo_parent.find("geometry/box/size")
-        if box is not None:
-            half = np.array([float(v) for v in box.text.split()]) / 2
-        else:
-            r = float(geo_parent.findtext("geometry/cylinder/radius"))
-            half = np.array([r, r, float(geo_parent.findtext("geometry/cylinder/length")) / 2])
+        half = _half_extent(geo_parent)
         R = _rpy(*pose[3:])
         for corner in np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T:
             pts.append(R @ (corner * half) + pose[:3])
+    if not pts:
+        raise ValueError("the model has no visual or collision geometry")
     p = np.array(pts)
     lo, hi = p.min(axis=0), p.max(axis=0)
     return Footprint(*(round(float(v), 6) for v in (lo[0], hi[0], lo[1], hi[1], hi[2])))
+
+
+def _half_extent(geo_parent: ET.Element) -> np.ndarray:
+    """Half the sides of the box around one visual's or collision's geometry."""
+    box = geo_parent.findtext("geometry/box/size")
+    if box is not None:
+        return np.array([float(v) for v in box.split()]) / 2
+    r = geo_parent.findtext("geometry/cylinder/radius")
+    if r is not None:
+        length = float(geo_parent.findtext("geometry/cylinder/length") or "nan")
+        return np.array([float(r), float(r), length / 2])
+    r = geo_parent.findtext("geometry/sphere/radius")
+    if r is not None:
+        return np.full(3, float(r))
+    kinds = [g.tag for g in geo_parent.findall("geometry/*")] or ["none"]
+    raise ValueError(
+        f"{geo_parent.tag} {geo_parent.get('name')!r}: {kinds[0]} geometry has no footprint "
+        "here (use boxes, cylinders and spheres)"
+    )
 
 
 def _rpy(r: float, p: float, y: float) -> np.ndarray:
@@ -118,35 +138,66 @@ def _rpy(r: float, p: float, y: float) -> np.ndarray:
     return rz @ ry @ rx
 
 
+#: the colour of an object whose SDF gives none
+DEFAULT_RGB = (0.6, 0.6, 0.6)
+
+
 @dataclass(frozen=True)
 class ObjectClass:
     """A class of graspable objects: its SDF and what perception and skills need to know.
 
     The object's origin is on the table under its centre; ``footprint`` is read from its SDF
-    (one source of truth). ``colour`` is the SDF's primary colour, which each instance
-    replaces with one of ``palette`` so that instances of a class look different.
+    (one source of truth), ``body`` is the SDF's one link. ``colour`` is the SDF's primary
+    colour (the text of its ``<diffuse>``), which each instance replaces with one of
+    ``palette`` so that instances of a class look different. ``sdf`` is the file (its text
+    is what the plant parses, `tamp.sim.lots.plant.object_sdf`), ``url`` how Drake names it.
+    The packaged classes are `CLASSES`; a scenario may declare more (`read_object_class`).
     """
 
     name: str
     colour: str
     palette: tuple[tuple[float, float, float], ...]
     footprint: Footprint
-
-    @property
-    def url(self) -> str:
-        return model_url(f"lots_{self.name}")
-
-    @property
-    def body(self) -> str:
-        return self.name
+    sdf: Path
+    url: str
+    body: str
 
     @property
     def height(self) -> float:
         return self.footprint.top
 
 
+def read_object_class(
+    name: str,
+    sdf: Path,
+    url: str,
+    palette: tuple[tuple[float, float, float], ...] = (),
+    colour: str | None = None,
+) -> ObjectClass:
+    """The class of the objects of SDF file ``sdf``: its one model's one link, footprint and
+    primary colour (``colour``, else the first visual's ``<diffuse>``); ``palette`` (empty:
+    that colour alone). ValueError saying what the file lacks."""
+    try:
+        root = ET.parse(sdf).getroot()
+    except (ET.ParseError, UnicodeDecodeError) as exc:
+        raise ValueError(f"not an SDFormat file: {exc}") from None
+    models = root.findall("model") if root.tag == "sdf" else []
+    if len(models) != 1:
+        raise ValueError(f"expected an <sdf> file with one <model>, found {len(models)}")
+    links = [link.get("name") or "" for link in models[0].findall("link")]
+    if len(links) != 1:
+        raise ValueError(f"an object is one rigid body: the model has {len(links)} links")
+    if colour is None:
+        colour = (models[0].findtext("link/visual/material/diffuse") or "").strip()
+    if not palette:
+        rgb = [float(v) for v in colour.split()[:3]] if colour else []
+        palette = (tuple(rgb) if len(rgb) == 3 else DEFAULT_RGB,)
+    return ObjectClass(name, colour, tuple(palette), _footprint(models[0]), sdf, url, links[0])
+
+
 def _cls(name: str, colour: str, *palette: tuple[float, float, float]) -> ObjectClass:
-    return ObjectClass(name, colour, palette, read_footprint(sdf_path(f"lots_{name}")))
+    file = f"lots_{name}"
+    return read_object_class(name, sdf_path(file), model_url(file), palette, colour)
 
 
 CLASSES: dict[str, ObjectClass] = {

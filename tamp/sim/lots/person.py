@@ -55,7 +55,7 @@ from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 from tamp.lots.person import ACTION_SKILLS, ScriptedPerson
 from tamp.lots.task import Event
 from tamp.sim.core.messages import SkillCommand, SkillStatus
-from tamp.sim.lots.catalogue import CLASSES, PERSON
+from tamp.sim.lots.catalogue import PERSON, Footprint
 from tamp.sim.lots.scenario import CellObject, CellScenario
 from tamp.world.interface import Status
 
@@ -179,13 +179,16 @@ def shelf_spot(k: int) -> tuple[float, float]:
     return (sx, sy - PERSON.shelf_size[1] / 2 + SHELF_PITCH * (k % n + 0.5))
 
 
-def staged_objects(events: list[Event] | tuple[Event, ...]) -> tuple[CellObject, ...]:
-    """The objects the script's ``add`` events bring in, waiting on the staging shelf."""
+def staged_objects(
+    events: list[Event] | tuple[Event, ...], scenario: CellScenario
+) -> tuple[CellObject, ...]:
+    """The objects the script's ``add`` events bring in, waiting on the staging shelf (of
+    the classes of ``scenario``: the packaged ones and its own)."""
     out: list[CellObject] = []
     for e in events:
         if e.kind != "add":
             continue
-        c = CLASSES[e.cls]
+        c = scenario.object_class(e.cls)
         for _ in range(e.count):
             k = len(out)
             rgb = c.palette[k % len(c.palette)]
@@ -411,7 +414,7 @@ class PersonSystem(LeafSystem):
         uid = cands[0]
         act.uid, act.outcome = uid, "running"
         X_WO = where[uid][1]
-        top = CLASSES[e.cls].footprint.top
+        top = self.scenario.object_class(e.cls).footprint.top
         p_take = self._over(X_WO, e.cls)
         if dst == STAGING:
             q = shelf_spot(len(self._staged) + s.shelf_next)
@@ -439,10 +442,9 @@ class PersonSystem(LeafSystem):
             HandStep("done"),
         )
 
-    @staticmethod
-    def _over(X_WO: RigidTransform, cls: str) -> tuple[float, float]:
+    def _over(self, X_WO: RigidTransform, cls: str) -> tuple[float, float]:
         """The point over the middle of the object's footprint (where the palm takes it)."""
-        f = CLASSES[cls].footprint
+        f = self._footprint(cls)
         p = X_WO @ np.array([(f.xmin + f.xmax) / 2, (f.ymin + f.ymax) / 2, 0.0])
         return float(p[0]), float(p[1])
 
@@ -454,12 +456,15 @@ class PersonSystem(LeafSystem):
         origin, lay on the hammer's head, and lifting the hammer made the plant non-finite."""
         w = self.scenario.workspaces[side]
         others = [
-            CLASSES[self._classes[u]].footprint.corners(*X.translation()[:2], yaw_of(X))
+            self._footprint(self._classes[u]).corners(*X.translation()[:2], yaw_of(X))
             for u, (_, X) in where.items()
             if u != uid and _near(X, w)
         ]
-        f = CLASSES[self._classes[uid]].footprint
+        f = self._footprint(self._classes[uid])
         return free_spot(w, f, yaw_of(where[uid][1]), others)
+
+    def _footprint(self, cls: str) -> Footprint:
+        return self.scenario.object_class(cls).footprint
 
     def _advance(self, s: PersonState, context, t: float) -> None:
         """Run the current step; a step that ends hands over to the next in the same update."""

@@ -34,17 +34,17 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import PdControllerGains
 
-from tamp.sim.core.models import sdf_path, with_friction
+from tamp.sim.core.models import absolute_uris, renamed_model, with_friction
 from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.lots.catalogue import (
     ARM,
-    CLASSES,
     HAND_LABEL,
     PERSON,
     READY,
     TABLE_URL,
     TRAY_URL,
     WASTE_BASKET_URL,
+    ObjectClass,
 )
 from tamp.sim.lots.scenario import CellObject, CellScenario
 
@@ -68,18 +68,19 @@ class CellPlant:
 
 
 def object_sdf(
-    cls: str, uid: str, rgb: tuple[float, float, float], friction: float | None = None
+    c: ObjectClass, uid: str, rgb: tuple[float, float, float], friction: float | None = None
 ) -> str:
-    """The class's SDF text with the model renamed to ``uid``, its primary colour ``rgb`` and,
-    for a run with a drawn ``friction`` coefficient (``perturbation.friction``), that
-    coefficient on every contact surface."""
-    c = CLASSES[cls]
-    text = sdf_path(f"lots_{cls}").read_text()
-    text = text.replace(f'<model name="{cls}">', f'<model name="{uid}">')
+    """Class ``c``'s SDF text with the model renamed to ``uid``, its primary colour ``rgb``
+    and, for a run with a drawn ``friction`` coefficient (``perturbation.friction``), that
+    coefficient on every contact surface (relative ``<uri>``s made absolute: the text is
+    parsed without its folder)."""
+    text = renamed_model(c.sdf.read_text(encoding="utf-8"), uid)
     if friction is not None:
         text = with_friction(text, friction)
-    colour = f"<diffuse>{rgb[0]:.3f} {rgb[1]:.3f} {rgb[2]:.3f} 1</diffuse>"
-    return re.sub(rf"<diffuse>{re.escape(c.colour)}</diffuse>", colour, text)
+    if c.colour:
+        colour = f"<diffuse>{rgb[0]:.3f} {rgb[1]:.3f} {rgb[2]:.3f} 1</diffuse>"
+        text = re.sub(rf"<diffuse>\s*{re.escape(c.colour)}\s*</diffuse>", colour, text)
+    return absolute_uris(text, c.sdf.parent)
 
 
 def add_cell_plant(
@@ -129,8 +130,9 @@ def add_cell_plant(
     hand = None if staged is None else _add_person(plant, parser)
     friction = None if scenario.sample is None else scenario.sample.friction
     for o in (*scenario.objects, *(staged or ())):
-        (m,) = parser.AddModelsFromString(object_sdf(o.cls, o.id, o.rgb, friction), "sdf")
-        body = plant.GetBodyByName(CLASSES[o.cls].body, m)
+        c = scenario.object_class(o.cls)
+        (m,) = parser.AddModelsFromString(object_sdf(c, o.id, o.rgb, friction), "sdf")
+        body = plant.GetBodyByName(c.body, m)
         w = scenario.workspaces.get(o.workspace)
         z = 0.01 if w is not None and w.tray else 0.0
         X = RigidTransform(RotationMatrix.MakeZRotation(o.yaw), [o.xy[0], o.xy[1], z + 1e-4])

@@ -20,6 +20,22 @@ with status 2. No Drake import here. Example (``tamp/scenarios/lots_sim/model_bu
     waste_basket: [0.2, -0.58]
     objects:                       # xy relative to the workspace centre, yaw in degrees
       - {class: saw, workspace: A, xy: [0.0, 0.11], yaw: 3}
+
+A scenario may declare object classes of its own beside the packaged tools
+(`tamp.sim.lots.catalogue.CLASSES`) and use them in ``objects`` (and a LOTS task's
+propositions, a person's ``add`` events) like a packaged one::
+
+    classes:
+      widget:                      # a lower-case identifier, not a packaged class's name
+        sdf: models/widget.sdf     # relative to this file, or package://tamp_models/...
+        palette: [[0.9, 0.1, 0.1], [0.1, 0.2, 0.9]]   # instance colours (default: the SDF's)
+    objects:
+      - {class: widget, workspace: A, xy: [0.0, 0.0]}
+
+The SDF holds one model of one link, its origin on the table under the object's centre, of
+box, cylinder or sphere geometry (the footprint the placement checks and the person use is
+read from it); its primary colour (the first visual's ``<diffuse>``) is replaced per
+instance by the palette's colours, as on the packaged tools.
 """
 
 from __future__ import annotations
@@ -33,12 +49,14 @@ from typing import Any
 import numpy as np
 
 from tamp import scenarios
-from tamp.errors import InputError
+from tamp.errors import InputError, short_repr
 from tamp.fileio import Fields, load_yaml
 from tamp.grasp.networks import DEFAULT_NETWORK, NETWORKS
+from tamp.lots.task import CLASS_NAME
 from tamp.perturbation import NONE, Applied, Perturbation, check_seed, parse_perturbation
 from tamp.schema import load_dataclass, spec
-from tamp.sim.lots.catalogue import CLASSES, ObjectClass
+from tamp.sim.core.models import model_path
+from tamp.sim.lots.catalogue import ARM, CLASSES, ObjectClass, read_object_class
 
 CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
 SIDES = ("A", "B")
@@ -112,6 +130,51 @@ class ObjectEntry:
     def check(self, f: Fields) -> None:
         if self.color is not None and not all(0.0 <= v <= 1.0 for v in self.color):
             raise f.error("color", f"RGB values must lie in [0, 1], got {list(self.color)}")
+
+
+@dataclass(frozen=True)
+class ClassEntry:
+    """One entry of ``classes:`` (module docstring): an object class the scenario declares."""
+
+    sdf: str = spec(
+        help="the SDFormat file: a path relative to the scenario file, or a "
+        "package://tamp_models/... URL"
+    )
+    palette: tuple[tuple[float, float, float], ...] = spec(
+        (),
+        min=0.0,
+        max=1.0,
+        min_items=1,
+        help="instance colours, RGB in [0, 1], used in turn (default: the SDF's own colour)",
+    )
+
+
+def _classes(raw: Any, f: Fields, key: str) -> dict[str, ObjectClass]:
+    """``classes``: each entry's SDF read into an `ObjectClass` (`read_object_class`)."""
+    section = f.sub(key)
+    out = {}
+    for name in section.data:
+        if not isinstance(name, str) or not CLASS_NAME.match(name):
+            where = short_repr(str(name), 40).strip("'")
+            raise section.error(where, "class names are lower-case identifiers")
+        if name in CLASSES:
+            raise section.error(name, f"a packaged class is named {name!r}: choose another name")
+        entry_f = section.sub(name)
+        entry = load_dataclass(ClassEntry, entry_f)
+        path = model_path(entry.sdf, Path(f.file).parent, entry_f)
+        try:
+            c = read_object_class(name, path, path.as_uri(), entry.palette)
+        except ValueError as exc:
+            raise entry_f.error("sdf", f"{path.name}: {exc}") from None
+        fp, opening = c.footprint, 2 * ARM.finger_max
+        if min(fp.xmax - fp.xmin, fp.ymax - fp.ymin) > opening:
+            raise entry_f.error(
+                "sdf",
+                f"{path.name}: wider than the gripper opens ({opening:g} m) both ways: "
+                f"{fp.xmax - fp.xmin:g} x {fp.ymax - fp.ymin:g} m",
+            )
+        out[name] = c
+    return out
 
 
 @dataclass(frozen=True)
@@ -250,6 +313,9 @@ class CellScenario:
     control: ControlSettings = spec(ControlSettings)
     safety: SafetySettings = spec(SafetySettings)
     grasp: GraspSettings = spec(GraspSettings)
+    classes: dict[str, ObjectClass] = spec(
+        {}, parse=_classes, help="the scenario's own object classes (module docstring)"
+    )
     workspaces: dict[str, Workspace] = spec(parse=_workspaces, help="W^A and W^B")
     waste_basket: tuple[float, float] = spec(unit="m", help="centre of the waste basket")
     max_sim_time: float = spec(600.0, min=0.0, strict_min=True, unit="s")
@@ -265,13 +331,14 @@ class CellScenario:
         raise KeyError(uid)
 
     def object_class(self, name: str) -> ObjectClass:
-        """The object class ``name`` (`tamp.sim.lots.catalogue.CLASSES`)."""
-        return CLASSES[name]
+        """The object class ``name``: one of the scenario's own ``classes`` or a packaged
+        one (`tamp.sim.lots.catalogue.CLASSES`)."""
+        return self.classes[name] if name in self.classes else CLASSES[name]
 
     @property
     def class_names(self) -> tuple[str, ...]:
-        """Every class an object of this scenario may have."""
-        return tuple(CLASSES)
+        """Every class an object of this scenario may have: the packaged ones, then its own."""
+        return (*CLASSES, *self.classes)
 
     def check(self, f: Fields) -> None:
         """The relations between sections (the file's own reading order)."""

@@ -29,7 +29,6 @@ from tamp.lots.task import Event, Task
 from tamp.sim.core.executor import ActionLog
 from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
 from tamp.sim.core.runner import make_simulator, run_in_chunks
-from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.controller_system import PERIOD, LotsControllerSystem
 from tamp.sim.lots.person import (
     REACTION,
@@ -247,7 +246,7 @@ def simulate_lots(
     check_matches(task, scenario)
     events = list(interference) if interference else None
     if events:
-        check_person_classes(events)
+        check_person_classes(events, scenario)
         for n, phase in sorted({(e.after, e.phase) for e in events}):  # the drawn reactions
             if scenario.perturbation.timing_jitter > 0:
                 shift = reaction_time(scenario.sample, n, phase) - REACTION
@@ -375,15 +374,16 @@ def run_seeded(
     return result.to_json()
 
 
-def check_person_classes(events: Sequence[Event]) -> None:
-    """Every class the person brings in must be a workcell class (`InputError` naming the
-    interference file's ``events[i].class``)."""
+def check_person_classes(events: Sequence[Event], scenario: CellScenario) -> None:
+    """Every class the person brings in must be a class of the workcell scenario, packaged
+    or its own (`InputError` naming the interference file's ``events[i].class``)."""
+    names = scenario.class_names
     for e in events:
-        if e.kind == "add" and e.cls not in CLASSES:
+        if e.kind == "add" and e.cls not in names:
             file, _, where = e.where.partition(": ")
             raise InputError(
                 f"the workcell has no {e.cls!r} objects for the person to bring in "
-                f"(classes: {', '.join(sorted(CLASSES))})",
+                f"(classes: {', '.join(sorted(names))})",
                 file=file or None,
                 field=f"{where}.class" if where else "class",
             )

@@ -131,7 +131,7 @@ def build_station(
     labels the safety monitor takes for a person's hand.
     """
     builder = DiagramBuilder()
-    staged = None if person is None else staged_objects(person)
+    staged = None if person is None else staged_objects(person, scenario)
     cell = add_cell_plant(builder, scenario, staged)
     plant, scene_graph = cell.plant, cell.scene_graph
     config = wrist_camera_config(scenario)

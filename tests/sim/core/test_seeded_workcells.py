@@ -79,7 +79,7 @@ def test_lots_draws_friction_noise_failures_and_reactions(tmp_path):
     assert perturbed(s, 3)[1].to_json() == perturbed(s, 3)[1].to_json()  # bit for bit
     # the drawn coefficient reaches every contact surface of an object's SDF
     out, applied = runs[4]
-    sdf = object_sdf("saw", "saw_0", (1.0, 0.0, 0.0), out.sample.friction)
+    sdf = object_sdf(CLASSES["saw"], "saw_0", (1.0, 0.0, 0.0), out.sample.friction)
     assert f"<drake:mu_dynamic>{applied.friction:.6f}</drake:mu_dynamic>" in sdf
     assert "<drake:mu_static>0.8</drake:mu_static>" not in sdf
     # the person's reaction: REACTION shifted by the slot's draw, never negative, per seed

@@ -23,6 +23,7 @@ from tamp.sim.lots.person import (
     shelf_spot,
     staged_objects,
 )
+from tamp.sim.lots.scenario import load_cell_scenario
 from tests.sim.lots.helpers import write_scenario
 
 TASK = {
@@ -47,7 +48,7 @@ def test_staged_objects_wait_on_the_shelf_one_per_added_object():
         Event(after=2, kind="remove", cls="body", side="B"),
         Event(after=3, kind="add", cls="toy_car", side="A"),
     ]
-    staged = staged_objects(events)
+    staged = staged_objects(events, load_cell_scenario("tower"))
     assert [o.id for o in staged] == ["person_body_1", "person_body_2", "person_toy_car_3"]
     assert {o.workspace for o in staged} == {STAGING}
     assert [o.xy for o in staged] == [shelf_spot(0), shelf_spot(1), shelf_spot(2)]
@@ -112,13 +113,12 @@ def _person_cell(tmp_path, events: list[dict], objects: list[dict]):
     from tamp.sim.core.messages import SkillCommand, SkillStatus
     from tamp.sim.lots.person import PersonSystem
     from tamp.sim.lots.plant import add_cell_plant
-    from tamp.sim.lots.scenario import load_cell_scenario
     from tamp.world.interface import Status
 
     _, ev = _files(tmp_path, events)
     scenario = load_cell_scenario(write_scenario(tmp_path, objects))
     builder = DiagramBuilder()
-    cell = add_cell_plant(builder, scenario, staged_objects(ev))
+    cell = add_cell_plant(builder, scenario, staged_objects(ev, scenario))
     plant = cell.plant
     person = builder.AddSystem(
         PersonSystem(plant, scenario, ev, cell.bodies, cell.classes, cell.hand, cell.staged)
@@ -206,7 +206,6 @@ def test_the_hand_carries_an_object_between_workspaces_and_parks(tmp_path):
 def test_the_persons_light_curtain_wakes_the_safety_monitor():
     """With a scripted person the monitor's ``person_present`` is the person's curtain (not
     an exported input); the controller side still gets nothing of the person."""
-    from tamp.sim.lots.scenario import load_cell_scenario
     from tamp.sim.lots.station import build_station
 
     task = load_task("tower")

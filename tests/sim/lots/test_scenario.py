@@ -17,10 +17,11 @@ from tests.sim.lots.snapshot import SNAPSHOT, normalise, packaged_files
 def snapshot_layout(loaded: dict) -> dict:
     """A normalised scenario in the snapshot's layout (the snapshot was written by the loader
     the typed one replaced): the ``plant`` section's fields at the top, no ``description``
-    (packaged files have none), and the never-set ``extra`` mapping."""
+    and no ``classes`` of their own (packaged files have none), and the never-set ``extra``
+    mapping."""
     out = dict(loaded)
     out.update(out.pop("plant"))
-    assert out.pop("description") == ""
+    assert out.pop("description") == "" and out.pop("classes") == {}
     out["extra"] = {}
     return out
 
