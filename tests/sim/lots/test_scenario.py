@@ -70,6 +70,38 @@ def test_packaged_model_building_loads():
         ([], {"waste_basket": [2.0, 0.0]}, "waste_basket"),
         ([], {"plant": {"time_step": 0.5}}, "plant.time_step"),
         ([], {"speed": 1}, "speed"),
+        # relations between fields, checked once the sections are read
+        (
+            [],
+            {"control": {"period": 0.003, "perception_period": 0.02, "command_period": 0.001}},
+            "control.period",  # shorter than the plant's step (0.004 s)
+        ),
+        ([], {"control": {"perception_period": 0.005}}, "control.perception_period"),
+        ([], {"safety": {"check_period": 0.015}}, "safety.check_period"),
+        ([], {"grasp": {"view_heights": [0.5, 0.2]}}, "grasp.view_heights[0]"),
+        (
+            [],
+            {
+                "workspaces": {
+                    "A": {"center": [0.5, 0.25], "size": [0.34, 0.34], "tray": True},
+                    "B": {"center": [0.5, -0.25], "size": [0.34, 0.34]},
+                }
+            },
+            "workspaces.A.tray",
+        ),
+        (
+            [
+                {"class": "body", "workspace": "A", "xy": [0, 0.1], "id": "b"},
+                {"class": "body", "workspace": "A", "xy": [0, -0.1], "id": "b"},
+            ],
+            {},
+            "objects[1].id",
+        ),
+        (
+            [{"class": "body", "workspace": "A", "xy": [0, 0], "color": [1, 2, 0]}],
+            {},
+            "objects[0].color",
+        ),
     ],
 )
 def test_bad_scenarios_name_the_field(tmp_path, objects, changes, field):
