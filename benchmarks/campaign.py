@@ -1,4 +1,4 @@
-"""Campaign targets and throughput (issue 18): success rates over many seeds, runs per
+"""Campaign targets and throughput: success rates over many seeds, runs per
 minute with 1 and 2 Ray workers, and what Ray adds per run compared with one process.
 
 Sections (``--only``):

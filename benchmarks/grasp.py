@@ -20,7 +20,7 @@ HRG-Net runs in its three fusion modes (:data:`tamp.grasp.models.FUSION_MODES`):
 (full), ``hrgnet_final`` (HRNet's "final fusion only" ablation) and ``hrgnet_nofusion`` (no
 fusion at all, the paper's Table IV ablation).
 
-Targets (issue 7), on the accuracy pooled over seeds: HRG-Net accuracy >= GR-ConvNet's and >= 90 %;
+Targets, on the accuracy pooled over seeds: HRG-Net accuracy >= GR-ConvNet's and >= 90 %;
 fusion on beats off (Table IV); CPU inference <= 60 ms at 224x224 RGB-D. The gain of the
 repeated exchange over final fusion only is printed as well; it is not a target.
 """

@@ -1,7 +1,7 @@
-"""Real-time factor of the SMP-MRO Drake simulation, Cases 1-3 (seed §V).
+"""Real-time factor of the SMP-MRO Drake simulation, Cases 1-3 (Nakamura & Sekiyama, IEEE Access, §V).
 
 For each case: plan + verify once, then simulate the grown tree in the Drake diagram with
-the packaged settings (SAP, 10 ms step) and, side by side, the FIELD_NOTES reference
+the packaged settings (SAP, 10 ms step) and, side by side, the measured reference
 setting (5 ms step), and the same tree in the symbolic peer `tamp.bt.SymbolicWorld`
 (effects applied instantly: what the physics and the skills cost on top).
 

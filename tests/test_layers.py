@@ -1,4 +1,4 @@
-"""The layering of ARCHITECTURE.md, checked on every import statement of the source tree.
+"""The layering of docs/architecture.md, checked on every import statement of the source tree.
 
 "The arrows go one way: world ← ltl, demo, rg, bt, lots, refine, grasp ← verification ←
 sim ← campaign ← commands." Function-level imports count too (a lazy import is still a

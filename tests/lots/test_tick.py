@@ -1,4 +1,4 @@
-"""The LOTS controller is tick-based on the `tamp.world.World` contract (issue 15).
+"""The LOTS controller is tick-based on the `tamp.world.World` contract.
 
 It starts one skill of the ``lots_arm`` domain at a time, polls it, never blocks; the only
 thing it reads from the world is what the camera sees (`visible_counts`); its state copies

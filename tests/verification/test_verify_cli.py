@@ -135,7 +135,7 @@ def test_plan_empty_order_exits_2(capsys) -> None:
 
 def test_bounded_bt_exploration_reports_no_spurious_violation(capsys) -> None:
     """At the bound the unexpanded states used to stutter forever, so `F goal` was reported
-    VIOLATED by a path that merely stops where the exploration stopped. Since issue 17 such
+    VIOLATED by a path that merely stops where the exploration stopped. Now such
     a property is "unknown" (exit 4), never "holds"."""
     rc, out, _ = run(capsys, "bt", str(path("case1.yaml")), "--max-states", "5", "--json")
     doc = json.loads(out)

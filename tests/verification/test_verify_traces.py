@@ -148,7 +148,7 @@ def test_large_conjunction_is_checked_conjunct_by_conjunct() -> None:
 @pytest.mark.parametrize("n", [8, 9, 12])
 @pytest.mark.parametrize("finite", [False, True])
 def test_unsatisfiable_conjunction_is_explained_at_any_size(n: int, finite: bool) -> None:
-    # issue 17: beyond 8 conjuncts `F a` alone was explained ("every finite prefix can still
+    # beyond 8 conjuncts `F a` alone was explained ("every finite prefix can still
     # be extended"), but the conjunction is unsatisfiable
     f = "G !a & F a & " + " & ".join(f"F g{i}" for i in range(n - 2))
     assert len(ltl.conjuncts(ltl.parse(f))) == n

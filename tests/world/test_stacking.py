@@ -1,4 +1,4 @@
-"""The tree's IsObjectAt and the Drake workcell's 3-D judge agree (issue 17): an object on top
+"""The tree's IsObjectAt and the Drake workcell's 3-D judge agree: an object on top
 of another is not at the area, whatever its x and y; on the floor inside the area it is."""
 
 from __future__ import annotations

@@ -66,8 +66,8 @@ def test_areas_found_at_run_time_travel_with_the_command():
 
 
 def test_a_skill_halted_at_its_goal_is_halted_not_cancelled():
-    """The reactive tree halts ``MoveTo(L0)`` once ``IsRobotCloseTo(L0)`` holds (issue 17:
-    the table said CANCELLED for a MoveTo that had done its job)."""
+    """The reactive tree halts ``MoveTo(L0)`` once ``IsRobotCloseTo(L0)`` holds; the
+    action table says HALTED (goal reached), not CANCELLED, for a MoveTo that did its job."""
     s = ExecutorState(b"")
     near = WorldState(robot=Pose.at(0.5, 0.0), areas=STATE.areas)  # 0.5 m < reach 0.9 m
     h = world(s, SkillStatus()).start(default_domain().action("MoveTo", "L0"))

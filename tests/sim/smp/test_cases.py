@@ -1,4 +1,4 @@
-"""SMP-MRO Cases 1-3 end to end in Drake (seed §V): assertions on the plant's state.
+"""SMP-MRO Cases 1-3 end to end in Drake (Nakamura & Sekiyama, IEEE Access, §V): assertions on the plant's state.
 
 Each case runs once per session (``case_runs``): RG order, verification gate, the grown
 tree ticked by the BtExecutor, skills moving the robot; then we check where the bodies
@@ -74,7 +74,7 @@ def test_objects_move_physically(case_runs, case):
 
 @pytest.mark.parametrize("case", [1, 2, 3])
 def test_welds_switch_on_only_at_the_grasp_pose(case_runs, case):
-    """FIELD_NOTES: a weld switched on with the bodies apart snaps them together."""
+    """A weld switched on with the bodies apart snaps them together."""
     result, _, _, runner, _ = case_runs.get(f"case{case}.yaml")
     picks = [a for a in result.actions if a.action.startswith("Pick(") and a.status == "SUCCESS"]
     assert len(runner.weld_log) == len(picks)
