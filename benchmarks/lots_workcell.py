@@ -1,4 +1,5 @@
-"""The LOTS workcell (Zhou et al., IEEE T-ASE 2023, §IV-B, Fig. 6): grasp success and time per pick for HRG-Net,
+"""The LOTS workcell (Zhou et al., IEEE T-ASE 2023, §IV-B, Fig. 6): grasp success and time
+per pick for HRG-Net,
 GR-ConvNet-style and GG-CNN-style networks on the same seeded scenes, and the workcell's
 real-time factor with the camera running and where its wall time goes.
 

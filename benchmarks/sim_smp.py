@@ -1,4 +1,5 @@
-"""Real-time factor of the SMP-MRO Drake simulation, Cases 1-3 (Nakamura & Sekiyama, IEEE Access, §V).
+"""Real-time factor of the SMP-MRO Drake simulation, Cases 1-3 (Nakamura & Sekiyama, IEEE
+Access, §V).
 
 For each case: plan + verify once, then simulate the grown tree in the Drake diagram with
 the packaged settings (SAP, 10 ms step) and, side by side, the measured reference

@@ -1,4 +1,5 @@
-"""SMP-MRO Cases 1-3 end to end in Drake (Nakamura & Sekiyama, IEEE Access, §V): assertions on the plant's state.
+"""SMP-MRO Cases 1-3 end to end in Drake (Nakamura & Sekiyama, IEEE Access, §V): assertions
+on the plant's state.
 
 Each case runs once per session (``case_runs``): RG order, verification gate, the grown
 tree ticked by the BtExecutor, skills moving the robot; then we check where the bodies
