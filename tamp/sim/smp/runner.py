@@ -26,9 +26,9 @@ The run ends when the BtExecutor's tree returns SUCCESS or FAILURE, or at
 ``max_sim_time``. Its status is decided once, by `judge`, from the tree's result AND the
 plant: SUCCESS only when the tree succeeded and every goal object rests in its final goal
 area in 3-D (`tamp.sim.smp.placement.why_not_in`: inside the area in the plane and upright
-on the floor, not on top of another object). `SimResult.ok` and the exit code follow the
-status and nothing else. `SimResult` also has the executed actions with sim start/end times,
-final plant poses of the objects, sim time, wall time and the real-time factor.
+on the floor, not on top of another object). `SimResult` (a `RunResult`: ``ok`` and the exit
+code follow the status and nothing else) also has the executed actions with sim start/end
+times, final plant poses of the objects, sim time, wall time and the real-time factor.
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ from pydrake.multibody.math import SpatialVelocity
 from tamp.sim.core.executor import ActionLog
 from tamp.sim.core.outcome import run_cause
 from tamp.sim.core.runner import make_simulator, run_in_chunks
+from tamp.sim.core.workcell import RunResult
 from tamp.sim.smp.ik import grasp_transform
 from tamp.sim.smp.placement import Body, blocker, free_spot, why_not_in
 from tamp.sim.smp.robot import ROBOT
@@ -79,85 +80,83 @@ def judge(
     return "SUCCESS", tree_reason or "every goal reached"
 
 
-@dataclass
-class SimResult:
-    """What a simulation run did, read from the plant and the executor's state.
+@dataclass(kw_only=True)
+class SimResult(RunResult):
+    """What an SMP-MRO run did, read from the plant and the executor's state.
 
-    ``status`` (decided by `judge`) is the one verdict: ``ok`` and the CLI's exit code are
-    derived from it, so they cannot disagree.
+    The verdict, its cause and the times are the common `RunResult` (``status``, decided by
+    `judge`, is the one verdict; ``ok`` and the exit code derive from it; ``task_time`` is
+    the sim time the run took). The cell's own: the executed actions with sim start/end
+    times, the objects' final plant poses, the robot's base path, when objects appeared,
+    which goals hold on the plant, warnings, every skill failure, the grasp and perception
+    modes, the RG's goal order (SMP-MRO §IV-B) and whether the scenario is perturbed.
     """
 
-    scenario: str
-    status: str  # SUCCESS | FAILURE | TIMEOUT
-    reason: str
-    actions: list[ActionLog]
-    final_poses: dict[str, ObjectPose]
-    sim_time: float
-    wall_time: float
-    cpu_time: float = 0.0  # process CPU time: the run's cost when other work shares the CPU
+    workcell: str = "smp-mro"
+    actions: list[ActionLog] = field(default_factory=list)
+    final_poses: dict[str, ObjectPose] = field(default_factory=dict)
     base_path: list[tuple[float, float, float]] = field(default_factory=list)
     appeared: dict[str, float] = field(default_factory=dict)
     goals: dict[str, bool] = field(default_factory=dict)
-    recording: str | None = None
     warnings: list[str] = field(default_factory=list)
-    cause: str | None = None  # tamp.sim.core.outcome.CAUSES; None on SUCCESS
     #: every skill failure: (sim time, action, cause, detail), recovered ones included
     failures: list[tuple[float, str, str, str]] = field(default_factory=list)
-    grasp: str = "weld"
-    perception: str = "truth"
-    seed: int | None = None  # set by a seeded run (`simulate.run_seeded`, ``--seed``)
-    perturbation: dict | None = None  # `tamp.perturbation.Applied.to_json()`
-
-    @property
-    def ok(self) -> bool:
-        """The task is done: the status is SUCCESS (tree and plant agree)."""
-        return self.status == "SUCCESS"
-
-    @property
-    def exit_code(self) -> int:
-        """0 when ``ok``, else 1 (what ``tamp simulate`` exits with)."""
-        return 0 if self.ok else 1
-
-    @property
-    def realtime_factor(self) -> float:
-        return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
-
-    @property
-    def cpu_realtime_factor(self) -> float:
-        return self.sim_time / self.cpu_time if self.cpu_time > 0 else math.inf
+    grasp: str
+    perception: str
+    order: list[str] = field(default_factory=list)
+    #: the scenario has a perturbation section (the report says what this seed drew)
+    perturbed: bool = False
 
     @property
     def executed(self) -> list[str]:
         return [a.action for a in self.actions if a.status == "SUCCESS"]
 
-    def to_json(self) -> dict:
+    def details_json(self) -> dict:
+        cpu_rtf = self.cpu_realtime_factor
         return {
-            "scenario": self.scenario,
-            "status": self.status,
-            "ok": self.ok,  # = status == "SUCCESS", kept for scripts that read it
-            "reason": self.reason,
+            "order": list(self.order),
             "actions": [a.to_json() for a in self.actions],
             "final_poses": {k: v.to_json() for k, v in sorted(self.final_poses.items())},
             "goals": self.goals,
             "appeared": {k: round(v, 3) for k, v in self.appeared.items()},
-            "sim_time": round(self.sim_time, 3),
-            "wall_time": round(self.wall_time, 3),
-            "realtime_factor": round(self.realtime_factor, 2),
-            "cpu_time": round(self.cpu_time, 3),
-            "cpu_realtime_factor": round(self.cpu_realtime_factor, 2),
-            "recording": self.recording,
+            "cpu_realtime_factor": round(cpu_rtf, 2) if math.isfinite(cpu_rtf) else None,
             "warnings": list(self.warnings),
-            "cause": self.cause,
-            "task_time": round(self.sim_time, 3),
             "failures": [
                 {"time": round(t, 3), "action": a, "cause": c, "detail": d}
                 for t, a, c, d in self.failures
             ],
             "grasp": self.grasp,
             "perception": self.perception,
-            "seed": self.seed,
-            "perturbation": self.perturbation,
         }
+
+    def details_lines(self) -> list[str]:
+        """The plan, the action table, the final plant poses, the goals on the plant,
+        warnings, skill failures and, for a perturbed scenario, what the seed drew."""
+        checks = f"(verified: {', '.join(self.verified)})" if self.verified else "(not verified)"
+        lines = [
+            f"scenario {self.scenario}: order {' -> '.join(self.order)}  {checks}",
+            f"{'action':<22} {'start':>8} {'end':>8}  status",
+        ]
+        for a in self.actions:
+            end = "-" if a.end is None else f"{a.end:8.2f}"
+            lines.append(f"{a.action:<22} {a.start:8.2f} {end:>8}  {a.outcome}")
+        lines.append("final object poses (plant, m / rad):")
+        for uid, p in sorted(self.final_poses.items()):
+            lines.append(f"  {uid:<4} x={p.x:7.3f} y={p.y:7.3f} z={p.z:6.3f} yaw={p.yaw:6.2f}")
+        for goal, inside in self.goals.items():
+            lines.append(f"  {goal}: {'inside' if inside else 'NOT inside'}")
+        lines += [f"warning: {w}" for w in self.warnings]
+        for t, action, cause, detail in self.failures:
+            lines.append(f"skill failure: t={t:.2f} s {action}: {cause} ({detail})")
+        if self.perturbed and self.perturbation is not None:
+            p = self.perturbation
+            mu = "as modelled" if p["friction"] is None else f"{p['friction']:.3f}"
+            lines.append(
+                f"seed {self.seed}: perturbation size {p['size']:.3f} m (largest object "
+                f"displacement), robot moved {p['robot_displacement']:.3f} m, friction "
+                f"{mu}, grasp {self.grasp}, perception {self.perception}"
+            )
+        return lines
 
 
 class SimRunner:
@@ -346,6 +345,7 @@ class SimRunner:
             reason=reason,
             actions=[a for a in ex.log],
             final_poses=poses,
+            task_time=run.sim_time,
             sim_time=run.sim_time,
             wall_time=run.wall_time,
             cpu_time=run.cpu_time,
@@ -357,6 +357,7 @@ class SimRunner:
             failures=skill_failures,
             grasp=s.scenario.grasp,
             perception=s.scenario.perception,
+            perturbed=bool(s.scenario.perturbation.fields()),
         )
 
     def goal_check(self, poses: dict[str, ObjectPose] | None = None) -> dict[str, str | None]:

@@ -5,18 +5,30 @@ scenario's cost (SMP-MRO §IV-B, Alg. 1), C_goal for the tree (§IV-C, Alg. 2), 
 verification gate on both — the order against the LTL encoding of the constraints and every
 execution of the tree over the symbolic domain (scripted appearances included, one skill
 failure allowed). A failed check raises `verification.VerificationError` (exit 1) with the
-counterexample, and nothing is simulated. `simulate_smp_mro` then builds the diagram around
-the *same* tree object and runs it (optionally recording a Meshcat animation).
+counterexample, and nothing is simulated. `simulate` then draws the seed's perturbation,
+builds the diagram around the *same* tree object and runs it (optionally recording a
+Meshcat animation). `SmpMroWorkcell` is the cell's `tamp.sim.core.workcell.Workcell`
+(``WORKCELL``): its options, ``load`` (a scenario file or packaged case, with ``--appear`` /
+``--fail``), ``perturbed``, ``build`` and ``run``. Drake is imported only inside functions,
+so listing the workcells builds nothing.
 """
 
 from __future__ import annotations
 
+import logging
+import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from tamp.errors import InputError
+from tamp.sim.core.workcell import Option
 from tamp.sim.smp.scenario import SimScenario
+
+if TYPE_CHECKING:
+    from tamp.sim.smp.runner import SimResult
 
 
 @dataclass
@@ -67,23 +79,24 @@ def prepare(scenario: SimScenario, *, verify: bool = True) -> Prepared:
     return prepared
 
 
-def simulate_smp_mro(
+def simulate(
     scenario: SimScenario,
     *,
     seed: int = 0,
-    verify: bool = True,
-    meshcat: Any = None,
     record: str | Path | None = None,
     max_sim_time: float | None = None,
+    verify: bool = True,
+    meshcat: Any = None,
     realtime_rate: float = 0.0,
-):
-    """Plan, verify, build and run; returns (`SimResult`, `Prepared`, `SmpStation`).
+) -> SimResult:
+    """Plan, verify, perturb by ``seed``, build and run ``scenario`` (module docstring).
 
     ``seed``: the run's draw of the scenario's perturbation (`tamp.sim.smp.perturb`); the
     same seed gives the same run, bit for bit on one machine (sim times, poses, actions).
     The plan and its verification use the nominal scenario (what the robot was shown).
-    ``record``: write a self-contained Meshcat animation (HTML) of the run there
-    (a local Meshcat server is started when ``meshcat`` is None).
+    ``record``: write a self-contained Meshcat animation (HTML) of the run there (a local
+    Meshcat server is started when ``meshcat`` is None). ``realtime_rate``: 0 runs as fast
+    as possible, 1.0 paces a live Meshcat view.
     """
     from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
     from tamp.sim.smp.perturb import perturb
@@ -91,46 +104,140 @@ def simulate_smp_mro(
     from tamp.sim.smp.station import build_station
 
     prepared = prepare(scenario, verify=verify)
-    scenario, applied = perturb(scenario, seed)
+    run_scenario, applied = perturb(scenario, seed)
     if record is not None and meshcat is None:
         meshcat = new_meshcat()
-    system = build_station(scenario, prepared.policy, meshcat=meshcat)
+    system = build_station(run_scenario, prepared.policy, meshcat=meshcat)
     runner = SimRunner(system, realtime_rate=realtime_rate)
     if record is not None:
         start_recording(system.visualizer)
     result = runner.run(max_sim_time=max_sim_time)
     result.seed = applied.seed
     result.perturbation = applied.to_json()
+    result.order = list(prepared.plan.order)
+    result.verified = {k: r.holds for k, r in prepared.reports.items()}
     if record is not None:
         result.recording = save_recording(system.visualizer, meshcat, record)
-    return result, prepared, system
+    return result
 
 
-def run_seeded(
-    scenario: str | Path,
-    seed: int,
-    *,
-    verify: bool = True,
-    max_sim_time: float | None = None,
-    record: str | Path | None = None,
-) -> dict[str, Any]:
-    """ONE seeded run of the scenario file (or packaged name) ``scenario``, as the JSON of
-    ``tamp simulate smp-mro --scenario S --seed N --json``: ``status``, ``cause`` (None on
-    success, else `tamp.sim.core.outcome.CAUSES`), ``task_time`` (sim s), ``seed``,
-    ``perturbation`` (the sample applied, its ``size``), ``wall_time``, ... The entry point
-    of ``tamp campaign --kind smp-mro`` (picklable arguments, builds everything inside)."""
-    from tamp.sim.smp.scenario import load_scenario, scenario_path
+class SmpMroWorkcell:
+    """The SMP-MRO youBot workcell as a `tamp.sim.core.workcell.Workcell`: what ``tamp
+    simulate smp-mro`` and ``tamp campaign --kind smp-mro`` run."""
 
-    loaded = load_scenario(scenario_path(scenario))
-    result, prepared, _ = simulate_smp_mro(
-        loaded, seed=seed, verify=verify, max_sim_time=max_sim_time, record=record
+    name = "smp-mro"
+    title = "SMP-MRO cases 1-3 (youBot pick-and-place)"
+    folder = "sim"
+    key = "demonstration"
+    main = Option(
+        "scenario",
+        "simulation scenario file or packaged name (overrides --case)",
+        flag="--scenario",
+        folder="sim",
     )
-    return run_json(result, prepared)
+    options = (
+        Option(
+            "case",
+            "packaged case, when no --scenario is given (default 1)",
+            type=int,
+            choices=(1, 2, 3),
+        ),
+        Option(
+            "appear",
+            "an object is put at PLACE (area name or x,y[,z] in the robot frame) at WHEN "
+            "(tick, t=SECONDS or after:Action(args)); without WHEN when the robot reaches it. "
+            "Overrides the file's entry for that object",
+            action="append",
+            metavar="OBJ@PLACE[@WHEN]",
+        ),
+        Option(
+            "fail",
+            "scripted skill failure: the first TIMES attempts fail, e.g. Pick(O1) or Pick(O1)x2",
+            action="append",
+            metavar="ACTION[(ARGS)][xTIMES]",
+        ),
+        Option("meshcat", "live view in a local Meshcat", stage="run", action="store_true"),
+        Option(
+            "rate",
+            "target real-time rate (default: as fast as possible; 1.0 with --meshcat)",
+            stage="run",
+            type=float,
+        ),
+    )
+    replay = "tamp simulate smp-mro --scenario {scenario} --seed {seed}"
+
+    def load(
+        self,
+        name_or_path: str | Path | None = None,
+        *,
+        case: int | None = None,
+        appear: Sequence[str] = (),
+        fail: Sequence[str] = (),
+    ) -> SimScenario:
+        """The scenario file (or packaged name; none: packaged case ``case``, default 1)
+        with the ``--appear`` / ``--fail`` entries applied (`SimScenario.with_events`)."""
+        from tamp.sim.smp.scenario import load_scenario
+        from tamp.world.events import check_events, parse_appear, parse_fail
+
+        scenario = load_scenario(name_or_path or f"case{case or 1}")
+        if appear or fail:
+            flags = [parse_appear(text, field="--appear") for text in appear or ()]
+            fails = [parse_fail(text, field="--fail") for text in fail or ()]
+            demo = scenario.demo
+            check_events(
+                flags,
+                fails,
+                objects=[o.id for o in scenario.objects],
+                areas=demo.initial_world().areas,
+                domain=demo.domain(),
+            )
+            scenario = scenario.with_events(flags, fails)
+        return scenario
+
+    def perturbed(self, scenario: SimScenario, seed: int) -> tuple[SimScenario, Any]:
+        from tamp.sim.smp.perturb import perturb
+
+        return perturb(scenario, seed)
+
+    def build(self, scenario: SimScenario, *, policy: Any = None, meshcat: Any = None) -> Any:
+        """The `SmpStation` of ``scenario`` around ``policy`` (default: its planned tree,
+        unverified)."""
+        from tamp.sim.smp.station import build_station
+
+        if policy is None:
+            policy = prepare(scenario, verify=False).policy
+        return build_station(scenario, policy, meshcat=meshcat)
+
+    def run(
+        self,
+        scenario: SimScenario,
+        *,
+        seed: int = 0,
+        record: str | Path | None = None,
+        max_sim_time: float | None = None,
+        verify: bool = True,
+        meshcat: bool = False,
+        rate: float | None = None,
+    ) -> SimResult:
+        """`simulate`; ``meshcat``: a live local Meshcat (its URL logged), ``rate``: the
+        real-time rate (>= 0; default 1.0 with ``meshcat``, else as fast as possible)."""
+        if rate is not None and not (math.isfinite(rate) and rate >= 0):
+            raise InputError(f"must be >= 0 (0: as fast as possible), got {rate}", field="--rate")
+        viewer = None
+        if meshcat:
+            from tamp.sim.core.recording import new_meshcat
+
+            viewer = new_meshcat()
+            logging.getLogger("tamp").info("meshcat: %s", viewer.web_url())
+        return simulate(
+            scenario,
+            seed=seed,
+            record=record,
+            max_sim_time=max_sim_time,
+            verify=verify,
+            meshcat=viewer,
+            realtime_rate=rate if rate is not None else (1.0 if meshcat else 0.0),
+        )
 
 
-def run_json(result, prepared: Prepared) -> dict[str, Any]:
-    """A run's JSON (``tamp simulate smp-mro --json``): the result, the order, the checks."""
-    payload = result.to_json()
-    payload["order"] = list(prepared.plan.order)
-    payload["verified"] = {k: r.holds for k, r in prepared.reports.items()}
-    return payload
+WORKCELL = SmpMroWorkcell()

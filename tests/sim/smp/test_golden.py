@@ -5,16 +5,20 @@ event vocabulary (`tamp.world.events`) and the Drake code to ``tamp/sim/{core,sm
 refactoring changed nothing a run does. Wall and CPU times (and their real-time factors)
 are left out; everything else, sim times and final plant poses included, must match.
 
-Changed on purpose by issue 17 (nothing a run does changed, only how it is reported): a
+Changed on purpose once (nothing a run does changed, only how it is reported): a
 ``MoveTo`` the tree halted once its goal held is ``"status": "HALTED"`` with ``"detail":
 "goal reached: IsRobotCloseTo(x)"`` (was ``CANCELLED``, ``""``), and every output has a
 ``warnings`` list (empty here: no appearance met an occupied place). ``ok`` now comes from
 `SimResult.to_json` (``status == "SUCCESS"``), the same value as before.
 
-Added by issue 18 (nothing a run does changed; every other value was compared equal before
+Added later (nothing a run does changed; every other value was compared equal before
 the files were rewritten): ``cause`` (None on success), ``task_time``, ``failures`` (the
 lost grasp's ``injected_failure``), ``grasp`` (weld), ``perception`` (truth), ``seed`` (0)
 and ``perturbation`` (nothing drawn: the packaged cases have no section).
+
+Every workcell's run document now starts with the common keys of
+`tamp.sim.core.workcell.RunResult`: ``schema`` and ``workcell`` are new (checked, not
+recorded); every other key and value is as recorded.
 """
 
 from __future__ import annotations
@@ -45,5 +49,6 @@ def test_simulated_output_is_unchanged(name, capsys):
     assert code == 0 and out["ok"] is True and out["status"] == "SUCCESS"
     for key in TIMING:
         assert out.pop(key) > 0
+    assert (out.pop("schema"), out.pop("workcell")) == (1, "smp-mro")  # the common keys' own
     expected = json.loads((GOLDEN / f"{name}.json").read_text())
     assert out == expected

@@ -74,7 +74,14 @@ def test_one_verdict_decides_status_reason_and_exit():
     assert judge(Status.FAILURE, "", [], 60) == ("FAILURE", "tree failed")
     assert judge(None, "", [], 60)[0] == "TIMEOUT"
     for status in ("SUCCESS", "FAILURE", "TIMEOUT"):
-        r = SimResult("x", status, "", [], {}, 1.0, 1.0)
+        r = SimResult(
+            scenario="x",
+            status=status,
+            sim_time=1.0,
+            wall_time=1.0,
+            grasp="weld",
+            perception="truth",
+        )
         data = r.to_json()
         assert data["status"] == status and data["ok"] is (status == "SUCCESS")
         assert r.exit_code == (0 if status == "SUCCESS" else 1)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from tamp.commands.main import main
-from tamp.sim.smp.simulate import run_seeded
+from tamp.sim.core.workcell import run_seeded
 
 from .helpers import verified_runner, write_one_bottle
 
@@ -45,7 +45,7 @@ def test_run_seeded_is_the_campaign_entry_point(tmp_path):
         "grasp: friction\nplant: {time_step: 0.005}\n"
         "perturbation: {objects: {xy: 0.02}, friction: [0.6, 0.9]}\n",
     )
-    out = run_seeded(str(path), 3, verify=False)
+    out = run_seeded("smp-mro", str(path), 3, verify=False)
     assert out["status"] == "SUCCESS" and out["cause"] is None and out["ok"] is True
     assert out["seed"] == 3 and 0.6 <= out["perturbation"]["friction"] <= 0.9
     assert out["task_time"] == out["sim_time"] > 5
@@ -59,7 +59,7 @@ def test_a_friction_grasp_slips_and_says_so(tmp_path):
         tmp_path,
         "grasp: friction\nplant: {time_step: 0.005}\nperturbation: {friction: [0.05, 0.05]}\n",
     )
-    out = run_seeded(str(path), 0, verify=False, max_sim_time=20)
+    out = run_seeded("smp-mro", str(path), 0, verify=False, max_sim_time=20)
     assert out["status"] != "SUCCESS"
     assert out["failures"] and out["failures"][0]["action"] == "Pick(O0)"
     assert out["failures"][0]["cause"] in ("grasp_slipped", "grasp_missed")
@@ -113,7 +113,7 @@ def test_an_injected_friction_grasp_failure_is_seen_and_retried(tmp_path, percep
         f"grasp: friction\nplant: {{time_step: 0.005}}\nperception: {perception}\n"
         'fail: ["Pick(O0)"]\n',
     )
-    out = run_seeded(str(path), 0, verify=False)
+    out = run_seeded("smp-mro", str(path), 0, verify=False)
     assert out["status"] == "SUCCESS", out["reason"]
     assert [f["cause"] for f in out["failures"]] == ["injected_failure"]
     assert [a["action"] for a in out["actions"] if a["status"] == "SUCCESS"][:2] == [
