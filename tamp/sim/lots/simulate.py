@@ -4,13 +4,18 @@
       LotsControllerSystem:  cell.observation, cell.skill_status ─► controller
                              controller.skill_command ─► cell.skill_command
 
-`simulate_lots` checks that the task and the cell scenario start from the same objects,
-builds the controller (its initial table passes the verification gate before anything
-moves), simulates in chunks until the controller stops or the time limit, and measures the
-result on the plant: counts per class in W^A, W^B and the waste basket from the objects'
-poses. The task counts as satisfied only when the controller completed its round and the
-plant's W^B is a W^B state that ends a round of the task (`Lots.is_goal`: the same verdict
-as ``tamp lots``, which applies it to its symbolic ground truth).
+A run's input is a `LotsScenario`: the LTL task (Zhou et al., IEEE T-ASE 2023, §III), the
+workcell scenario it runs in (`tamp.sim.lots.scenario`) and, optionally, a person's
+interference script, validated together when loaded (`LotsWorkcell.load`: the cell starts
+from the task's objects, the person brings in only classes the cell has). `simulate_lots`
+draws the seed's perturbation, builds the controller (its initial table passes the
+verification gate before anything moves), simulates in chunks until the controller stops or
+the time limit, and measures the result on the plant: counts per class in W^A, W^B and the
+waste basket from the objects' poses. The run is a SUCCESS only when the controller
+completed its round and the plant's W^B is a W^B state that ends a round of the task
+(`Lots.is_goal`: the same verdict as ``tamp lots``, which applies it to its symbolic ground
+truth). `LotsWorkcell` (``WORKCELL``) is the cell's `tamp.sim.core.workcell.Workcell`.
+Drake is imported only inside functions, so listing the workcells builds nothing.
 """
 
 from __future__ import annotations
@@ -19,41 +24,44 @@ import dataclasses
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
-
-from pydrake.systems.framework import Diagram, DiagramBuilder
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from tamp.errors import InputError
-from tamp.lots.controller import ActionRecord, LotsController
+from tamp.grasp.networks import DEFAULT_NETWORK, NETWORKS
 from tamp.lots.task import Event, Task
-from tamp.sim.core.executor import ActionLog
-from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
-from tamp.sim.core.runner import make_simulator, run_in_chunks
-from tamp.sim.lots.controller_system import PERIOD, LotsControllerSystem
-from tamp.sim.lots.person import (
-    REACTION,
-    RESTING_Z,
-    STAGING,
-    PersonAction,
-    on_shelf,
-    reaction_time,
-    slot_key,
-)
-from tamp.sim.lots.safety import SafetyStop
-from tamp.sim.lots.scenario import (
-    BASKET_HALF,
-    DEFAULT_WEIGHTS,
-    NETWORKS,
-    CellScenario,
-    perturbed,
-)
-from tamp.sim.lots.station import LotsStation, build_station
-from tamp.world.interface import Status
+from tamp.perturbation import Applied
+from tamp.sim.core.workcell import Option, RunResult
+from tamp.sim.lots.scenario import BASKET_HALF, DEFAULT_WEIGHTS, CellScenario, perturbed
+
+if TYPE_CHECKING:
+    from pydrake.systems.framework import Diagram
+
+    from tamp.lots.controller import ActionRecord, LotsController
+    from tamp.sim.core.executor import ActionLog
+    from tamp.sim.lots.controller_system import LotsControllerSystem
+    from tamp.sim.lots.person import PersonAction
+    from tamp.sim.lots.safety import SafetyStop
+    from tamp.sim.lots.station import LotsStation
 
 #: how far the simulator runs between checks of the controller's result (sim s)
 CHUNK = 0.5
 #: after the controller's result, how long the person may take to finish its trip (sim s)
 PERSON_GRACE = 15.0
+
+
+@dataclass(frozen=True)
+class LotsScenario:
+    """What one LOTS run takes: the task, the workcell scenario (its grasp network
+    chosen) and the person's interference events (empty: no person in the cell)."""
+
+    task: Task
+    cell: CellScenario
+    interference: tuple[Event, ...] = ()
+
+    @property
+    def name(self) -> str:
+        return self.task.name
 
 
 @dataclass
@@ -70,16 +78,22 @@ def build_lots_diagram(
     controller: LotsController,
     *,
     meshcat: Any = None,
-    period=PERIOD,
+    period: float | None = None,
     person: Sequence[Event] | None = None,
 ) -> LotsDiagram:
     """The cell diagram of ``scenario`` driven by ``controller`` (observation and skill status
     in, skill command out: nothing else reaches the controller). ``person``: interference
-    events a scripted person carries out in the cell (`tamp.sim.lots.person`)."""
+    events a scripted person carries out in the cell (`tamp.sim.lots.person`). ``period``:
+    the controller's tick (default `tamp.sim.lots.controller_system.PERIOD`)."""
+    from pydrake.systems.framework import DiagramBuilder
+
+    from tamp.sim.lots.controller_system import PERIOD, LotsControllerSystem
+    from tamp.sim.lots.station import build_station
+
     cell = build_station(scenario, meshcat=meshcat, person=person)
     builder = DiagramBuilder()
     sub = builder.AddSystem(cell.diagram)
-    ctrl = builder.AddSystem(LotsControllerSystem(controller, period=period))
+    ctrl = builder.AddSystem(LotsControllerSystem(controller, period=period or PERIOD))
     builder.Connect(sub.GetOutputPort("observation"), ctrl.observation_port)
     builder.Connect(sub.GetOutputPort("skill_status"), ctrl.skill_status_port)
     builder.Connect(ctrl.command_port, sub.GetInputPort("skill_command"))
@@ -88,73 +102,99 @@ def build_lots_diagram(
     return LotsDiagram(diagram, cell, ctrl)
 
 
-@dataclass
-class LotsSimResult:
-    """A finished workcell run: verdict, skill log (sim times), robot actions, measurements."""
+@dataclass(kw_only=True)
+class LotsSimResult(RunResult):
+    """A finished workcell run: the common verdict (`RunResult`: ``status`` is SUCCESS only
+    when ``satisfied``), the task, what the controller said (``controller_status``), the
+    skill log (sim times), robot and person actions, and what the plant shows at the end."""
 
-    task: str
-    scenario: str
-    status: str  # SUCCESS | FAILURE | TIMEOUT (the controller's result, or no result in time)
-    reason: str
-    satisfied: bool
-    actions: list[ActionLog]
-    robot_actions: list[ActionRecord]
-    replans: int
-    frames_rendered: int
-    grasps: dict[str, int]
-    sim_time: float
-    wall_time: float
-    final_counts: dict[str, dict[str, int]]
+    workcell: str = "lots"
+    task: str = ""
+    formula: str = ""
+    satisfied: bool = False
+    controller_status: str = "TIMEOUT"  # the controller's result (TIMEOUT: none in time)
+    actions: list[ActionLog] = field(default_factory=list)
+    robot_actions: list[ActionRecord] = field(default_factory=list)
+    replans: int = 0
+    frames_rendered: int = 0
+    grasps: dict[str, int] = field(default_factory=dict)
+    final_counts: dict[str, dict[str, int]] = field(default_factory=dict)
     elsewhere: list[str] = field(default_factory=list)  # objects in no workspace nor basket
-    network: str = "hrgnet"
-    recording: str | None = None
+    network: str = DEFAULT_NETWORK
     safety_stops: list[SafetyStop] = field(default_factory=list)
-    seed: int = 0
-    perturbation: dict | None = None  # `tamp.perturbation.Applied.to_json()`
-
-    @property
-    def cause(self) -> str | None:
-        """Why the run failed, one of `tamp.sim.core.outcome.CAUSES` (None when satisfied)."""
-        return lots_cause(self)
-
     person_actions: list[PersonAction] = field(default_factory=list)
     never_happened: list[Event] = field(default_factory=list)  # scripted, run ended first
+    perturbed: bool = False  # the scenario has a perturbation section
 
-    @property
-    def rtf(self) -> float:
-        return self.sim_time / self.wall_time if self.wall_time > 0 else float("inf")
-
-    @property
-    def exit_code(self) -> int:
-        return 0 if self.satisfied else 1
-
-    def to_json(self) -> dict[str, Any]:
+    def details_json(self) -> dict[str, Any]:
         return {
             "task": self.task,
-            "scenario": self.scenario,
             "grasp": self.network,
-            "status": self.status,
-            "reason": self.reason,
             "satisfied": self.satisfied,
+            "controller_status": self.controller_status,
             "actions": [a.to_json() for a in self.actions],
             "robot_actions": [a.to_json() for a in self.robot_actions],
             "replans": self.replans,
             "safety_stops": [stop.to_json() for stop in self.safety_stops],
             "frames_rendered": self.frames_rendered,
             "grasps": dict(self.grasps),
-            "sim_time": round(self.sim_time, 3),
-            "wall_time": round(self.wall_time, 3),
-            "rtf": round(self.rtf, 3),
             "final_counts": self.final_counts,
             "elsewhere": self.elsewhere,
             "person_actions": [a.to_json() for a in self.person_actions],
             "never_happened": [e.never_happened() for e in self.never_happened],
-            "recording": self.recording,
-            "cause": self.cause,
-            "task_time": round(self.sim_time, 3),
-            "seed": self.seed,
-            "perturbation": self.perturbation,
         }
+
+    def details_lines(self) -> list[str]:
+        lines = [
+            f"task {self.task}: {self.formula}  (workcell {self.scenario}, grasp {self.network})",
+            f"{'skill':<22} {'start':>8} {'end':>8}  status",
+        ]
+        for a in self.actions:
+            end = "-" if a.end is None else f"{a.end:8.2f}"
+            lines.append(f"{a.action:<22} {a.start:8.2f} {end:>8}  {a.outcome}  {a.detail}")
+        lines += [f"  {a.index:2d}. {a.text()}" for a in self.robot_actions]
+        for p in self.person_actions:
+            end = "-" if p.end is None else f"{p.end:.2f}"
+            what = f"{p.uid or '-'} {p.src}→{p.dst}"
+            detail = f" ({p.detail})" if p.detail else ""
+            lines.append(
+                f"  person: {p.event.describe()} {p.event.when()}: {what} {p.start:.2f}–{end} s, "
+                f"{p.outcome}{detail}"
+            )
+        lines += [e.never_happened() for e in self.never_happened]
+        c = self.final_counts
+        lines.append(f"final (plant): W^A {c['A']}  W^B {c['B']}  waste {c['waste']}")
+        if self.elsewhere:
+            lines.append(f"elsewhere: {', '.join(self.elsewhere)}")
+        for stop in self.safety_stops:
+            lines.append(
+                f"safety stop at {stop.time:.2f} s: {stop.cause} ({stop.detail}), "
+                f"held {stop.duration:.2f} s"
+            )
+        g = self.grasps
+        lines.append(
+            f"replans {self.replans}, grasps {g['successes']}/{g['attempts']}, "
+            f"frames {self.frames_rendered}, safety stops {len(self.safety_stops)}"
+        )
+        if self.perturbed and self.perturbation is not None:
+            lines.append(f"seed {self.seed}: perturbation size {self.perturbation['size']:.3f} m")
+        return lines
+
+
+def lots_verdict(
+    controller_status: str, satisfied: bool, actions: Sequence[ActionLog]
+) -> tuple[str, str | None]:
+    """The run's status and cause (`tamp.sim.core.outcome.run_cause`): SUCCESS when the task
+    is satisfied on the plant; ``placement_off`` (a FAILURE) when the controller completed
+    its round but the plant's W^B ends none; else the controller's status with the cause the
+    last failed skill reported (`SkillStatus.cause`)."""
+    from tamp.sim.core.outcome import run_cause
+
+    if satisfied:
+        return "SUCCESS", None
+    status = "FAILURE" if controller_status == "SUCCESS" else controller_status
+    causes = [a.cause or "task_failed" for a in actions if a.status == "FAILURE"]
+    return status, run_cause(status, causes, plant_disagrees=controller_status == "SUCCESS")
 
 
 def scenario_counts(scenario: CellScenario) -> dict[str, dict[str, int]]:
@@ -179,6 +219,21 @@ def check_matches(task: Task, scenario: CellScenario) -> None:
             )
 
 
+def check_person_classes(events: Sequence[Event], scenario: CellScenario) -> None:
+    """Every class the person brings in must be a class of the workcell scenario, packaged
+    or its own (`InputError` naming the interference file's ``events[i].class``)."""
+    names = scenario.class_names
+    for e in events:
+        if e.kind == "add" and e.cls not in names:
+            file, _, where = e.where.partition(": ")
+            raise InputError(
+                f"the workcell has no {e.cls!r} objects for the person to bring in "
+                f"(classes: {', '.join(sorted(names))})",
+                file=file or None,
+                field=f"{where}.class" if where else "class",
+            )
+
+
 def with_network(scenario: CellScenario, network: str | None) -> CellScenario:
     """``scenario`` with grasp network ``network`` (None: the scenario's own)."""
     if network is None or network == scenario.grasp.network:
@@ -197,6 +252,8 @@ def with_network(scenario: CellScenario, network: str | None) -> CellScenario:
 def plant_counts(cell: LotsStation, plant_context) -> tuple[dict[str, dict[str, int]], list[str]]:
     """Counts per class in W^A, W^B and the waste basket from the objects' plant poses, and
     the objects lying in none of them (held, on the floor, elsewhere on the table)."""
+    from tamp.sim.lots.person import RESTING_Z, STAGING, on_shelf
+
     plant, scenario = cell.plant, cell.scenario
     counts: dict[str, dict[str, int]] = {"A": {}, "B": {}, "waste": {}}
     if cell.cell.staged:
@@ -222,39 +279,65 @@ def plant_counts(cell: LotsStation, plant_context) -> tuple[dict[str, dict[str, 
     return counts, elsewhere
 
 
+def perturbed_run(scenario: LotsScenario, seed: int) -> tuple[LotsScenario, Applied]:
+    """``scenario`` as run ``seed`` draws it: the cell's objects, friction, depth noise and
+    chance grasp failures (`tamp.sim.lots.scenario.perturbed`), and the person's reaction
+    time of each scripted slot (`tamp.sim.lots.person.reaction_time`), all in one record."""
+    cell, applied = perturbed(scenario.cell, seed)
+    if scenario.interference and cell.perturbation.timing_jitter > 0:
+        from tamp.sim.lots.person import REACTION, reaction_time, slot_key
+
+        for n, phase in sorted({(e.after, e.phase) for e in scenario.interference}):
+            shift = reaction_time(cell.sample, n, phase) - REACTION
+            applied.timing[slot_key(n, phase)] = shift
+    return dataclasses.replace(scenario, cell=cell), applied
+
+
+class TableGate:
+    """The verification gate on every table the LOTS controller builds (`verification.gate`:
+    the initial one before anything moves, each replanned one before it is used); what it
+    raises propagates. ``holds``: every table checked so far was proved."""
+
+    def __init__(self) -> None:
+        self.reports: list[Any] = []
+
+    def __call__(self, controller: LotsController) -> None:
+        from verification import gate
+
+        self.reports.append(gate(controller))
+
+    @property
+    def verified(self) -> dict[str, bool]:
+        return {"table": all(r.holds for r in self.reports)} if self.reports else {}
+
+
 def simulate_lots(
-    scenario: CellScenario,
-    task: Task,
-    interference: Any = None,
+    scenario: LotsScenario,
     *,
-    grasp: str | None = None,
     seed: int = 0,
-    record: str | None = None,
+    record: str | Path | None = None,
     meshcat: Any = None,
     max_sim_time: float | None = None,
-    check=None,
+    verify: bool = True,
 ) -> LotsSimResult:
-    """Run ``task`` in the workcell of ``scenario`` (see the module docstring).
+    """Run ``scenario`` (see the module docstring); ``seed`` draws the perturbation and the
+    controller's tree update. ``verify``: pass every table through the verification gate
+    (`TableGate`; False: no gate). With interference events, a scripted person's hand
+    carries them out, and the run also waits (at most `PERSON_GRACE` s) for the person to
+    finish what it started."""
+    from tamp.lots.controller import LotsController
+    from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
+    from tamp.sim.core.runner import make_simulator, run_in_chunks
+    from tamp.world.interface import Status
 
-    ``check``: the verification gate (`verification.gate`), called on every table before it
-    is used; what it raises propagates. ``interference``: the events of an interference file
-    (`tamp.lots.task.load_events`), carried out by a scripted person's hand; the run then
-    also waits (at most `PERSON_GRACE` s) for the person to finish what it started.
-    """
-    scenario, applied = perturbed(scenario, seed)  # the run's draw of its perturbation
-    scenario = with_network(scenario, grasp)
-    check_matches(task, scenario)
-    events = list(interference) if interference else None
-    if events:
-        check_person_classes(events, scenario)
-        for n, phase in sorted({(e.after, e.phase) for e in events}):  # the drawn reactions
-            if scenario.perturbation.timing_jitter > 0:
-                shift = reaction_time(scenario.sample, n, phase) - REACTION
-                applied.timing[slot_key(n, phase)] = shift
-    controller = LotsController(task, seed=seed, check=check)  # the gate runs here
+    run, applied = perturbed_run(scenario, seed)  # the run's draw of its perturbation
+    cell_scenario, task = run.cell, run.task
+    gate = TableGate() if verify else None
+    controller = LotsController(task, seed=seed, check=gate)  # the gate runs here
     if record and meshcat is None:
         meshcat = new_meshcat()
-    built = build_lots_diagram(scenario, controller, meshcat=meshcat, person=events)
+    events = list(run.interference) or None
+    built = build_lots_diagram(cell_scenario, controller, meshcat=meshcat, person=events)
     if record:
         start_recording(built.cell.visualizer)
     simulator = make_simulator(built.diagram)
@@ -273,24 +356,26 @@ def simulate_lots(
             return True
         return person.state(person_context).idle  # let the person put down what it holds
 
-    limit = max_sim_time if max_sim_time is not None else scenario.max_sim_time
-    t0 = time.perf_counter()
-    run = run_in_chunks(simulator, chunk=CHUNK, limit=limit, between=finished)
-    wall = time.perf_counter() - t0
+    limit = max_sim_time if max_sim_time is not None else cell_scenario.max_sim_time
+    t0, c0 = time.perf_counter(), time.process_time()
+    chunks = run_in_chunks(simulator, chunk=CHUNK, limit=limit, between=finished)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     cell = built.cell
     s = ctrl.state(ctrl_context)
     counts, elsewhere = plant_counts(cell, cell.plant.GetMyContextFromRoot(context))
     c = s.controller
-    status = s.result.value if s.result is not None else "TIMEOUT"
-    reason = s.reason if s.result is not None else f"no result within {limit:g} s of sim time"
+    controller_status = s.result.value if s.result is not None else "TIMEOUT"
+    why = s.reason if s.result is not None else f"no result within {limit:g} s of sim time"
     truth = c.lots.vector(counts["B"])
     satisfied = s.result is Status.SUCCESS and c.lots.is_goal(truth)
     if s.result is Status.SUCCESS and not satisfied:
-        reason = (
+        why = (
             f"the controller completed its round, but the plant's W^B holds "
             f"{c.lots.format(truth)}, which ends no round of the task "
             f"(planned: {c.lots.format(c.lots.final)})"
         )
+    log = list(s.log)
+    status, cause = lots_verdict(controller_status, satisfied, log)
     skills = cell.skills.state(cell.skills.GetMyContextFromRoot(context))
     perception = cell.perception.state(cell.perception.GetMyContextFromRoot(context))
     recording = save_recording(cell.visualizer, meshcat, record) if record else None
@@ -300,90 +385,123 @@ def simulate_lots(
         frames, stops = frames + safety.frames, safety.all_stops(context.get_time())
     ps = None if person is None else person.state(person_context)
     return LotsSimResult(
-        task=task.name,
-        scenario=scenario.name,
+        scenario=cell_scenario.name,
         status=status,
-        reason=reason,
+        reason="task satisfied" if satisfied else f"task NOT satisfied: {why}",
+        cause=cause,
+        task_time=None if s.result is None else chunks.sim_time,
+        sim_time=chunks.sim_time,
+        wall_time=wall,
+        cpu_time=cpu,
+        seed=applied.seed,
+        perturbation=applied.to_json(),
+        recording=recording,
+        verified=gate.verified if gate is not None else {},
+        task=task.name,
+        formula=task.formula,
         satisfied=satisfied,
-        actions=list(s.log),
+        controller_status=controller_status,
+        actions=log,
         robot_actions=list(c.actions),
         replans=c.replans,
         frames_rendered=frames,
         grasps={"attempts": skills.grasp_attempts, "successes": skills.grasp_successes},
-        sim_time=run.sim_time,
-        wall_time=wall,
         final_counts=counts,
         elsewhere=elsewhere,
-        network=scenario.grasp.network,
-        recording=recording,
+        network=cell_scenario.grasp.network,
         safety_stops=stops,
-        seed=applied.seed,
-        perturbation=applied.to_json(),
         person_actions=[] if ps is None else list(ps.actions),
         never_happened=[] if ps is None else ps.script.unfired(),
+        perturbed=bool(cell_scenario.perturbation.fields()),
     )
 
 
-def lots_cause(result: LotsSimResult) -> str | None:
-    """The run's cause (`tamp.sim.core.outcome.run_cause`): the cause the last failed skill
-    reported (`SkillStatus.cause`), ``placement_off`` when the controller finished but the
-    plant's W^B ends no round."""
-    from tamp.sim.core.outcome import run_cause
+class LotsWorkcell:
+    """The LOTS arm workcell as a `tamp.sim.core.workcell.Workcell`: what ``tamp simulate
+    lots`` and ``tamp campaign --kind lots`` run. Its main input is the LTL task
+    (``tamp/scenarios/lots``, told apart by its ``formula`` key)."""
 
-    if result.satisfied:
-        return None
-    causes = [a.cause or "task_failed" for a in result.actions if a.status == "FAILURE"]
-    status = "FAILURE" if result.status == "SUCCESS" else result.status
-    return run_cause(status, causes, plant_disagrees=result.status == "SUCCESS")
-
-
-def run_seeded(
-    task: str,
-    seed: int,
-    *,
-    scenario: str | None = None,
-    interference: str | None = None,
-    grasp: str | None = None,
-    max_sim_time: float | None = None,
-    record: str | None = None,
-) -> dict[str, Any]:
-    """ONE seeded run of LOTS task ``task`` (file or packaged name) in the workcell
-    ``scenario`` (default: the packaged one named like the task), with the person's
-    ``interference`` file (events, as ``--interference``) if given, as the JSON of
-    ``tamp simulate lots --task T --seed N --json``: ``status``, ``cause``, ``task_time``
-    (sim s), ``seed``, ``perturbation``, ``satisfied``, ... The entry point of
-    ``tamp campaign --kind lots``; ``seed`` drives the perturbation draw and the
-    controller's tree update."""
-    from tamp.lots.task import load_events, load_task
-    from tamp.sim.lots.scenario import load_cell_scenario
-    from verification import gate
-
-    loaded = load_task(task)
-    cell = load_cell_scenario(scenario or loaded.name)
-    events = load_events(interference, loaded) if interference else None
-    result = simulate_lots(
-        cell,
-        loaded,
-        events,
-        grasp=grasp,
-        seed=seed,
-        record=record,
-        max_sim_time=max_sim_time,
-        check=gate,
+    name = "lots"
+    title = "LOTS task in the Drake workcell (arm with wrist camera, LOTS controller)"
+    folder = "lots"
+    key = "formula"
+    main = Option(
+        "task", "LTL task file or packaged task name", flag="--task", required=True, folder="lots"
     )
-    return result.to_json()
+    options = (
+        Option(
+            "scenario",
+            "workcell scenario file (default: the packaged lots_sim scenario of the task's name)",
+            metavar="CELL.yaml",
+            campaign=True,
+            folder="lots_sim",
+        ),
+        Option(
+            "interference",
+            "human interference script: a scripted person's hand carries it out",
+            metavar="EVENTS.yaml",
+            campaign=True,
+            folder="lots",
+        ),
+        Option("grasp", "grasp network (default: the scenario's)", choices=tuple(NETWORKS)),
+    )
+    replay = "tamp simulate lots --task {scenario} --seed {seed}"
 
+    def load(
+        self,
+        name_or_path: str | Path,
+        *,
+        scenario: str | Path | None = None,
+        interference: str | Path | None = None,
+        grasp: str | None = None,
+    ) -> LotsScenario:
+        """The task (file or packaged name), the workcell scenario (default: the packaged
+        one named like the task) with grasp network ``grasp``, and the interference events,
+        checked together: the cell starts from the task's objects, the person brings in
+        only classes the cell has (`InputError` naming file and field)."""
+        from tamp.lots.task import load_events, load_task
+        from tamp.scenarios import resolve
+        from tamp.sim.lots.scenario import load_cell_scenario
 
-def check_person_classes(events: Sequence[Event], scenario: CellScenario) -> None:
-    """Every class the person brings in must be a class of the workcell scenario, packaged
-    or its own (`InputError` naming the interference file's ``events[i].class``)."""
-    names = scenario.class_names
-    for e in events:
-        if e.kind == "add" and e.cls not in names:
-            file, _, where = e.where.partition(": ")
+        task = load_task(name_or_path)
+        events = load_events(interference, task) if interference else []
+        if scenario is None and not resolve(task.name, "lots_sim").is_file():
             raise InputError(
-                f"the workcell has no {e.cls!r} objects for the person to bring in "
-                f"(classes: {', '.join(sorted(names))})",
-                file=file or None,
-                field=f"{where}.class" if where else "class",
+                f"no packaged workcell scenario for task {task.name!r}: give one",
+                field="--scenario",
             )
+        cell = with_network(load_cell_scenario(scenario or task.name), grasp)
+        check_matches(task, cell)
+        check_person_classes(events, cell)
+        return LotsScenario(task, cell, tuple(events))
+
+    def perturbed(self, scenario: LotsScenario, seed: int) -> tuple[LotsScenario, Applied]:
+        return perturbed_run(scenario, seed)
+
+    def build(
+        self, scenario: LotsScenario, *, controller: LotsController | None = None, meshcat=None
+    ) -> LotsDiagram:
+        """The workcell with the LOTS controller of ``scenario``'s task (default: a new one,
+        unverified) and the person's events."""
+        from tamp.lots.controller import LotsController
+
+        controller = controller or LotsController(scenario.task)
+        events = list(scenario.interference) or None
+        return build_lots_diagram(scenario.cell, controller, meshcat=meshcat, person=events)
+
+    def run(
+        self,
+        scenario: LotsScenario,
+        *,
+        seed: int = 0,
+        record: str | Path | None = None,
+        max_sim_time: float | None = None,
+        verify: bool = True,
+    ) -> LotsSimResult:
+        """`simulate_lots`."""
+        return simulate_lots(
+            scenario, seed=seed, record=record, max_sim_time=max_sim_time, verify=verify
+        )
+
+
+WORKCELL = LotsWorkcell()

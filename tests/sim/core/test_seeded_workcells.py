@@ -173,33 +173,46 @@ def test_refine_seeded_runs_repeat_per_seed(tmp_path):
     assert a["seed"] == 5 and set(a["perturbation"]["robots"]) == {"R1", "R2"}
 
 
-def _lots_result(status, satisfied, failures):
+def _lots_result(controller, satisfied, failures):
     from tamp.sim.core.executor import ActionLog
-    from tamp.sim.lots.simulate import LotsSimResult
+    from tamp.sim.lots.simulate import LotsSimResult, lots_verdict
 
     actions = [
         ActionLog(i + 1, "Pick(peak)", 1.0, 2.0, "FAILURE" if c else "SUCCESS", "", c)
         for i, c in enumerate(failures)
     ]
+    status, cause = lots_verdict(controller, satisfied, actions)
     return LotsSimResult(
-        "tower", "tower", status, "", satisfied, actions, [], 0, 0, {}, 10.0, 1.0, {}
+        scenario="tower",
+        task="tower",
+        status=status,
+        cause=cause,
+        satisfied=satisfied,
+        controller_status=controller,
+        actions=actions,
+        task_time=10.0,
+        sim_time=10.0,
+        wall_time=1.0,
+        seed=0,
     )
 
 
 @pytest.mark.parametrize(
-    ("status", "satisfied", "failures", "cause"),
+    ("controller", "satisfied", "failures", "status", "cause"),
     [
-        ("SUCCESS", True, ["grasp_slipped"], None),
-        ("SUCCESS", False, [], "placement_off"),
-        ("TIMEOUT", False, ["grasp_missed"], "timeout"),
-        ("FAILURE", False, ["grasp_missed"], "grasp_missed"),
-        ("FAILURE", False, ["object_not_found", "grasp_slipped"], "grasp_slipped"),
-        ("FAILURE", False, [None], "task_failed"),  # a failure without a cause
+        ("SUCCESS", True, ["grasp_slipped"], "SUCCESS", None),
+        ("SUCCESS", False, [], "FAILURE", "placement_off"),  # the plant disagrees
+        ("TIMEOUT", False, ["grasp_missed"], "TIMEOUT", "timeout"),
+        ("FAILURE", False, ["grasp_missed"], "FAILURE", "grasp_missed"),
+        ("FAILURE", False, ["object_not_found", "grasp_slipped"], "FAILURE", "grasp_slipped"),
+        ("FAILURE", False, [None], "FAILURE", "task_failed"),  # a failure without a cause
     ],
 )
-def test_lots_runs_name_their_cause(status, satisfied, failures, cause):
-    """The run's cause is the one the last failed skill reported (never parsed from words)."""
-    r = _lots_result(status, satisfied, failures)
-    assert r.cause == cause
+def test_lots_runs_name_their_cause(controller, satisfied, failures, status, cause):
+    """The run's cause is the one the last failed skill reported (never parsed from words);
+    its status is SUCCESS only when the plant satisfies the task."""
+    r = _lots_result(controller, satisfied, failures)
+    assert (r.status, r.cause, r.ok) == (status, cause, satisfied)
     out = r.to_json()
     assert out["cause"] == cause and out["task_time"] == 10.0 and out["seed"] == 0
+    assert out["controller_status"] == controller and out["satisfied"] is satisfied
