@@ -1,7 +1,8 @@
 """Wall time of a whole ``tamp refine`` per task and the simulation's real-time factor.
 
-For each packaged task (seed 002, Tasks 1-4): the four phases plus the tuning run, each
-simulated in the workcell (SAP, 10 ms step, Channels/executors/supervisor on the same
+For each packaged task (Figueroa Heredia et al. 2018, Tasks 1-4): the four phases plus the
+tuning run, each
+simulated in the workcell (SAP, 10 ms step, Channels/state machines/supervisor on the same
 tick). Reports the task time of each phase (sim seconds, measured), the rate found, the
 reduction beside the paper's, what each phase did to the object (the chair's hinge angle,
 the scale's tilt: `tamp.sim.refine.outcome`), what was parallelized or reverted, the total

@@ -44,8 +44,7 @@ def run(args: argparse.Namespace) -> int:
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
     from pathlib import Path
 
-    from tamp.refine.architecture import default_architecture, load_architecture
-    from tamp.refine.loader import dump_program, load_program
+    from tamp.refine.loader import dump_program
 
     for option, value, parents in (
         ("--gantt", args.gantt, True),
@@ -55,16 +54,11 @@ def run(args: argparse.Namespace) -> int:
         if value:
             output_file(value, option, make_parents=parents)
     from tamp.perturbation import check_seed
-    from tamp.sim.refine.scenario import load_scene
-    from tamp.sim.refine.simulate import perturbed_program, program_perturbation
+    from tamp.sim.refine.simulate import WORKCELL
 
     check_seed(args.seed)
-    nominal = load_program(args.task)
-    program, applied = perturbed_program(nominal, program_perturbation(nominal), args.seed)
-    arch = (
-        load_architecture(program.architecture) if program.architecture else default_architecture()
-    )
-    scene = load_scene(program.scene)
+    scenario, applied = WORKCELL.perturbed(WORKCELL.load(args.task), args.seed)
+    program, arch, scene = scenario.program, scenario.architecture, scenario.scene
     if args.no_verify:
         warn_unverified("tamp refine", "each refined program")
 

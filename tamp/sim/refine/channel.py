@@ -7,14 +7,14 @@ changes it only in its periodic update, once per plant step Δ (the workcell's t
    one message per sensor (force, IMU, odometry) created at that time, carrying the
    reading of `SensorReadings` at that time (the plant's state is held between its steps,
    so a sample between two steps carries the previous step's reading, kept in the state);
-2. the command the executor published at its last tick enters the network at its
+2. the command the state machine published at its last tick enters the network at its
    creation time;
 3. the network advances to now; what it delivers becomes visible: the latest delivered
-   sample of each sensor (``delivered`` output, what the executor reads) and the latest
+   sample of each sensor (``delivered`` output, what the state machine reads) and the latest
    delivered command, whose setpoints the actuators' sub-CPU applies (``actuation``
    output: the plant's desired state).
 
-So a sample that queued behind other messages arrives late, and the executor decides on
+So a sample that queued behind other messages arrives late, and the state machine decides on
 stale data; a command that queued reaches the actuators late. Nothing here is a formula
 of the delay: the delay is what the queues did.
 """

@@ -1,4 +1,10 @@
-"""What the refinement workcell loads besides the program: the scene (YAML, ``version: 1``).
+"""What the refinement workcell loads: a program with its architecture and its scene.
+
+`load_scenario` reads a program file (`tamp.refine.loader`), its communication
+architecture (the packaged calibrated one unless the program names another) and the scene
+it runs in into a `RefineScenario`; the program's ``perturbation`` section may ask only for
+what this workcell simulates (`PERTURBED`: each robot's start pose). The scene is the
+cell's own file format (YAML, ``version: 1``), below.
 
 A scene (Figueroa Heredia et al. 2018, Fig. 9) declares the task's objects, where each lies
 and what the task must achieve with them, measured on the plant at the end of a run. A
@@ -45,13 +51,18 @@ from pathlib import Path
 
 from tamp.errors import InputError
 from tamp.fileio import Fields, load_yaml
-from tamp.refine.loader import scene_path
+from tamp.perturbation import Perturbation
+from tamp.refine.architecture import Architecture, default_architecture, load_architecture
+from tamp.refine.loader import load_program, scene_path
 from tamp.refine.measure import Goal
+from tamp.refine.program import Program
 from tamp.schema import load_dataclass, spec
 from tamp.sim.core.models import PACKAGE, model_url, models_dir, sdf_path
 
 #: model files a scene may name (Drake's parser reads both)
 MODEL_SUFFIXES = (".sdf", ".urdf")
+#: the ``perturbation`` fields this workcell simulates
+PERTURBED = ("robot",)
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
@@ -157,3 +168,31 @@ def load_scene(name_or_path: str | Path) -> Scene:
         description=scene.description.strip(),
         file=file,
     )
+
+
+@dataclass(frozen=True)
+class RefineScenario:
+    """One run's input: the program, the architecture it is measured under, its scene."""
+
+    program: Program
+    architecture: Architecture
+    scene: Scene
+
+
+def program_perturbation(program: Program) -> Perturbation:
+    """``program``'s ``perturbation`` section, refused (`InputError` naming the field) when
+    it asks for what this workcell does not simulate."""
+    program.perturbation.require(PERTURBED, "refinement")
+    return program.perturbation
+
+
+def load_scenario(name_or_path: str | Path) -> RefineScenario:
+    """A program file (or packaged name such as ``task4``) with its architecture and its
+    scene, every file validated (`InputError` naming file and field, nothing half-done)."""
+    program = load_program(name_or_path)
+    program_perturbation(program)
+    if program.architecture:
+        architecture = load_architecture(program.architecture)
+    else:
+        architecture = default_architecture()
+    return RefineScenario(program, architecture, load_scene(program.scene))

@@ -13,34 +13,39 @@ and fired events in sim time. At the end it measures what the objects did
 (`tamp.sim.refine.outcome`: the chair's hinge angle, the scale's tilt) against the scene's
 goals.
 
-Seeded runs (``tamp refine --seed N``, campaigns): the program file's ``perturbation``
-section (`Program.perturbation`, read by the loader) drawn for one seed and applied to the
-program. The workcell simulates the ``robot`` field only (`PERTURBED`): each robot's start
-pose ``(x, y, yaw)`` is moved by its own draw (`PerturbationSample.robot_offset`, keyed by
-the robot's name). The scene's objects lie where the scene puts them; a section asking for
-more is refused naming the field. A start moved onto the object shows as a collision or an
-unfinished run, which is what a perturbation is for.
+Seeded runs (``tamp refine --seed N``, ``tamp simulate refine``, campaigns): the program
+file's ``perturbation`` section (`Program.perturbation`, read by the loader) drawn for one
+seed and applied to the program (`perturbed_program`). The workcell simulates the
+``robot`` field only (`tamp.sim.refine.scenario.PERTURBED`): each robot's start pose
+``(x, y, yaw)`` is moved by its own draw (`PerturbationSample.robot_offset`, keyed by the
+robot's name). The scene's objects lie where the scene puts them. A start moved onto the
+object shows as a collision or an unfinished run, which is what a perturbation is for.
+
+`RefineWorkcell` (``WORKCELL``) is the cell's `tamp.sim.core.workcell.Workcell`: ONE
+seeded run of a program as given (no refinement), judged by its events and its measured
+event order. Drake is imported only inside functions, so listing the workcells builds
+nothing.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tamp.perturbation import Applied, Perturbation, check_seed
 from tamp.refine.architecture import Architecture
 from tamp.refine.measure import Run
 from tamp.refine.program import Program
 from tamp.refine.timeline import Timeline
-from tamp.sim.core.runner import make_simulator, run_in_chunks
-from tamp.sim.refine.outcome import measure, start_heights
-from tamp.sim.refine.scenario import Scene, load_scene
-from tamp.sim.refine.station import RefineStation, build_station, search_of
+from tamp.sim.core.workcell import Option, RunResult
+from tamp.sim.refine.scenario import RefineScenario, Scene, load_scenario, load_scene
+
+if TYPE_CHECKING:
+    from tamp.sim.refine.station import RefineStation
 
 CHUNK = 0.05  # s of sim time between the run loop's checks
-#: the ``perturbation`` fields this workcell simulates
-PERTURBED = ("robot",)
 
 
 def time_limit(program: Program, architecture: Architecture, tune: bool) -> float:
@@ -66,6 +71,10 @@ def simulate(
 ) -> Run:
     """Build the station of ``program`` in its scene (``scene``: already loaded, else
     `load_scene` of ``program.scene``) and run it to the end (module docstring)."""
+    from tamp.sim.core.runner import make_simulator, run_in_chunks
+    from tamp.sim.refine.outcome import measure, start_heights
+    from tamp.sim.refine.station import build_station
+
     if scene is None:
         scene = load_scene(program.scene)
     meshcat = None
@@ -77,7 +86,7 @@ def simulate(
     simulator = make_simulator(cell.diagram)
     root = simulator.get_mutable_context()
     plant_ctx = cell.plant.GetMyContextFromRoot(root)
-    ex_ctx = {n: e.GetMyContextFromRoot(root) for n, e in cell.executors.items()}
+    ex_ctx = {n: e.GetMyContextFromRoot(root) for n, e in cell.machines.items()}
     sup_ctx = cell.supervisor.GetMyContextFromRoot(root)
     collisions: dict[tuple[str, str], float] = {}
     contacts = cell.plant.get_contact_results_output_port()
@@ -107,9 +116,7 @@ def simulate(
                 collisions.setdefault(key, t)
         if tune:
             return cell.supervisor.state(sup_ctx).done
-        return all(
-            e.machine.progress_of(e.state(ex_ctx[n])).done for n, e in cell.executors.items()
-        )
+        return all(e.machine.progress_of(e.state(ex_ctx[n])).done for n, e in cell.machines.items())
 
     heights = start_heights(cell.plant, plant_ctx, cell.objects)
     if record is not None:
@@ -128,9 +135,11 @@ def simulate(
 
 
 def _result(cell: RefineStation, root, chunked, collisions, recording, outcome) -> Run:
+    from tamp.sim.refine.station import search_of
+
     records = []
     rates = {}
-    for name, e in cell.executors.items():
+    for name, e in cell.machines.items():
         s = e.state(e.GetMyContextFromRoot(root))
         records += e.machine.records(s)
         rates[name] = s.rate
@@ -149,13 +158,6 @@ def _result(cell: RefineStation, root, chunked, collisions, recording, outcome) 
     )
 
 
-def program_perturbation(program: Program) -> Perturbation:
-    """``program``'s ``perturbation`` section, refused (`InputError` naming the field) when
-    it asks for what this workcell does not simulate."""
-    program.perturbation.require(PERTURBED, "refinement")
-    return program.perturbation
-
-
 def perturbed_program(
     program: Program, perturbation: Perturbation, seed: int
 ) -> tuple[Program, Applied]:
@@ -172,51 +174,141 @@ def perturbed_program(
     return dataclasses.replace(program, robots=tuple(robots)), applied
 
 
-def run_seeded(
-    program: str | Path,
-    seed: int,
-    *,
-    verify: bool = True,
-    max_sim_time: float | None = None,
-    record: str | None = None,
-) -> dict[str, Any]:
-    """ONE seeded simulation of the program file (or packaged name) ``program`` as given
-    (no refinement): ``status`` (SUCCESS when every event fired and the measured event order
-    satisfies the ordering property; TIMEOUT when some event never fired within the time
-    limit; FAILURE when the order breaks the property), ``cause``, ``task_time`` (sim s;
-    the time limit when unfinished), ``seed``, ``perturbation``, ``wall_time``,
-    ``collisions``. The entry point of ``tamp campaign --kind refine``."""
-    from tamp.refine.architecture import default_architecture, load_architecture
-    from tamp.refine.loader import load_program
+@dataclass(kw_only=True)
+class RefineResult(RunResult):
+    """One seeded run of a program: the common `RunResult` and the measured `Run`."""
+
+    run: Run | None = None
+    run_satisfies_ordering: bool | None = None
+
+    def details_json(self) -> dict[str, Any]:
+        r = self.run
+        if r is None:
+            return {}
+        return {
+            "program": r.program.name,
+            "category": r.program.communication.category,
+            "run_satisfies_ordering": self.run_satisfies_ordering,
+            "timeline": r.timeline.to_json()["behaviors"],
+            "collisions": [[a, b, round(t, 3)] for (a, b), t in sorted(r.collisions.items())],
+            "max_wait": {k: round(v, 5) for k, v in r.max_wait.items()},
+            "outcome": r.outcome.to_json(),
+        }
+
+    def details_lines(self) -> list[str]:
+        r = self.run
+        if r is None:
+            return []
+        cat = r.program.communication.category
+        lines = [f"program {r.program.name} (Category {cat})"]
+        for rec in r.timeline.records:
+            start = "-" if rec.start is None else f"{rec.start:.2f}"
+            end = "never" if rec.end is None else f"{rec.end:.2f}"
+            lines.append(f"  {rec.event:<22} {start:>8} .. {end:>8} s")
+        if r.outcome.goals:
+            lines.append(f"  outcome: {r.outcome.summary()}")
+        for (a, b), t in sorted(r.collisions.items()):
+            lines.append(f"  collision {a} with {b} at {t:.1f} s")
+        return lines
+
+
+def judge(program: Program, run: Run, check_run) -> tuple[str, str | None, str, bool | None]:
+    """(status, cause, reason, run_satisfies_ordering) of one run: SUCCESS when every event
+    fired and the measured event order satisfies the ordering property; TIMEOUT when some
+    event never fired within the time limit; FAILURE when the order breaks the property.
+    The scene's goals and the collisions are reported, not judged (a program as given is
+    what the run measures)."""
     from tamp.sim.core.outcome import run_cause
-    from verification.refine import check_run
 
-    loaded = load_program(program)
-    arch = load_architecture(loaded.architecture) if loaded.architecture else default_architecture()
-    moved, applied = perturbed_program(loaded, program_perturbation(loaded), seed)
-    if verify:
-        from verification.gate import gate_program
-
-        gate_program(moved, subject=f"program {moved.name}")
-    run = simulate(moved, arch, max_sim_time=max_sim_time, record=record)
-    holds = check_run(moved, run.timeline.order()).holds if run.finished else None
     if not run.finished:
-        status = "TIMEOUT"
-    elif holds:
-        status = "SUCCESS"
-    else:
-        status = "FAILURE"
-    cause = run_cause(status, ["order_violated"] if holds is False else [], False)
-    return {
-        "program": moved.name,
-        "status": status,
-        "cause": cause,
-        "task_time": round(run.task_time if run.finished else run.sim_time, 3),
-        "sim_time": round(run.sim_time, 3),
-        "wall_time": round(run.wall_time, 3),
-        "run_satisfies_ordering": holds,
-        "collisions": [[a, b, round(t, 3)] for (a, b), t in sorted(run.collisions.items())],
-        "seed": applied.seed,
-        "perturbation": applied.to_json(),
-        "recording": run.recording,
-    }
+        stuck = ", ".join(r.event for r in run.timeline.records if r.end is None)
+        return "TIMEOUT", run_cause("TIMEOUT", [], False), f"{stuck} never fired", None
+    holds = check_run(program, run.timeline.order()).holds
+    if holds:
+        return "SUCCESS", None, "every event fired in an order the property allows", True
+    cause = run_cause("FAILURE", ["order_violated"], False)
+    return "FAILURE", cause, "the measured event order breaks the ordering property", False
+
+
+class RefineWorkcell:
+    """The two-robot refinement workcell as a `tamp.sim.core.workcell.Workcell`: what
+    ``tamp simulate refine`` and ``tamp campaign --kind refine`` run (one program as given;
+    ``tamp refine`` runs the refinement)."""
+
+    name = "refine"
+    title = "two-robot refinement programs (Figueroa Heredia et al. 2018), one run as given"
+    folder = "refine"
+    key = "robots"
+    main = Option(
+        "program",
+        "refinement program file or packaged name (task4)",
+        flag="program",
+        required=True,
+        folder="refine",
+    )
+    options: tuple[Option, ...] = ()
+    replay = "tamp simulate refine {scenario} --seed {seed}"
+
+    def load(self, name_or_path: str | Path) -> RefineScenario:
+        return load_scenario(name_or_path)
+
+    def perturbed(self, scenario: RefineScenario, seed: int) -> tuple[RefineScenario, Applied]:
+        program, applied = perturbed_program(scenario.program, scenario.program.perturbation, seed)
+        return dataclasses.replace(scenario, program=program), applied
+
+    def build(self, scenario: RefineScenario, *, tune: bool = False, meshcat: Any = None) -> Any:
+        """The `RefineStation` of the scenario's program in its scene."""
+        from tamp.sim.refine.station import build_station
+
+        return build_station(
+            scenario.program, scenario.architecture, scenario.scene, tune=tune, meshcat=meshcat
+        )
+
+    def run(
+        self,
+        scenario: RefineScenario,
+        *,
+        seed: int = 0,
+        record: str | Path | None = None,
+        max_sim_time: float | None = None,
+        verify: bool = True,
+    ) -> RefineResult:
+        """Gate the ordering property, perturb by ``seed``, simulate and judge (`judge`)."""
+        from verification.refine import check_run
+
+        moved, applied = self.perturbed(scenario, seed)
+        program = moved.program
+        verified = {}
+        if verify:
+            from verification.gate import gate_program
+
+            gate_program(program, subject=f"program {program.name}")
+            verified["ordering"] = True
+        run = simulate(
+            program,
+            moved.architecture,
+            max_sim_time=max_sim_time,
+            record=record,
+            scene=moved.scene,
+        )
+        status, cause, reason, holds = judge(program, run, check_run)
+        return RefineResult(
+            workcell=self.name,
+            scenario=program.file or program.name,
+            status=status,
+            reason=reason,
+            cause=cause,
+            task_time=run.task_time if run.finished else run.sim_time,
+            sim_time=run.sim_time,
+            wall_time=run.wall_time,
+            cpu_time=run.cpu_time,
+            seed=applied.seed,
+            perturbation=applied.to_json(),
+            recording=run.recording,
+            verified=verified,
+            run=run,
+            run_satisfies_ordering=holds,
+        )
+
+
+WORKCELL = RefineWorkcell()

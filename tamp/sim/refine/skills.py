@@ -24,7 +24,7 @@ class PioneerStateMachine(LeafSystem):
 
     def __init__(self, program: Program, robot: str, period: float, empty: ChannelState):
         super().__init__()
-        self.set_name(f"executor_{robot}")
+        self.set_name(f"state_machine_{robot}")
         self.robot = robot
         self.machine = Machine(program, robot)
         self.delivered_port = self.DeclareAbstractInputPort("delivered", AbstractValue.Make(empty))

@@ -15,9 +15,9 @@ lever pitches (``arm_pitch``, up positive) and two prismatic paddles/fingers ope
 implicit; `GAINS`). The scene's objects (`tamp.sim.refine.scenario`) are added from their
 models, named as the scene names them, and welded to the world when fixed.
 
-The plant steps every `TIME_STEP`; the Channels, executors and the supervisor update on the
+The plant steps every `TIME_STEP`; the Channels, state machines and the supervisor update on the
 same tick (the Channels take every sensor sample in between at its own time, so sensors
-may be faster than the tick). A command leaves on an executor tick, so P is at most
+may be faster than the tick). A command leaves on a state machine's tick, so P is at most
 1 / `TIME_STEP` (100 Hz) here: the rate search stops there too. Gravity is off for the
 robots (their drivers hold the lever), so the force sensor reads only what the gripper
 touches. Contact is hydroelastic where the models say so (the chair's frames, the
@@ -73,7 +73,7 @@ class RefineStation:
     program: Program
     scene: Scene
     robots: dict[str, Any]  # robot name -> ModelInstanceIndex
-    executors: dict[str, PioneerStateMachine]
+    machines: dict[str, PioneerStateMachine]
     channels: dict[str, Channel]
     supervisor: RateTuningSupervisor
     objects: dict[str, Any]  # object name -> ModelInstanceIndex
@@ -179,7 +179,7 @@ def build_station(
         assert tuple(order) == JOINTS, order  # the Channel's actuation is in JOINTS order
 
     qi = plant.GetPositionsFromArray
-    executors, channels = {}, {}
+    machines, channels = {}, {}
     empty = None
     reaction = plant.get_reaction_forces_output_port()
     for r in program.robots:
@@ -214,15 +214,15 @@ def build_station(
             )
         )
         empty = ChannelState(network.initial())
-        executor = builder.AddSystem(PioneerStateMachine(program, r.name, period, empty))
+        machine = builder.AddSystem(PioneerStateMachine(program, r.name, period, empty))
         builder.Connect(plant.get_state_output_port(m), sensors.state_port)
         builder.Connect(reaction, sensors.reaction_port)
         builder.Connect(plant.get_generalized_contact_forces_output_port(m), sensors.contact_port)
         builder.Connect(sensors.readings_port, channel.readings_port)
-        builder.Connect(executor.command_port, channel.command_port)
-        builder.Connect(channel.delivered_port, executor.delivered_port)
+        builder.Connect(machine.command_port, channel.command_port)
+        builder.Connect(channel.delivered_port, machine.delivered_port)
         builder.Connect(channel.actuation_port, plant.get_desired_state_input_port(m))
-        executors[r.name], channels[r.name] = executor, channel
+        machines[r.name], channels[r.name] = machine, channel
 
     watched = {r.name: watched_sensors(program, r.name) for r in program.robots}
     searches = None
@@ -239,8 +239,8 @@ def build_station(
     )
     a, b = (r.name for r in program.robots)
     for name, other in ((a, b), (b, a)):
-        builder.Connect(executors[other].progress_port, executors[name].others_port)
-        builder.Connect(supervisor.rates_port, executors[name].rates_port)
+        builder.Connect(machines[other].progress_port, machines[name].others_port)
+        builder.Connect(supervisor.rates_port, machines[name].rates_port)
         builder.Connect(channels[name].delivered_port, supervisor.delivered_ports[name])
 
     visualizer = None
@@ -256,7 +256,7 @@ def build_station(
         program,
         scene,
         robots,
-        executors,
+        machines,
         channels,
         supervisor,
         objects,

@@ -1,7 +1,7 @@
 """RateTuningSupervisor: Fig. 5 online, one search per robot, on the Channels' deliveries.
 
 Step 1: each robot starts from its current command rate P. Step 2: the supervisor sets P
-(its ``rates`` output, read by the executors) to the search's probe rate and watches the
+(its ``rates`` output, read by the state machines) to the search's probe rate and watches the
 robot's triggering sensors (those its behaviors' events read) for one probe window of sim
 time; the probe's measurement is the longest *wait* any of their samples had in the
 Channel (delivery - creation - service times: the queueing the architecture caused). A

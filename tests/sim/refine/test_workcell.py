@@ -1,0 +1,79 @@
+"""The refinement cell as a registered `Workcell`: one run of a program as given, judged by
+its events and its measured event order; listing it imports no Drake."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from tamp.errors import InputError
+from tamp.refine.measure import Run
+from tamp.refine.timeline import BehaviorRecord, Timeline
+from tamp.scenarios import resolve
+from tamp.sim.core.workcell import Workcell, get, run_seeded
+from tamp.sim.refine import WORKCELL
+from tamp.sim.refine.simulate import judge
+from tests.refine.helpers import task
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def test_it_is_the_registered_refine_workcell_and_imports_no_drake():
+    assert isinstance(WORKCELL, Workcell) and get("refine") is WORKCELL
+    assert "{scenario}" in WORKCELL.replay and "{seed}" in WORKCELL.replay
+    code = "import sys, tamp.sim.refine; assert 'pydrake' not in sys.modules"
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr
+
+
+class Verdict:
+    def __init__(self, holds):
+        self.holds = holds
+
+
+def _run(ends):
+    program = task(4)
+    records = []
+    for r in program.robots:
+        for b in r.behaviors:
+            end = ends.get(f"{r.name}.{b.name}", 1.0)
+            records.append(BehaviorRecord(r.name, b.name, b.section, 0.0, end))
+    return program, Run(program, Timeline(tuple(records)), sim_time=30.0)
+
+
+def test_judge_by_events_and_order():
+    program, run = _run({})
+    assert judge(program, run, lambda p, o: Verdict(True))[:2] == ("SUCCESS", None)
+    status, cause, reason, holds = judge(program, run, lambda p, o: Verdict(False))
+    assert (status, cause, holds) == ("FAILURE", "order_violated", False)
+    program, run = _run({"R2.release": None})
+    status, cause, reason, holds = judge(program, run, lambda p, o: Verdict(True))
+    assert (status, cause, holds) == ("TIMEOUT", "timeout", None)
+    assert reason == "R2.release never fired"
+
+
+def test_a_short_seeded_run_through_the_registry(tmp_path):
+    """``run_seeded("refine", ...)``: the common keys, the program's timeline and outcome."""
+    out = run_seeded("refine", "table_collision", 3, max_sim_time=2.0)
+    json.dumps(out)
+    assert out["workcell"] == "refine" and out["seed"] == 3
+    assert out["status"] == "TIMEOUT" and out["cause"] == "timeout"
+    assert out["task_time"] == out["sim_time"] == pytest.approx(2.0, abs=0.06)
+    assert out["verified"] == {"ordering": True}
+    assert out["program"] == "table_collision" and out["outcome"]["goals"] == []
+    assert [b["event"] for b in out["timeline"]][0] == "R1.lower_arm"
+
+
+def test_load_refuses_a_perturbation_it_does_not_simulate(tmp_path):
+    data = yaml.safe_load(resolve("task4", "refine").read_text())
+    data["perturbation"] = {"friction": [0.5, 0.6]}
+    f = tmp_path / "task4.yaml"
+    f.write_text(yaml.safe_dump(data))
+    with pytest.raises(InputError) as e:
+        WORKCELL.load(str(f))
+    assert e.value.field == "perturbation.friction" and "refinement workcell" in str(e.value)
