@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -70,7 +70,7 @@ PERTURBED = ("objects", "robot", "friction", "sensor", "timing", "skills")
 DEFAULT_MODEL = "bottle"
 #: the shortest plant step, and so the shortest tick of the controller and the tree (s)
 MIN_TIME_STEP = 0.0005
-#: the floor's half-extent (``models/sdf/floor.sdf``): a workspace lies within it
+#: how far from the origin a workspace may reach, per axis (m)
 FLOOR_HALF = 9.0
 
 
@@ -161,7 +161,7 @@ class ObjectEntry:
     pose: tuple[float, float, float] | None = spec(None, unit="m, m, rad", help="x, y, yaw")
 
 
-def _entries(parse: Any, what: str) -> Any:
+def _entries(parse: Callable[..., Any], what: str) -> Callable[[Any, Fields, str], tuple]:
     """A ``spec(parse=...)`` reader of a list of flag strings (``appear``, ``fail``) with
     the flags' own grammar; each error names ``key[i]``."""
 
