@@ -20,8 +20,8 @@ Format (the fields, their defaults and bounds are stated once, in the dataclasse
     name: open_chair                  # default: the file's stem
     description: The folded chair lying on the floor (Fig. 9(d)).
     objects:
-      - model: folding_chair          # a packaged model (models/sdf/<name>.sdf), an .sdf or
-                                      # .urdf file relative to this file, or a
+      - model: folding_chair          # a packaged model (models/sdf/<name>.sdf), an .sdf
+                                      # file relative to this file, or a
                                       # package://tamp_models/... URL
         name: folding_chair           # the object's name in the plant (default: the model's)
         x: 0.0                        # m, its first body's origin in the world
@@ -57,37 +57,24 @@ from tamp.refine.loader import load_program, scene_path
 from tamp.refine.measure import Goal
 from tamp.refine.program import Program
 from tamp.schema import load_dataclass, spec
-from tamp.sim.core.models import PACKAGE, model_url, models_dir, sdf_path
+from tamp.sim.core.models import PACKAGE, model_path, model_url, sdf_path
 
-#: model files a scene may name (Drake's parser reads both)
-MODEL_SUFFIXES = (".sdf", ".urdf")
 #: the ``perturbation`` fields this workcell simulates
 PERTURBED = ("robot",)
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
 def _model(raw: object, f: Fields, key: str) -> str:
-    """An object's ``model`` as Drake loads it: a ``package://`` URL or an absolute file."""
+    """An object's ``model`` as Drake loads it: a packaged model's ``package://`` URL, or the
+    absolute SDFormat file of a model of the user's (`tamp.sim.core.models.model_path`)."""
     ref = f.str(key)
-    prefix = f"package://{PACKAGE}/"
-    if ref.startswith("package://"):
-        if not ref.startswith(prefix):
-            raise f.error(key, f"unknown package in {ref!r} (the known one: {prefix})")
-        if not (models_dir() / ref[len(prefix) :]).is_file():
-            raise f.error(key, f"no model file {ref!r}")
-        return ref
-    if ref.endswith(MODEL_SUFFIXES) or "/" in ref:
-        p = Path(f.file).parent / ref
-        if not p.is_file():
-            raise f.error(key, f"model file not found: {p}")
-        if p.suffix not in MODEL_SUFFIXES:
-            raise f.error(key, f"expected an {' or '.join(MODEL_SUFFIXES)} file, got {p.name}")
-        return str(p)
+    if "://" in ref or "/" in ref or ref.endswith(".sdf"):
+        return str(model_path(ref, Path(f.file).parent, f, key))
     if not sdf_path(ref).is_file():
         raise f.error(
             key,
             f"no packaged model {ref!r} (models/sdf/{ref}.sdf); a model of your own is an "
-            f"{' or '.join(MODEL_SUFFIXES)} file relative to the scene file",
+            f".sdf file relative to the scene file or a package://{PACKAGE}/ URL",
         )
     return model_url(ref)
 
@@ -98,8 +85,8 @@ class SceneObject:
 
     model: str = spec(
         parse=_model,
-        help="a packaged model name, an .sdf/.urdf file relative to the scene file, or a "
-        "package:// URL (stored as the URL or the absolute file)",
+        help="a packaged model name, an .sdf file relative to the scene file, or a "
+        "package:// URL (stored as the packaged model's URL or the absolute file)",
     )
     x: float = spec(unit="m")
     y: float = spec(unit="m")

@@ -144,7 +144,8 @@ def test_a_users_scene_with_its_own_model_is_simulated(tmp_path):
     assert program.scene == str(tmp_path / "crate_scene.yaml")
     scene = load_scene(program.scene)
     (crate,) = scene.objects
-    assert crate.model == str(tmp_path / "models" / "crate.sdf") and crate.name == "my_crate"
+    assert crate.model == str((tmp_path / "models" / "crate.sdf").resolve())
+    assert crate.name == "my_crate"
     assert (crate.yaw, crate.fixed) == (0.0, False)  # the defaults
     run = simulate(program, load_architecture(program.architecture), max_sim_time=1.0)
     values = run.outcome.values
@@ -185,12 +186,12 @@ OBJ = "objects[0]"
         (
             {"objects": [{"model": "crate.sdf", "x": 0, "y": 0, "z": 0}]},
             f"{OBJ}.model",
-            "model file not found",
+            "no model file 'crate.sdf'",
         ),
         (
             {"objects": [{"model": "./crate_scene.yaml", "x": 0, "y": 0, "z": 0}]},
             f"{OBJ}.model",
-            "expected an .sdf or .urdf file",
+            "expected an SDFormat file (.sdf)",
         ),
         (
             {"objects": [{"model": "barrel", "x": 0, "y": 0, "z": 0}]},
@@ -277,3 +278,12 @@ def test_a_goal_on_a_joint_the_model_lacks_is_refused_when_built(tmp_path):
     with pytest.raises(InputError) as e:
         build_station(program, load_architecture(program.architecture), load_scene(f))
     assert e.value.field == "goals[0].quantity" and "lid_hinge" in str(e.value)
+
+
+def test_a_package_url_names_a_packaged_model_file(tmp_path):
+    from tamp.sim.core.models import sdf_path
+
+    obj = {"model": "package://tamp_models/sdf/table.sdf", "x": 0.1, "y": 0, "z": 0}
+    scene = load_scene(write_scene(tmp_path, scene_data(objects=[obj], goals=[])))
+    (table,) = scene.objects
+    assert table.model == str(sdf_path("table").resolve()) and table.name == "table"
