@@ -32,13 +32,12 @@ import math
 import zlib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from tamp.errors import InputError
-from tamp.fileio import Fields, load_yaml
+from tamp.fileio import Fields
 
 DISTRIBUTIONS = ("normal", "uniform")
 #: a normal draw is clipped at this many standard deviations (every offset stays bounded)
@@ -310,10 +309,3 @@ def _spread(p: Fields, key: str) -> PoseSpread:
         xy=s.float("xy", 0.0, min=0.0, max=MAX_XY),
         yaw=s.float("yaw", 0.0, min=0.0, max=MAX_YAW),
     )
-
-
-def read_perturbation(path: str | Path, *, kind: str) -> Perturbation:
-    """The ``perturbation`` section of the file at ``path`` (for files whose own loader lives
-    below `tamp.sim` and only lets the section through, e.g. refinement programs)."""
-    data, file = load_yaml(path, kind=kind)
-    return parse_perturbation(Fields(data, file))

@@ -7,7 +7,6 @@ import pytest
 
 from tamp.errors import InputError
 from tamp.fileio import Fields
-from tamp.sim.core.outcome import CAUSES, run_cause
 from tamp.perturbation import (
     MAX_ATTEMPTS,
     NONE,
@@ -17,8 +16,8 @@ from tamp.perturbation import (
     PoseSpread,
     check_seed,
     parse_perturbation,
-    read_perturbation,
 )
+from tamp.sim.core.outcome import CAUSES, run_cause
 
 FULL = {
     "objects": {"distribution": "normal", "xy": 0.03, "yaw": 0.3},
@@ -89,12 +88,6 @@ def test_a_workcell_refuses_what_it_does_not_simulate():
     assert e.value.field == "perturbation.timing"
     assert "not simulated by the LOTS workcell" in str(e.value)
     parse({"objects": {"xy": 0.01}}).require(("objects",), "LOTS")  # no error
-
-
-def test_read_perturbation_reads_the_section_of_a_file(tmp_path):
-    f = tmp_path / "prog.yaml"
-    f.write_text("version: 1\nname: x\nperturbation: {robot: {xy: 0.02}}\n")
-    assert read_perturbation(f, kind="refinement program").robot.xy == 0.02
 
 
 def test_the_same_seed_gives_the_same_sample_bit_for_bit():
