@@ -257,12 +257,15 @@ class RefineWorkcell:
         return dataclasses.replace(scenario, program=program), applied
 
     def build(self, scenario: RefineScenario, *, tune: bool = False, meshcat: Any = None) -> Any:
-        """The `RefineStation` of the scenario's program in its scene."""
+        """The Drake Diagram of the scenario's program in its scene; its exported ports are
+        listed in `tamp.sim.refine.station`. The run loop uses `build_station`, which also
+        returns the handles it needs."""
         from tamp.sim.refine.station import build_station
 
-        return build_station(
+        station = build_station(
             scenario.program, scenario.architecture, scenario.scene, tune=tune, meshcat=meshcat
         )
+        return station.diagram
 
     def run(
         self,

@@ -8,6 +8,10 @@
     Channels' deliveries -> RateTuningSupervisor -> rates -> both state machines
     MeshcatVisualizer (optional, `tamp.sim.core.recording`)
 
+Exported ports of the Diagram, per robot ``R``: ``R_state`` (its plant state),
+``R_progress`` (its state machine's progress), ``R_delivered`` (what its channel delivered);
+and ``rates`` (the supervisor's command rates).
+
 Robots (``models/sdf/pioneer_lift.sdf``, ``pioneer_parallel.sdf``, Fig. 7): the base moves
 on planar joints (x, y, yaw) driven along its heading or about the vertical axis, the lift
 lever pitches (``arm_pitch``, up positive) and two prismatic paddles/fingers open and close
@@ -242,6 +246,12 @@ def build_station(
         builder.Connect(machines[other].progress_port, machines[name].others_port)
         builder.Connect(supervisor.rates_port, machines[name].rates_port)
         builder.Connect(channels[name].delivered_port, supervisor.delivered_ports[name])
+
+    for r in program.robots:
+        builder.ExportOutput(plant.get_state_output_port(robots[r.name]), f"{r.name}_state")
+        builder.ExportOutput(machines[r.name].progress_port, f"{r.name}_progress")
+        builder.ExportOutput(channels[r.name].delivered_port, f"{r.name}_delivered")
+    builder.ExportOutput(supervisor.rates_port, "rates")
 
     visualizer = None
     if meshcat is not None:

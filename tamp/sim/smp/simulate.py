@@ -200,13 +200,14 @@ class SmpMroWorkcell:
         return perturb(scenario, seed)
 
     def build(self, scenario: SimScenario, *, policy: Any = None, meshcat: Any = None) -> Any:
-        """The `SmpStation` of ``scenario`` around ``policy`` (default: its planned tree,
-        unverified)."""
+        """The Drake Diagram of ``scenario`` around ``policy`` (default: its planned tree,
+        unverified); its exported ports are listed in `tamp.sim.smp.station`. The run loop
+        uses `build_station`, which also returns the handles it needs."""
         from tamp.sim.smp.station import build_station
 
         if policy is None:
             policy = prepare(scenario, verify=False).policy
-        return build_station(scenario, policy, meshcat=meshcat)
+        return build_station(scenario, policy, meshcat=meshcat).diagram
 
     def run(
         self,

@@ -8,6 +8,9 @@ function, one named Diagram) and returns its handles (`SmpStation`).
     mast RgbdSensor ─► Perception ─► ObjectPoseEstimator ─► body_poses (``perception: camera``)
     MeshcatVisualizer (optional)
 
+Exported ports of the Diagram: ``skill_command``, ``skill_status``, ``world_state``,
+``robot_state`` (the youBot's plant state) and ``body_poses``.
+
 Plant settings come from Drake's `MultibodyPlantConfig` (discrete SAP solver, needed by
 weld constraints; hydroelastic contact for the objects on the floor). The robot's joints
 are driven by the plant's PD-controlled actuators (`PdControllerGains`, implicit in SAP)
@@ -255,6 +258,12 @@ def build_station(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
     builder.Connect(skills.status_port, executor.skill_status_port)
     builder.Connect(executor.command_port, skills.command_port)
     builder.Connect(skills.desired_state_port, plant.get_desired_state_input_port(robot))
+
+    builder.ExportOutput(executor.command_port, "skill_command")
+    builder.ExportOutput(skills.status_port, "skill_status")
+    builder.ExportOutput(estimator.world_state_port, "world_state")
+    builder.ExportOutput(plant.get_state_output_port(robot), "robot_state")
+    builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
 
     visualizer = None
     if meshcat is not None:
