@@ -478,16 +478,15 @@ class LotsWorkcell:
     def perturbed(self, scenario: LotsScenario, seed: int) -> tuple[LotsScenario, Applied]:
         return perturbed_run(scenario, seed)
 
-    def build(
-        self, scenario: LotsScenario, *, controller: LotsController | None = None, meshcat=None
-    ) -> LotsDiagram:
-        """The workcell with the LOTS controller of ``scenario``'s task (default: a new one,
-        unverified) and the person's events."""
-        from tamp.lots.controller import LotsController
+    def build(self, scenario: LotsScenario, *, meshcat: Any = None) -> Diagram:
+        """The Drake Diagram of ``scenario``'s workcell station, with the person's events
+        (exported ports: ``skill_command`` in; ``skill_status``, ``observation``,
+        ``arm_state``, ... out: `tamp.sim.lots.station`). A run wires the LOTS controller to
+        those ports (`build_lots_diagram`)."""
+        from tamp.sim.lots.station import build_station
 
-        controller = controller or LotsController(scenario.task)
         events = list(scenario.interference) or None
-        return build_lots_diagram(scenario.cell, controller, meshcat=meshcat, person=events)
+        return build_station(scenario.cell, meshcat=meshcat, person=events).diagram
 
     def run(
         self,
