@@ -8,9 +8,9 @@ import pytest
 import yaml
 
 from tamp.errors import InputError
+from tamp.perturbation import Perturbation, PoseSpread
 from tamp.refine.loader import load_program
 from tamp.scenarios import resolve
-from tamp.perturbation import Perturbation, PoseSpread
 from tamp.sim.lots.catalogue import CLASSES
 from tamp.sim.lots.scenario import load_cell_scenario, perturbed, rectangles_overlap
 from tamp.sim.refine.scenario import program_perturbation
