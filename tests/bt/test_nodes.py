@@ -98,7 +98,8 @@ def test_reactive_sequence_failure_of_precondition_cancels_action() -> None:
 
 
 def test_py_trees_starts_the_new_action_before_stopping_the_old_one() -> None:
-    """The peer's order (observed in py_trees 2.6), which ours avoids: same tree as above, in py_trees."""
+    """The peer's order (observed in py_trees 2.6), which ours avoids: the same tree in
+    py_trees."""
     py_trees = pytest.importorskip("py_trees")
     log: list[str] = []
     flags = {"close": True}
