@@ -23,8 +23,6 @@ whose bad prefix is shortest, named as such.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 from tamp import ltl
 from tamp.errors import InputError
 from tamp.ltl.automata import Automaton, Stepper, accepting_continuation, accepts_lasso
@@ -49,7 +47,6 @@ __all__ = [
     "check_trace",
     "explain",
     "explain_on",
-    "known_violations",
 ]
 
 
@@ -144,38 +141,6 @@ def _explain_conjunction(f: Formula, violated: list[Formula], word: Word, finite
         f"bad prefix of the whole is possible): {ce.reason.replace('the formula', 'it')}"
     )
     return ce
-
-
-def known_violations(
-    formula: str,
-    aps: list[str],
-    word: Callable[[], Word],
-    violated: list[tuple[str, int | None]],
-    *,
-    explored: int,
-    subject: str,
-    steps: list[str] | None = None,
-    accepting_word: Word | None = None,
-) -> Verdict:
-    """The infinite-word verdict of a conjunction whose violated conjuncts the caller has
-    already decided exactly (the order-check fast path, `verification.rg.order_violations`).
-
-    ``violated``: those conjuncts in the formula's order, each with the end of its
-    shortest bad prefix (None: none); the other conjuncts hold. No conjunction is built and
-    no conjunct is checked on an automaton: only the violated conjunct with the shortest
-    bad prefix is translated, for the counterexample — what the conjunct-by-conjunct path
-    of `check_trace` reports. ``formula`` is the conjunction's text, ``aps`` its
-    propositions, ``word()`` makes the checked word (only needed for a counterexample).
-    """
-    if not violated:
-        return Verdict(subject, formula, "infinite", True, explored)
-    first = min(violated, key=lambda cp: (cp[1] is None, cp[1] or 0))[0]
-    ce = explain(as_formula(first), word(), finite=False)
-    ce.accepting_word = accepting_word
-    ce.violated = [str(as_formula(c)) for c, _ in violated]
-    ce.aps = list(aps)
-    ce.steps = steps
-    return Verdict(subject, formula, "infinite", False, explored, ce)
 
 
 def _holds_finite(f: Formula, word: Word) -> tuple[bool, int]:

@@ -193,6 +193,13 @@ class ReachabilityGraph:
                 )
         return self._stats
 
+    def enumeration(self) -> tuple[list[int], list[tuple[int, int, int]]] | None:
+        """States as goal bit masks (breadth-first, the root first) and edges ``(state,
+        child, goal)`` by state position; None past ``limit``. Shared, not to be modified."""
+        if self._masks is None:
+            return None
+        return self._masks, self._edges
+
     def networkx(self) -> nx.DiGraph:
         """The RG as a networkx DiGraph (see `build_rg`); `RGTooLarge` beyond ``limit``."""
         if self._masks is None:
