@@ -10,7 +10,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from tamp.errors import InfeasibleError
+from tamp.ltl.formula import short
 from verification.words import Word
+
+#: Characters of a formula that text output shows (JSON carries it whole): the encoding of
+#: a plan of 5,000 goals is 10,000 conjuncts long.
+FORMULA_SHOWN = 200
+#: Violated conjuncts that text output lists.
+VIOLATED_SHOWN = 8
 
 
 @dataclass
@@ -53,10 +60,19 @@ class Counterexample:
     def text(self) -> str:
         lines = [f"counterexample: {self.reason}"]
         if self.violated:
-            lines.append("  violated: " + "; ".join(self.violated))
+            shown = self.violated[:VIOLATED_SHOWN]
+            more = len(self.violated) - len(shown)
+            lines.append(
+                "  violated: " + "; ".join(shown) + (f"; … and {more} more" if more else "")
+            )
         if self.steps is not None:
             n = len(self.word.prefix)
+            shown = _steps_shown(len(self.steps), self.position)
             for i, s in enumerate(self.steps):
+                if i not in shown:
+                    if i - 1 in shown:
+                        lines.append("  …")
+                    continue
                 mark = "  cycle " if i >= n else "  "
                 letter = self.word.letter(i)
                 props = ", ".join(sorted(letter & set(self.aps))) if self.aps else ""
@@ -68,6 +84,17 @@ class Counterexample:
         if self.accepting_word is not None:
             lines.append(f"  accepted:  {self.accepting_word.format(self.aps)}")
         return "\n".join(lines)
+
+
+def _steps_shown(n: int, position: int | None, edge: int = 5) -> set[int]:
+    """The steps text output lists: all of a short run; of a long one its start, the steps
+    around the end of the bad prefix and its end (JSON carries every step)."""
+    if n <= 4 * edge:
+        return set(range(n))
+    keep = set(range(edge)) | set(range(n - edge, n))
+    if position is not None:
+        keep |= set(range(max(0, position - edge), min(n, position + edge + 1)))
+    return keep
 
 
 @dataclass
@@ -106,7 +133,8 @@ class Verdict:
         word = {"holds": "holds", "violated": "VIOLATED", "unknown": "UNKNOWN (bounded)"}
         head = (
             f"{self.subject}: {word[self.status]} "
-            f"({self.semantics}; {self.states_explored} states explored)\n  formula: {self.formula}"
+            f"({self.semantics}; {self.states_explored} states explored)\n"
+            f"  formula: {short(self.formula, FORMULA_SHOWN)}"
         )
         if self.counterexample is None:
             return head
@@ -178,7 +206,7 @@ class VerificationError(InfeasibleError):
         bad = report.failed
         first = bad[0] if bad else None
         summary = (
-            f"verification failed: {first.subject} violates {first.formula}"
+            f"verification failed: {first.subject} violates {short(first.formula, FORMULA_SHOWN)}"
             if first
             else "verification failed"
         )

@@ -68,6 +68,16 @@ def configure_logging(prog: str) -> None:
         logger.setLevel(level)
 
 
+def error_line(prog: str, exc: TampError) -> str:
+    """What the user reads for a handled error: ``PROG: error: <where>: <reason>``, said once.
+
+    The exception's text already names its file and field (`tamp.errors.InputError`), so
+    nothing is added but the program's name; messages name the value, not the field again
+    (``formula: 'GF p1 & …' is too large``, never ``formula: formula '…'``).
+    """
+    return f"{prog}: error: {exc}"
+
+
 def _error_json(message: str, code: int, exc: BaseException | None = None) -> None:
     """The ``--json`` form of an error: one document on stdout, beside the stderr line."""
     doc = {
@@ -100,7 +110,7 @@ def run(
     try:
         return int(args.func(args) or 0)
     except TampError as exc:
-        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+        print(error_line(parser.prog, exc), file=sys.stderr)
         if as_json:
             _error_json(str(exc), exc.exit_code, exc)
         return exc.exit_code

@@ -40,7 +40,7 @@ def parse(text: str, *, field: str = "formula", file: str | None = None) -> Form
         lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
         reason = next((ln for ln in lines if not ln.startswith((">>>", "^"))), "syntax error")
         raise InputError(
-            f"formula {text!r} does not parse: {reason}", file=file, field=field
+            f"{text!r} does not parse: {reason}", file=file, field=field
         ) from None
 
 

@@ -158,7 +158,7 @@ def _check_size(
     n_aps = len(ap_names(f))
     if n_aps > limits.max_aps:
         raise InputError(
-            f"formula {short(text)!r} is too large to translate: {n_aps} propositions "
+            f"{short(text)!r} is too large to translate: {n_aps} propositions "
             f"(limit {limits.max_aps})",
             file=file,
             field=field,
@@ -166,7 +166,7 @@ def _check_size(
     k = temporal_conjuncts(f)
     if k > limits.max_temporal_conjuncts:
         raise InputError(
-            f"formula {short(text)!r} is too large to translate: {k} temporal conjuncts "
+            f"{short(text)!r} is too large to translate: {k} temporal conjuncts "
             f"(limit {limits.max_temporal_conjuncts}; the automaton can need 2^{k} states)",
             file=file,
             field=field,
@@ -210,7 +210,7 @@ def _in_child(
             if not ready:
                 os.kill(pid, signal.SIGKILL)
                 raise InputError(
-                    f"formula {short(text)!r} takes longer than the limit of "
+                    f"{short(text)!r} takes longer than the limit of "
                     f"{limits.seconds:g} s to translate",
                     file=file,
                     field=field,

@@ -180,7 +180,7 @@ def test_a_formula_too_large_to_translate_exits_2_at_once(capsys, tmp_path, comm
     assert time.perf_counter() - t < 2.0
     err = capsys.readouterr().err
     assert code == 2
-    assert "gf40.yaml: formula: formula 'GF p1 & GF p2" in err
+    assert "gf40.yaml: formula: 'GF p1 & GF p2" in err
     assert "40 temporal conjuncts (limit 16" in err
 
 
