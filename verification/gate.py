@@ -43,10 +43,35 @@ def _passed(report: Report) -> Report:
 
 
 def gate_order(plan: PlanResult, *, graph: bool = True) -> Report:
-    """The chosen goal order (and, when ``graph``, the whole RG) against C's encoding."""
+    """The chosen goal order (and, when ``graph``, the whole RG) against C's encoding.
+
+    First, structurally: every goal condition of the order must be the effect of some
+    usable action template of the robot's domain (`tamp.world.achievable`); otherwise the
+    task is infeasible (`InfeasibleError`, exit 1) for that reason, before any model checking.
+    """
     from verification.rg import check_plan
 
+    _achievable(plan)
     return _passed(check_plan(plan, graph=graph))
+
+
+def _achievable(plan: PlanResult) -> None:
+    from tamp.errors import InfeasibleError
+    from tamp.world.achievable import unachievable_goals
+
+    demo = plan.demo
+    domain = demo.domain()
+    bad = unachievable_goals(domain, plan.c_goal, demo.initial_world())
+    if not bad:
+        return
+    by_reason: dict[str, list[str]] = {}
+    for u in bad:
+        by_reason.setdefault(u.reason, []).append(str(u.goal))
+    parts = []
+    for reason, goals in by_reason.items():
+        shown = ", ".join(goals[:3]) + (f" and {len(goals) - 3} more" if len(goals) > 3 else "")
+        parts.append(f"{shown} can never be achieved: {reason}")
+    raise InfeasibleError("the robot cannot do this task: " + "; ".join(parts))
 
 
 def gate_tree(

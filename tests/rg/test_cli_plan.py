@@ -98,3 +98,71 @@ def test_tree_exports_need_execute(capsys, tmp_path) -> None:
     code, _, err = _run(capsys, "plan", "case1.yaml", "--bt-xml", str(tmp_path / "t.xml"))
     assert code == 2 and "--bt-xml" in err and "--execute" in err
     assert not (tmp_path / "t.xml").exists()
+
+
+# -- hostile inputs: long demonstrations, domains that cannot achieve the goals ---------------
+
+
+@pytest.mark.parametrize("steps", [300, pytest.param(5000, marks=pytest.mark.slow)])
+def test_a_long_chain_of_one_object_plans_and_verifies(capsys, tmp_path, steps) -> None:
+    """N steps of one object: N goals and N-1 constraints used to be refused by the gate's
+    automaton size guard as bad input (exit 2); the encoding is checked directly now."""
+    from tamp.demo import load_demonstration
+    from tamp.rg import plan
+    from tests.demo.generate import write_demo
+    from verification.gate import gate_order
+
+    demo_file = write_demo(tmp_path / f"chain{steps}.yaml", steps, "one")
+    code, out, err = _run(capsys, "plan", str(demo_file), "--json")
+    assert code == 0, err
+    assert "warning" not in err and len(json.loads(out)["order"]) == steps
+    report = gate_order(plan(load_demonstration(str(demo_file))))
+    assert report.holds and [v.subject.split(" ")[0] for v in report.verdicts] == ["order", "RG"]
+    assert report.verdicts[1].states_explored == steps + 1
+
+
+def _demo_with_domain(tmp_path, actions: str):
+    from tamp.scenarios import path
+
+    (tmp_path / "domain.yaml").write_text(f"version: 1\nrobot: youbot\nactions:\n{actions}")
+    text = path("case1.yaml").read_text()
+    text = text.replace("  start: [0, 0, 0]", "  start: [0, 0, 0]\n  domain: domain.yaml")
+    demo = tmp_path / "demo.yaml"
+    demo.write_text(text)
+    return str(demo)
+
+
+MOVE = """  - {name: MoveTo, params: {target: place}, eff: ["IsRobotCloseTo(target)"]}\n"""
+PICK = """  - name: Pick
+    params: {o: object}
+    con: ["IsHandFree()", "IsRobotCloseTo(o)"]
+    eff: ["IsGraspedObject(o)"]\n"""
+PLACE = """  - name: Place
+    params: {o: object, l: area}
+    con: ["IsGraspedObject(o)", "IsRobotCloseTo(l)", "IsAreaFree(l)"]
+    eff: ["IsHandFree()", "IsObjectAt(o, l)"]\n"""
+
+
+@pytest.mark.parametrize("execute", [[], ["--execute"]])
+def test_a_domain_without_place_is_infeasible_for_that_reason(capsys, tmp_path, execute) -> None:
+    """Used to exit 1 from the tree gate with an LTL counterexample ("violates F goal …");
+    the cause a user needs is that no action template achieves IsObjectAt(O, L)."""
+    demo = _demo_with_domain(tmp_path, MOVE + PICK)
+    code, out, err = _run(capsys, "plan", demo, *execute)
+    assert code == 1 and out == ""
+    assert "IsObjectAt(O2, L2)" in err and "has IsObjectAt among its effects" in err
+    assert "(templates: MoveTo, Pick)" in err
+    assert "counterexample" not in err and "F goal" not in err and "Fgoal" not in err
+
+
+def test_a_domain_whose_place_can_never_run_is_infeasible(capsys, tmp_path) -> None:
+    demo = _demo_with_domain(tmp_path, MOVE + PLACE)
+    code, _, err = _run(capsys, "plan", demo)
+    assert code == 1
+    assert "Place needs IsGraspedObject(o)" in err and "counterexample" not in err
+
+
+def test_a_complete_custom_domain_still_plans(capsys, tmp_path) -> None:
+    demo = _demo_with_domain(tmp_path, MOVE + PICK + PLACE)
+    code, out, _ = _run(capsys, "plan", demo)
+    assert code == 0 and "G2 -> G1 -> G0" in out
