@@ -3,7 +3,7 @@
     tamp grasp synth OUT --scenes N            render a Jacquard-format set with Drake
     tamp grasp train --dataset jacquard PATH --model hrgnet --input rgbd
     tamp grasp eval WEIGHTS --dataset jacquard PATH --split object
-    tamp grasp predict IMAGE --weights W [--depth D] [--camera camera.json]
+    tamp grasp predict IMAGE --weights W [--depth D] [--depth-range MIN,MAX] [--camera camera.json]
 
 Heavy imports (torch, Drake) happen inside the handlers.
 """
@@ -17,8 +17,11 @@ import sys
 from pathlib import Path
 
 from tamp.commands.output import print_json
-from tamp.errors import InputError
+from tamp.errors import InfeasibleError, InputError
 from tamp.grasp.networks import DEFAULT_NETWORK, FUSION_MODES, INPUT_CHANNELS, NETWORKS
+
+#: `tamp grasp predict --depth-range` default (= tamp.grasp.depth.DEFAULT_DEPTH_RANGE)
+DEPTH_RANGE = "0.05,5"
 
 
 def default_weights() -> Path:
@@ -133,6 +136,15 @@ def register(subparsers) -> None:
     p = sub.add_parser("predict", help="grasps in an image (pixels; world frame with a camera)")
     p.add_argument("image", help="RGB image (.png/.jpg) or depth image (.tiff, metres)")
     p.add_argument("--depth", help="depth image (.tiff, metres) when IMAGE is the RGB image")
+    p.add_argument(
+        "--depth-range",
+        # tamp.grasp.depth.DEFAULT_DEPTH_RANGE (a test keeps them equal; importing it here
+        # would load numpy on every start of the command line)
+        default=DEPTH_RANGE,
+        metavar="MIN,MAX",
+        help=f"the camera's valid depth in metres (default {DEPTH_RANGE}): holes (0, NaN) and "
+        "depth outside it are masked and carry no grasp",
+    )
     p.add_argument(
         "--weights",
         help=f"weights file (default: the shipped {NETWORKS[DEFAULT_NETWORK].weights_file})",
@@ -430,20 +442,38 @@ def _camera(args):
 
 
 def run_predict(args) -> int:
+    """Exit 2 for a depth image that is no depth image (no valid pixel, negative values:
+    `tamp.grasp.depth.DepthCheck.problem`), exit 1 with the reason when no grasp stands on
+    valid depth."""
     from tamp.grasp import formats
+    from tamp.grasp.depth import DepthRange, check_depth
     from tamp.grasp.predict import GraspPredictor
 
+    if args.top < 1:
+        raise InputError(f"--top must be >= 1, got {args.top}")
+    depth_range = DepthRange.parse(args.depth_range)
     image = Path(args.image)
-    rgb = depth = None
+    rgb = depth = depth_file = None
     if image.suffix.lower() in (".tif", ".tiff"):
-        depth = formats.read_depth_tiff(image)
+        depth, depth_file = formats.read_depth_tiff(image), image
     else:
         rgb = formats.read_rgb(image)
     if args.depth:
-        depth = formats.read_depth_tiff(args.depth)
+        depth, depth_file = formats.read_depth_tiff(args.depth), Path(args.depth)
+    if depth is not None:
+        check = check_depth(depth, depth_range)
+        problem = check.problem()
+        if problem and check.valid_count == 0 and (check.near or check.far):
+            problem += "; --depth-range MIN,MAX sets the range"
+        if problem:
+            raise InputError(problem, file=str(depth_file))
     intrinsics, pose = _camera(args)
-    predictor = GraspPredictor.load(args.weights or default_weights())
-    grasps = predictor.predict(rgb=rgb, depth=depth, intrinsics=intrinsics, X_WC=pose, n=args.top)
+    predictor = GraspPredictor.load(args.weights or default_weights(), depth_range=depth_range)
+    found = predictor.detect(rgb=rgb, depth=depth, intrinsics=intrinsics, X_WC=pose, n=args.top)
+    grasps = found.grasps
+    if not grasps:
+        where = f"{depth_file}: " if depth_file is not None else ""
+        raise InfeasibleError(f"{where}no grasp: {found.reason}")
     if args.json:
         print_json([g.as_dict() for g in grasps])
     else:

@@ -30,7 +30,8 @@ import numpy as np
 
 from tamp.errors import InputError
 from tamp.grasp import formats
-from tamp.grasp.maps import draw_targets, fill_missing_depth, stack_input
+from tamp.grasp.depth import fill_invalid_depth
+from tamp.grasp.maps import draw_targets, stack_input
 from tamp.grasp.rect import GraspRect
 
 DATASETS = ("cornell", "jacquard")
@@ -175,7 +176,8 @@ class GraspDataset:
         return make_split(self.ids() if spec.kind == "image" else self.groups(), spec)
 
     def read(self, i: int) -> tuple[np.ndarray, np.ndarray, list[GraspRect]]:
-        """Raw RGB, depth (metres, holes filled) and rectangles of sample ``i``."""
+        """Raw RGB, depth (metres, invalid pixels filled: `tamp.grasp.depth`) and rectangles of
+        sample ``i``."""
         s = self.samples[i]
         if self.kind == "jacquard":
             rects = formats.read_jacquard_grasps(s.grasps)
@@ -193,7 +195,7 @@ class GraspDataset:
                 f"{depth.shape[1]}x{depth.shape[0]}",
                 file=str(s.rgb),
             )
-        return rgb, fill_missing_depth(depth), rects
+        return rgb, fill_invalid_depth(depth), rects
 
     def crop_box(
         self, shape: tuple[int, int], rects: list[GraspRect]

@@ -24,6 +24,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from tamp.grasp.depth import INVALID_PEAKS, on_valid_depth
 from tamp.grasp.rect import GraspRect
 
 WIDTH_SCALE = 40.0
@@ -51,15 +52,6 @@ def draw_targets(rects: Sequence[GraspRect], size: int) -> np.ndarray:
         out[2][region][mask] = math.sin(2 * r.angle)
         out[3][region][mask] = r.width / WIDTH_SCALE
     return out
-
-
-def fill_missing_depth(depth: np.ndarray) -> np.ndarray:
-    """Replace missing depth (0 or non-finite) by the median of the valid pixels."""
-    valid = np.isfinite(depth) & (depth > 0)
-    if valid.all():
-        return depth
-    fill = float(np.median(depth[valid])) if valid.any() else 0.0
-    return np.where(valid, depth, fill).astype(np.float32)
 
 
 def normalise_depth(depth: np.ndarray) -> np.ndarray:
@@ -117,22 +109,38 @@ def post_process(
 
 
 def detect_grasps(
-    q: np.ndarray, angle: np.ndarray, width: np.ndarray, n: int = 1, min_distance: int = 5
+    q: np.ndarray,
+    angle: np.ndarray,
+    width: np.ndarray,
+    n: int = 1,
+    min_distance: int = 5,
+    valid: np.ndarray | None = None,
+    max_invalid: int = INVALID_PEAKS,
 ) -> list[tuple[GraspRect, float]]:
     """Up to ``n`` grasps at the highest local maxima of Q, best first, with their quality.
 
-    Local maxima are at least ``min_distance`` pixels apart (greedy suppression).
+    Local maxima are at least ``min_distance`` pixels apart (greedy suppression). With
+    ``valid`` (bool, where the input's depth was measured: `tamp.grasp.depth`), a peak whose
+    grasp is not `on_valid_depth` is passed over, and after ``max_invalid`` such peaks the
+    search stops: fewer than ``n`` grasps (maybe none) come back.
     """
     order = np.argsort(q, axis=None)[::-1]
     picked: list[tuple[int, int]] = []
     out = []
+    passed = 0
     for flat in order:
         y, x = divmod(int(flat), q.shape[1])
         if any(abs(y - py) < min_distance and abs(x - px) < min_distance for py, px in picked):
             continue
         picked.append((y, x))
         w = max(float(width[y, x]), 1.0)
-        out.append((GraspRect(float(x), float(y), float(angle[y, x]), w, w / 2), float(q[y, x])))
+        rect = GraspRect(float(x), float(y), float(angle[y, x]), w, w / 2)
+        if valid is not None and not on_valid_depth(rect, valid):
+            passed += 1
+            if passed >= max_invalid:
+                break
+            continue
+        out.append((rect, float(q[y, x])))
         if len(out) >= n:
             break
     return out

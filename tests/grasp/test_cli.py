@@ -161,3 +161,87 @@ def test_synth_writes_a_jacquard_set(tmp_path: Path, capsys):
         assert rc == 0 and json.loads(capsys.readouterr().out)["scenes"] == 1
     rc = main(["grasp", "synth", str(tmp_path / "g"), "--table", "green"])
     assert rc == 2 and "'plain', 'mats'" in capsys.readouterr().err
+
+
+def _bar_scene(tmp_path: Path) -> tuple[Path, np.ndarray]:
+    """A red bar 5 cm above a table seen from 0.6 m (the scene of tests/test_wheel.py)."""
+    n = 96
+    depth = np.full((n, n), 0.60, np.float32)
+    rgb = np.full((n, n, 3), 150, np.uint8)
+    depth[40:56, 30:66] = 0.55
+    rgb[40:56, 30:66] = (200, 40, 40)
+    formats.write_rgb(tmp_path / "rgb.png", rgb)
+    return tmp_path / "rgb.png", depth
+
+
+@pytest.mark.parametrize(
+    "fill, dtype, message",
+    [(np.nan, np.float32, "no valid depth: 0 of 9216 pixels in 0.05-5 m, 9216 holes (0 or NaN)"),
+     (0.0, np.float32, "9216 holes (0 or NaN)"),
+     (-0.6, np.float32, "9216 of 9216 pixels have negative depth"),
+     (7.0, np.float32, "9216 farther than 5 m; --depth-range MIN,MAX sets the range"),
+     (600, np.uint16, "values near 600 look like millimetres: depth must be in metres")],
+)  # fmt: skip
+def test_hostile_depth_image_exits_2_naming_the_file(tmp_path: Path, capsys, fill, dtype, message):
+    """All NaN, all zero, all negative, all beyond the sensor's range, millimetres: bad
+    input, before any weights are read."""
+    import tifffile
+
+    rgb, _ = _bar_scene(tmp_path)
+    bad = tmp_path / "D.tiff"
+    tifffile.imwrite(bad, np.full((96, 96), fill, dtype))
+    no_weights = str(tmp_path / "none.pt")
+    rc = main(["grasp", "predict", str(rgb), "--depth", str(bad), "--weights", no_weights])
+    err = capsys.readouterr().err
+    assert rc == 2 and f"{bad}: " in err and message in err and err.count("\n") == 1, err
+    rc = main(["grasp", "predict", str(bad), "--weights", no_weights, "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert rc == 2 and doc["exit"] == 2 and doc["file"] == str(bad) and message in doc["error"]
+
+
+@pytest.mark.parametrize(
+    "flags, message",
+    [(["--depth-range", "1,0.5"], "--depth-range: depth range needs 0 < MIN < MAX"),
+     (["--depth-range", "near,far"], "--depth-range: expected MIN,MAX in metres"),
+     (["--depth-range", "0.05,0.5"], "9216 farther than 0.5 m"),
+     (["--top", "0"], "--top must be >= 1")],
+)  # fmt: skip
+def test_bad_depth_range_and_top_exit_2(tmp_path: Path, capsys, flags, message):
+    rgb, depth = _bar_scene(tmp_path)
+    formats.write_depth_tiff(tmp_path / "d.tiff", depth)
+    rc = main(["grasp", "predict", str(rgb), "--depth", str(tmp_path / "d.tiff"), *flags])
+    assert rc == 2 and message in capsys.readouterr().err
+
+
+def test_depth_holes_off_the_object_still_grasp_it_on_valid_depth(tmp_path: Path, capsys):
+    """A real camera's holes (NaN to the right, zeros along the top, a little beyond the
+    range in a corner) away from the bar: the grasp is on the bar, on measured depth."""
+    rgb, depth = _bar_scene(tmp_path)
+    depth[:, 70:] = np.nan
+    depth[:20] = 0.0
+    depth[80:, :10] = 9.0
+    formats.write_depth_tiff(tmp_path / "d.tiff", depth)
+    down = "1 0 0 0  0 -1 0 0  0 0 -1 0.6  0 0 0 1".split()
+    rc = main(["grasp", "predict", str(rgb), "--depth", str(tmp_path / "d.tiff"),
+               "--intrinsics", "100", "100", "47.5", "47.5", "--pose", *down,
+               "--top", "2", "--json"])  # fmt: skip
+    assert rc == 0
+    for g in json.loads(capsys.readouterr().out):
+        assert 30 <= g["u"] <= 66 and 40 <= g["v"] <= 56, g
+        assert g["position"][2] == pytest.approx(0.05, abs=0.01)
+
+
+def test_no_grasp_where_the_object_has_no_depth_exits_1(tmp_path: Path, capsys):
+    """The bar (and its rim) is a hole: the network still sees it in colour, but every grasp
+    it rates best lies where the camera measured nothing: no grasp, exit 1, the reason."""
+    rgb, depth = _bar_scene(tmp_path)
+    depth[35:61, 25:71] = np.nan
+    d = tmp_path / "d.tiff"
+    formats.write_depth_tiff(d, depth)
+    rc = main(["grasp", "predict", str(rgb), "--depth", str(d)])
+    err = capsys.readouterr().err
+    assert rc == 1 and f"{d}: no grasp: the network's best grasps lie on invalid depth" in err
+    assert "8020 of 9216 pixels in 0.05-5 m, 1196 holes" in err
+    rc = main(["grasp", "predict", str(rgb), "--depth", str(d), "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert rc == 1 and doc["exit"] == 1 and "no grasp" in doc["error"]

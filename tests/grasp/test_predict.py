@@ -83,3 +83,100 @@ def test_predictor_needs_the_right_images():
         pred.predict(rgb=np.zeros((32, 32, 3), np.uint8))
     with pytest.raises(InputError, match="RGB image is needed"):
         pred.predict(depth=np.zeros((32, 32), np.float32))
+
+
+class _BlobModel:
+    """A stand-in network whose quality falls off smoothly from one input pixel over the
+    whole image (so the order of its peaks is defined), angle 0, width 8 px; counts calls."""
+
+    def __init__(self, size, row, col, spread=12.0):
+        import torch
+
+        ys, xs = torch.meshgrid(torch.arange(size), torch.arange(size), indexing="ij")
+        r2 = ((ys - row) ** 2 + (xs - col) ** 2).float()
+        self.out = torch.zeros(1, 4, size, size)
+        self.out[0, 0] = torch.exp(-r2 / (2 * spread**2))
+        self.out[0, 1] = 1.0
+        self.out[0, 3] = 8 / WIDTH_SCALE
+        self.calls = 0
+
+    def __call__(self, x):
+        self.calls += 1
+        return self.out.expand(x.shape[0], -1, -1, -1)
+
+
+def _hole(depth, row, col, radius, value=np.nan):
+    ys, xs = np.mgrid[0 : depth.shape[0], 0 : depth.shape[1]]
+    out = depth.copy()
+    out[(ys - row) ** 2 + (xs - col) ** 2 <= radius**2] = value
+    return out
+
+
+TABLE = np.full((64, 64), 0.6, np.float32)
+DOWN = np.array([[1, 0, 0, 0], [0, -1, 0, 0], [0, 0, -1, 0.6], [0, 0, 0, 1]], float)
+K64 = (80.0, 80.0, 31.5, 31.5)
+
+
+@pytest.mark.parametrize(
+    "fill, message",
+    [(np.nan, "4096 holes"), (0.0, "holes (0 or NaN)"), (-0.6, "have negative depth"),
+     (7.0, "farther than 5 m")],
+)  # fmt: skip
+def test_no_valid_depth_gives_no_grasp_and_the_reason(fill, message):
+    """All NaN, all zero, all negative, all beyond the range: the network is not even run."""
+    model = _BlobModel(64, 32, 32)
+    pred = GraspPredictor(model, {"input": "d", "size": 64})
+    found = pred.detect(depth=np.full((64, 64), fill, np.float32), intrinsics=K64, X_WC=DOWN)
+    assert found.grasps == [] and message in found.reason and model.calls == 0
+    assert pred.predict(depth=np.full((64, 64), fill, np.float32)) == []
+
+
+def test_partly_invalid_depth_still_grasps_the_object_on_valid_depth():
+    """Half the image NaN, a strip of zeros: the peak stands on measured depth and is kept."""
+    depth = TABLE.copy()
+    depth[:, :24] = np.nan
+    depth[:6] = 0.0
+    pred = GraspPredictor(_BlobModel(64, 32, 44), {"input": "d", "size": 64})
+    found = pred.detect(depth=depth, intrinsics=K64, X_WC=DOWN, n=2)
+    assert found.reason is None and len(found.grasps) == 2
+    g = found.grasps[0]
+    assert abs(g.u - 44) < 1 and abs(g.v - 32) < 1 and g.quality > 0.9
+    assert g.position[2] == pytest.approx(0.0, abs=1e-6)  # the table, seen from 0.6 m
+    assert found.depth.valid_count == 64 * 40 - 6 * 40
+
+
+@pytest.mark.parametrize("value", [np.nan, 0.0, 9.0, 0.01])
+def test_a_peak_on_invalid_depth_is_passed_over(value):
+    """A small hole (or depth beyond the range) under the best peak: the best grasp on
+    valid depth comes back instead, off the hole."""
+    depth = _hole(TABLE, 32, 32, 4, value)
+    pred = GraspPredictor(_BlobModel(64, 32, 32), {"input": "d", "size": 64})
+    (g,) = pred.predict(depth=depth, intrinsics=K64, X_WC=DOWN)
+    assert math.hypot(g.u - 32, g.v - 32) > 4 and g.quality < 1.0
+    assert all(math.isfinite(v) for v in g.position)
+
+
+def test_no_grasp_where_the_best_peaks_all_lie_on_invalid_depth():
+    """A hole over everything the network rates best: no grasp, and why."""
+    depth = _hole(TABLE, 32, 32, 20)
+    pred = GraspPredictor(_BlobModel(64, 32, 32), {"input": "d", "size": 64})
+    found = pred.detect(depth=depth, n=3)
+    assert found.grasps == []
+    assert "best grasps lie on invalid depth" in found.reason and "holes" in found.reason
+
+
+def test_the_range_is_the_predictor_s():
+    from tamp.grasp.depth import DepthRange
+
+    near = GraspPredictor(
+        _BlobModel(64, 32, 32), {"input": "d", "size": 64}, depth_range=DepthRange(0.05, 0.5)
+    )
+    assert "farther than 0.5 m" in near.detect(depth=TABLE).reason
+
+
+def test_no_made_up_depth_for_the_world_point():
+    """Without valid depth around the grasp pixel the world point is NaN, not the image's
+    median (the robot would reach for a point nobody measured)."""
+    depth = _hole(TABLE, 10, 10, 5)
+    pos, _, _ = to_world(GraspRect(10, 10, 0.0, 8, 4), depth, K64, DOWN)
+    assert all(math.isnan(v) for v in pos)

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tamp.grasp.depth import valid_depth
 from tamp.grasp.pinhole import pixel_to_camera
 from tamp.grasp.predict import to_world
 from tamp.grasp.rect import GraspRect, angle_difference
@@ -139,8 +140,8 @@ class GraspPlanner:
         self.calls += 1
         mask = dilate(np.asarray(crop.mask), 1)
         depth = np.where(crop.mask, crop.depth, 0.0).astype(np.float32)  # the target's top
-        top = depth[crop.mask]
-        top = float(np.median(top[top > 0])) if np.any(top > 0) else float("nan")
+        top = depth[crop.mask & valid_depth(depth, self.predictor.depth_range)]
+        top = float(np.median(top)) if top.size else float("nan")
         opening = (MAX_OPENING - 2 * PAD_CLEARANCE) * fx / top  # in pixels at the top
         half_pad = PAD_WIDTH / 2 * fx / top
         out, fallbacks = [], []
@@ -326,7 +327,7 @@ def clear_of_others(
     us, vs = us[inside], vs[inside]
     target = dilate(np.asarray(crop.mask), 2)
     z = np.asarray(crop.depth)[vs, us]
-    other = ~target[vs, us] & np.isfinite(z) & (z > 0)
+    other = ~target[vs, us] & valid_depth(z)
     if not other.any():
         return True
     X = np.asarray(X_WC)
