@@ -82,25 +82,36 @@ def gate_tree(
     events: Iterable[Appear] = (),
     failures: Sequence[Fail] | None = None,
     max_failures: int = 1,
+    budget: int | None = None,
+    allow_unknown: bool = False,
 ) -> Report:
     """Every execution of ``executor``'s grown tree from ``state`` (it is not ticked).
 
     ``properties``: LTL over the exploration's propositions (default
     `verification.bt.DEFAULT_PROPERTIES`); ``events``: appearances; ``failures``: the skills
     that may fail (None: every skill), at most ``max_failures`` per execution.
+    ``budget``: the states the exploration may visit (default
+    `verification.bt.DEFAULT_MAX_STATES`; ``--verify-budget``). A tree it cannot cover
+    within the budget is neither passed nor refused as unsafe: `VerificationUnknown` (exit
+    1) names the budget and how to raise it; ``allow_unknown`` lets such a report pass,
+    its notes saying so.
     """
-    from verification.bt import DEFAULT_PROPERTIES, check_tree
+    from verification.bt import DEFAULT_MAX_STATES, DEFAULT_PROPERTIES, check_tree
+    from verification.bt.check import VerificationUnknown
 
-    return _passed(
-        check_tree(
-            executor,
-            state,
-            properties if properties is not None else DEFAULT_PROPERTIES,
-            events=events,
-            failures=failures,
-            max_failures=max_failures,
-        )
+    limit = DEFAULT_MAX_STATES if budget is None else budget
+    report = check_tree(
+        executor,
+        state,
+        properties if properties is not None else DEFAULT_PROPERTIES,
+        events=events,
+        failures=failures,
+        max_failures=max_failures,
+        max_states=limit,
     )
+    if report.status == "unknown" and not allow_unknown:
+        raise VerificationUnknown(report, limit)
+    return _passed(report)
 
 
 def gate_table(controller: LotsController) -> Report:

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import copy
 from collections import Counter, deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 
 from tamp.bt.expand import (
@@ -122,6 +122,11 @@ class ExecutorSnapshot:
     def resume(self) -> PaBtExecutor:
         """A new executor continuing from this point (the snapshot stays usable)."""
         return copy.deepcopy(self.executor)
+
+    def fork(self) -> PaBtExecutor:
+        """Like `resume`, sharing the finished goal subtrees with the snapshot
+        (`PaBtExecutor.fork`): what the verification explorer continues from."""
+        return self.executor.fork()
 
 
 def default_max_expansions(goals: int) -> int:
@@ -218,6 +223,7 @@ class PaBtExecutor(TreeGrowth):
             del self.preempt[:]
         if self._abort is not None:
             return self._stop(self._abort, world)
+        self._forget_passed_goals()
         if st is SUCCESS:
             self.result = SUCCESS
             self.reason = "every goal condition reached"
@@ -264,6 +270,22 @@ class PaBtExecutor(TreeGrowth):
             queue.extend(n.children)
         return None
 
+    def ticked_nodes(self) -> Iterator[Node]:
+        """The nodes ticked in the last tick, depth-first in tick order.
+
+        A node is ticked only through its parent in the same tick, so a subtree whose root
+        was not ticked holds no node that was: it is skipped whole (the finished goal
+        subtrees of a long run cost nothing here).
+        """
+        tick = self.tick_id
+        stack: list[Node] = [self.root]
+        while stack:
+            n = stack.pop()
+            if n.tick_id != tick:
+                continue
+            yield n
+            stack.extend(reversed(n.children))
+
     def _grow(self, state: WorldState, world: World) -> Status:
         self._fruitless += 1
         if self._fruitless > self.max_fruitless:
@@ -290,9 +312,7 @@ class PaBtExecutor(TreeGrowth):
             self._register_new_areas(world)
             return RUNNING
         failed = [
-            n
-            for n in self.root.walk()
-            if n.__class__ is ActionNode and n.tick_id == self.tick_id and n.status is FAILURE
+            n for n in self.ticked_nodes() if n.__class__ is ActionNode and n.status is FAILURE
         ]
         if failed:
             for n in failed:
@@ -307,8 +327,8 @@ class PaBtExecutor(TreeGrowth):
             return RUNNING
         guards = [
             str(n.pred)
-            for n in self.root.walk()
-            if n.__class__ is Condition and n.tick_id == self.tick_id and n.status is FAILURE
+            for n in self.ticked_nodes()
+            if n.__class__ is Condition and n.status is FAILURE
         ]
         return self._stop(
             "the tree failed and no failed condition can be grown further"
@@ -522,6 +542,86 @@ class PaBtExecutor(TreeGrowth):
         self.log = []
         self.attempts = [r for r in self.attempts if r.status is None]
 
+    def finished_goals(self) -> int:
+        """How many leading children of the root are finished for good: the goal subtrees
+        before the root's cursor while the executor runs (0 once it stopped).
+
+        The root is a SequenceWithMemory (Alg. 2 l. 1-3) and is never reset while the
+        executor runs (only its success or `_stop` resets it, and both end the run), so a
+        child left of its cursor is never ticked again: from the tick after the one that
+        passed it, its nodes keep a tick id older than every later tick, which hides them
+        from GetFailedNode, from the failed-action and guard lists of `_grow`, and from
+        conflict search (which only looks at ReactiveSequence ancestors of a new subtree,
+        and the root is not one). Tree edits happen only at or after the cursor.
+        """
+        root = self.root
+        if self.result is not None or not isinstance(root, SequenceNode) or not root.memory:
+            return 0
+        return root.cursor
+
+    def live_key(self) -> tuple:
+        """`state_key` restricted to what can still influence a tick: equal live keys,
+        ticked against equal worlds, do the same thing from now on.
+
+        Left out, because they never act again (see `finished_goals`): the finished goal
+        subtrees and the livelock records of nodes no longer in the live tree. Node ids
+        become positions in the live tree (two branches that grew the same subtree with
+        different ids are the same state). A stopped executor does nothing more: its key is
+        its result. This is the state hashing that makes the verification of a tree grown
+        from per-goal subtrees scale with the goals (`verification.bt.explore`).
+        """
+        if self.result is not None:
+            return ("stopped", self.result.value)
+        tick = self.tick_id
+        root = self.root
+        done = self.finished_goals()
+        position: dict[int, int] = {}
+        nodes = [(root.__class__.__name__, len(root.children), root.state_key(tick))]
+        for child in root.children[done:]:
+            if child.__class__ is Condition:  # most of them: the goals not reached yet
+                position[child.uid] = len(nodes)
+                nodes.append(child.state_key(tick))
+                continue
+            for n in child.walk():
+                position[n.uid] = len(nodes)
+                nodes.append(n.state_key(tick))
+        livelock = frozenset(
+            (position[uid], fp, cursor, count)
+            for (uid, fp, cursor), count in self._completed_from.items()
+            if uid in position
+        )
+        start = self._start_key
+        if self.running is None or start is None or start[0] not in position:
+            start = None
+        else:
+            start = (position[start[0]], *start[1:])
+        return (
+            done,
+            tuple(nodes),
+            None if self.running is None else position.get(self.running.uid),
+            livelock,
+            start,
+            self._fruitless,
+            self.stats.expansions,
+            tuple(self.reserved),
+            tuple(sorted(self.extra_areas)),
+            tuple(sorted(self.put_down_hint.items())),
+        )
+
+    def fork(self) -> PaBtExecutor:
+        """A copy that continues the run from here and shares the finished goal subtrees
+        (`finished_goals`) with this executor instead of copying them.
+
+        Neither executor ticks or edits those subtrees again, so sharing them is safe for
+        running; it makes a copy cost the live part of the tree, not the whole grown tree.
+        Their parent links point into this executor's tree: export or inspect the tree of
+        the executor the fork came from, not of the fork.
+        """
+        memo: dict = {}
+        for child in self.root.children[: self.finished_goals()]:
+            memo[id(child)] = child
+        return copy.deepcopy(self, memo)
+
     def state_key(self) -> tuple:
         """A hashable value of everything that decides what this executor does next.
 
@@ -557,7 +657,8 @@ class PaBtExecutor(TreeGrowth):
         new.running = None if self.running is None else memo[id(self.running)]
         new.preempt = [memo.get(id(n), n) for n in self.preempt]
         new.attempts = [copy.copy(r) for r in self.attempts]
-        new.stats = copy.deepcopy(self.stats, memo)
+        new.stats = copy.copy(self.stats)
+        new.stats.free_areas_found = list(self.stats.free_areas_found)
         return new
 
     _SHARED = frozenset(
@@ -575,6 +676,16 @@ class PaBtExecutor(TreeGrowth):
     )  # fmt: skip
 
     # -- helpers ---------------------------------------------------------------------------
+    def _forget_passed_goals(self) -> None:
+        """Drop the livelock records of goals the root has passed: their key holds the
+        root's cursor at the start, and the cursor only grows while the executor runs, so
+        they can never match again. The bookkeeping of a long run stays one goal's size."""
+        done = self._completed_from
+        cursor = _cursor(self.root)
+        # records are added in the order of the ticks, so the first has the oldest cursor
+        if done and next(iter(done))[2] < cursor:
+            self._completed_from = Counter({k: n for k, n in done.items() if k[2] >= cursor})
+
     def _open_record(self, action: Action) -> ActionRecord | None:
         for rec in reversed(self.attempts):
             if rec.status is None and rec.action == action:

@@ -189,8 +189,10 @@ class Node:
         """Copy the subtree below this node, top-down, sharing the immutable payloads.
 
         Node slots hold immutable values (ints, floats, enums, predicates, actions) or lists
-        of them, except ``children`` (copied recursively) and ``parent`` (the copy of the
-        parent if it is being copied too, else None: a copied subtree is detached).
+        of them, except ``children`` (copied recursively; a child already in ``memo`` is
+        taken from there, which is how `PaBtExecutor.fork` shares finished subtrees) and
+        ``parent`` (the copy of the parent if it is being copied too, else None: a copied
+        subtree is detached).
         """
         cls = self.__class__
         new = cls.__new__(cls)
@@ -198,7 +200,7 @@ class Node:
         for slot in _slots_of(cls):
             value = getattr(self, slot)
             if slot == "children":
-                value = [c.__deepcopy__(memo) for c in value]
+                value = [memo[id(c)] if id(c) in memo else c.__deepcopy__(memo) for c in value]
             elif slot == "parent":
                 value = None if value is None else memo.get(id(value))
             elif value.__class__ is list:
@@ -267,6 +269,35 @@ class Condition(Node):
 
     def describe(self) -> str:
         return str(self.pred)
+
+    def state_key(self, tick_id: int) -> tuple:
+        """`Node.state_key` with the predicate's small int key in place of its text (the
+        same information, without formatting a string: keys are taken once per explored
+        state)."""
+        status = self.status
+        return (
+            "Condition",
+            self.key,
+            None if status is None else status.value,
+            self.tick_id == tick_id,
+            self.expanded,
+        )
+
+    def __deepcopy__(self, memo: dict) -> Condition:
+        """`Node.__deepcopy__` for a leaf, spelled out: a grown tree is mostly conditions,
+        and the verification explorer copies the live part of it once per explored state."""
+        new = Condition.__new__(Condition)
+        memo[id(self)] = new
+        new.uid = self.uid
+        parent = self.parent
+        new.parent = None if parent is None else memo.get(id(parent))
+        new.children = []
+        new.status = self.status
+        new.tick_id = self.tick_id
+        new.pred = self.pred
+        new.key = self.key
+        new.expanded = self.expanded
+        return new
 
 
 class ActionNode(Node):

@@ -1,8 +1,8 @@
 """The ``--execute`` part of ``tamp plan``: argument definitions and the run function.
 
 ``tamp plan DEMO.yaml --execute [--appear OBJ@PLACE[@WHEN]] [--fail ACTION[(ARGS)][xTIMES]]
-[--skill-ticks N] [--max-ticks N] [--max-expansions N] [--json] [--bt-xml out.xml]
-[--bt-dot out.dot]``
+[--skill-ticks N] [--max-ticks N] [--max-expansions N] [--verify-budget N] [--json]
+[--bt-xml out.xml] [--bt-dot out.dot]``
 
 - ``--max-ticks`` and ``--max-expansions`` default to caps that scale with the number of
   goals (`default_max_ticks`, `tamp.bt.executor.default_max_expansions`); a run stopped by
@@ -14,7 +14,9 @@
   first two attempts of Place(O1, L1); ``--fail MoveTo`` the first MoveTo, whatever its target.
 - Before it runs, the grown tree passes the verification gate as in ``tamp simulate``:
   every execution over the symbolic domain (the appearances, one skill failure) against
-  the safety properties and ``F goal`` (`verification.gate.gate_tree`).
+  the safety properties and ``F goal`` (`verification.gate.gate_tree`). ``--verify-budget
+  N`` bounds the states it explores; a tree it cannot cover within them is refused as
+  unknown (exit 1, the message names the budget); a long check logs its progress.
 - exit status 0 when every goal was reached, 1 otherwise (the reason is printed).
 """
 
@@ -51,6 +53,14 @@ def add_execute_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="N",
         help="tree expansions before the executor gives up (default: 20 per goal, >= 200)",
+    )
+    g.add_argument(
+        "--verify-budget",
+        type=int,
+        default=None,
+        metavar="N",
+        help="states the tree gate may explore before its verdict is unknown (exit 1) "
+        "(default 200000)",
     )
     g.add_argument(
         "--bt-xml", metavar="PATH", help="write the grown tree as BehaviorTree.CPP v4 XML"
@@ -94,6 +104,8 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any, *, 
         raise InputError("must be >= 1", field="--max-ticks")
     if args.max_expansions is not None and args.max_expansions < 1:
         raise InputError("must be >= 1", field="--max-expansions")
+    if args.verify_budget is not None and args.verify_budget < 1:
+        raise InputError("must be >= 1", field="--verify-budget")
     goals = len(plan_result.c_goal)
     max_ticks = args.max_ticks or default_max_ticks(goals, args.skill_ticks)
     appear, fail = demo_events(args, demo)
@@ -103,7 +115,10 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any, *, 
         from verification.gate import gate_tree
 
         verified = gate_tree(
-            executor_for(demo, list(plan_result.order)), demo.initial_world(), events=appear
+            executor_for(demo, list(plan_result.order)),
+            demo.initial_world(),
+            events=appear,
+            budget=args.verify_budget,
         )
     report = execute_plan(
         demo,

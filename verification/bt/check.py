@@ -1,4 +1,8 @@
-"""`check_tree`: model-check every explored execution of a grown tree against LTL properties."""
+"""`check_tree`: model-check every explored execution of a grown tree against LTL properties.
+
+`VerificationUnknown` is what the gate raises when the exploration hit its budget without
+finding a violation: nothing is established, and the message says how to raise the budget.
+"""
 
 from __future__ import annotations
 
@@ -8,10 +12,10 @@ from tamp.bt.executor import PaBtExecutor
 from tamp.ltl.formula import Formula, ap_names, as_formula
 from tamp.world.events import Appear, Fail
 from tamp.world.state import WorldState
-from verification.bt.explore import explore
+from verification.bt.explore import DEFAULT_MAX_STATES, explore
 from verification.bt.labels import DEFAULT_PROPERTIES
 from verification.kripke import model_check
-from verification.verdict import Report
+from verification.verdict import Report, VerificationError
 
 
 def check_tree(
@@ -22,8 +26,9 @@ def check_tree(
     events: Iterable[Appear] = (),
     failures: Iterable[Fail] | None = None,
     max_failures: int = 1,
-    max_states: int = 50_000,
+    max_states: int = DEFAULT_MAX_STATES,
     subject: str = "BT",
+    reduce: bool = True,
 ) -> Report:
     """Every execution of ``executor`` from ``state`` against each property.
 
@@ -31,6 +36,8 @@ def check_tree(
     entries; None: every skill), at most ``max_failures`` failures per execution.
     ``executor`` is not ticked (the exploration works on copies). Properties use the
     propositions of `verification.bt.labels`; an unknown one is an `InputError`.
+    ``reduce``: the reduced exploration (default) or the explicit one
+    (`verification.bt.explore`).
     """
     formulas = [as_formula(p, field="--property") for p in properties]
     aps = sorted({a for f in formulas for a in ap_names(f)})
@@ -42,6 +49,7 @@ def check_tree(
         failures=failures,
         max_failures=max_failures,
         max_states=max_states,
+        reduce=reduce,
     )
     bound = "" if ex.complete else f", BOUNDED at {max_states} states"
     name = (
@@ -55,6 +63,20 @@ def check_tree(
             v.complete = False
         notes.append(
             f"exploration bounded at {max_states} states: a property with no counterexample "
-            "among them is unknown, not established (raise --max-states)"
+            "among them is unknown, not established (raise the bound)"
         )
     return Report(verdicts, explored=ex.system.num_states, notes=notes)
+
+
+class VerificationUnknown(VerificationError):
+    """The tree gate's exploration hit its budget without a violation: unknown (exit 1)."""
+
+    def __init__(self, report: Report, budget: int, option: str = "--verify-budget") -> None:
+        super().__init__(report)
+        self.budget = budget
+        self.summary = (
+            f"verification unknown: the behavior tree has more executions than the budget of "
+            f"{budget} states covers (no violation among them); raise it with "
+            f"{option} N (e.g. {option} {budget * 10}), or skip the gate with --no-verify"
+        )
+        self.args = (self.summary,)
