@@ -27,6 +27,7 @@ demonstration's reason for it) or the goal never reached.
 
 from __future__ import annotations
 
+import itertools
 import re
 from collections import Counter, deque
 from collections.abc import Collection, Sequence
@@ -256,10 +257,12 @@ class GoalGraph:
 
     def name(self, state: int) -> str:
         """``{G0, G1}``; a large set is abbreviated to its first goals and its size."""
-        names = [self.ids[k] for k in _bits(self.masks[state])]
-        if len(names) <= 8:
+        mask = self.masks[state]
+        count = mask.bit_count()
+        names = [self.ids[k] for k in itertools.islice(_bits(mask), 8 if count <= 8 else 3)]
+        if count <= 8:
             return "{" + ", ".join(names) + "}"
-        return "{" + ", ".join(names[:3]) + f", … ({len(names)} goals)" + "}"
+        return "{" + ", ".join(names) + f", … ({count} goals)" + "}"
 
 
 def _bits(mask: int):
@@ -328,16 +331,15 @@ def _search(gg: GoalGraph, preds: list[list[int]]) -> tuple[int, list[int], _Wit
 
 
 def _lasso(gg: GoalGraph, parent: list[int], w: _Witness) -> tuple[list[int], list[int]]:
-    """A path from the start to the witness, then the states repeated forever: the witness
-    itself (a dead end stutters), a cycle of equal goal sets through it, or, for a broken
-    constraint, any way on from it to a state the run stays in."""
+    """(prefix, cycle) of a run from the start through the witness: the cycle, repeated
+    forever, is the witness itself (a dead end stutters) or a cycle of equal goal sets
+    through it, or, for a broken constraint, where any way on from the witness ends."""
     path = [w.state]
     while parent[path[-1]] != -1:
         path.append(parent[path[-1]])
     path.reverse()
     if w.stuck:
-        cycle = _cycle_through(gg, w.state)
-        return path, cycle or [w.state]
+        return path[:-1], _cycle_through(gg, w.state) or [w.state]
     seen = set(path)
     while gg.succ[path[-1]]:
         nxt = gg.succ[path[-1]][0]
@@ -346,7 +348,7 @@ def _lasso(gg: GoalGraph, parent: list[int], w: _Witness) -> tuple[list[int], li
             return path[:k], path[k:]
         seen.add(nxt)
         path.append(nxt)
-    return path, [path[-1]]
+    return path[:-1], [path[-1]]
 
 
 def _cycle_through(gg: GoalGraph, s: int) -> list[int] | None:
@@ -388,18 +390,18 @@ def check_goal_graph(demo, gg: GoalGraph, *, subject: str | None = None) -> Verd
         return Verdict(subject, formula, "all paths", True, reached)
     prefix, cycle = _lasso(gg, parent, witness)
     run = prefix + cycle
-    at: dict[str, int] = {}
-    for t, s in enumerate(run):
-        for k in _bits(gg.masks[s]):
-            at.setdefault(ids[k], t)
+    # the goals each step adds (the run never loses one): O(run · |G| / 64 + |G|)
+    added = [gg.masks[run[0]]] + [gg.masks[b] & ~gg.masks[a] for a, b in itertools.pairwise(run)]
+    at = {ids[k]: t for t, new in enumerate(added) for k in _bits(new)}
     broken = run_violations(ids, demo.constraints, at, demo.constraint_reasons)
 
     def word_of(keep):
-        def letter(s: int) -> frozenset[str]:
-            props = (goal_prop(ids[k]) for k in _bits(gg.masks[s]))
-            return frozenset(p for p in props if keep is None or p in keep)
-
-        return Word.lasso([letter(s) for s in prefix], [letter(s) for s in cycle])
+        letters, cur = [], frozenset()
+        for new in added:
+            props = {goal_prop(ids[k]) for k in _bits(new)}
+            cur = cur | {p for p in props if keep is None or p in keep} if props else cur
+            letters.append(cur)
+        return Word.lasso(letters[: len(prefix)], letters[len(prefix) :])
 
     ce = _counterexample(
         broken,

@@ -13,8 +13,8 @@ from tamp.errors import InfeasibleError
 from tamp.ltl.formula import short
 from verification.words import Word
 
-#: Characters of a formula that text output shows (JSON carries it whole): the encoding of
-#: a plan of 5,000 goals is 10,000 conjuncts long.
+#: Characters of a formula or word that text output shows (JSON carries it whole): the
+#: encoding of a plan of 5,000 goals is 10,000 conjuncts long.
 FORMULA_SHOWN = 200
 #: Violated conjuncts that text output lists.
 VIOLATED_SHOWN = 8
@@ -78,11 +78,12 @@ class Counterexample:
                 props = ", ".join(sorted(letter & set(self.aps))) if self.aps else ""
                 lines.append(f"{mark}[{i}] {s}" + (f"  {{{props}}}" if props or self.aps else ""))
         else:
-            lines.append(f"  word:      {self.word.format(self.aps)}")
+            lines.append(f"  word:      {short(self.word.format(self.aps), FORMULA_SHOWN)}")
         if self.position is not None:
             lines.append(f"  no accepting continuation after position {self.position}")
         if self.accepting_word is not None:
-            lines.append(f"  accepted:  {self.accepting_word.format(self.aps)}")
+            accepted = self.accepting_word.format(self.aps)
+            lines.append(f"  accepted:  {short(accepted, FORMULA_SHOWN)}")
         return "\n".join(lines)
 
 

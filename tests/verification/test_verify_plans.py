@@ -326,8 +326,8 @@ def test_bt_appearance_after_an_action_is_explored() -> None:
 
 
 def test_order_scan_agrees_with_the_automata() -> None:
-    """Above MAX_CONJUNCTS_FOR_WHOLE conjuncts the order is decided by one scan: the same
-    verdict, violated conjuncts and bad-prefix end as checking every conjunct's automaton."""
+    """The order is decided by one scan: the same verdict, violated conjuncts and bad-prefix
+    end as checking the encoding's automata."""
     import random
 
     from tamp.demo import cyclic_swap
