@@ -12,13 +12,14 @@ reads 600 m). Everything else is **invalid**: holes, values nearer or farther th
 and the few negative values a filtered image may carry.
 
 Masked pixels are filled for the network from their valid neighbours (:func:`fill_invalid`:
-each takes the depth of the nearest valid pixel). GG-CNN (Morrison et al., RSS 2018, §V-A)
-and GR-ConvNet (Kumra et al., IROS 2020) inpaint the holes of Cornell and Jacquard depth
-with OpenCV's Navier-Stokes method before the network; the nearest-valid fill continues the
-surface that bounds the hole in the same way (not a value from elsewhere in the image, as a
-median does) without OpenCV. The fill only keeps the network's input well defined: a grasp
-whose centre, or most of whose rectangle, lies on invalid depth is never returned
-(:func:`on_valid_depth`), since the camera saw nothing there.
+each takes the depth of the nearest valid pixel). GG-CNN (Morrison et al., RSS 2018) and
+GR-ConvNet (Kumra et al., IROS 2020) inpaint the holes (0) of Cornell and Jacquard depth with
+OpenCV's Navier-Stokes method before the network, in their released preprocessing
+(``DepthImage.inpaint``); the nearest-valid fill continues the surface that bounds the hole
+in the same way (not a value from elsewhere in the image, as a median does) without OpenCV.
+The fill only keeps the network's input well defined: a grasp whose centre, or most of whose
+rectangle, lies on invalid depth is never returned (:func:`on_valid_depth`), since the camera
+saw nothing there.
 
 Bad input (:meth:`DepthCheck.problem`): an image with no valid pixel at all, or with negative
 depth on more than :data:`NEGATIVE_TOLERANCE` of its pixels. Depth is the distance in front
