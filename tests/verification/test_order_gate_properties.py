@@ -149,3 +149,18 @@ def test_growing_sizes_stay_linear_and_exact() -> None:
         gv = check_goal_graph(demo, GoalGraph(tuple(demo.goal_ids), masks, succ))
         assert gv is not None and gv.holds == v.holds
     assert per_goal[5000] < 20 * per_goal[100] + 1e-4
+
+
+def test_tamp_verify_plan_on_a_300_goal_chain(tmp_path, capsys) -> None:
+    """The whole RG and a wrong order of 300 goals: verdicts, not the size guard's exit 2."""
+    from tamp.commands.verify import main as verify_main
+    from tests.demo.generate import write_demo
+
+    demo = str(write_demo(tmp_path / "chain300.yaml", 300, "one"))
+    assert verify_main(["plan", demo]) == 0
+    assert "RG (301 states, 300 edges): holds" in capsys.readouterr().out
+    order = ",".join(["G1", "G0"] + [f"G{k}" for k in range(2, 300)])
+    assert verify_main(["plan", demo, "--order", order, "--no-graph"]) == 1
+    out = capsys.readouterr().out
+    assert "G1 is reached at position 1 before G0, but C has G0 <= G1" in out
+    assert len(max(out.splitlines(), key=len)) < 400  # long formulas and runs are shortened
