@@ -39,9 +39,7 @@ def parse(text: str, *, field: str = "formula", file: str | None = None) -> Form
     except SyntaxError as exc:
         lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
         reason = next((ln for ln in lines if not ln.startswith((">>>", "^"))), "syntax error")
-        raise InputError(
-            f"{text!r} does not parse: {reason}", file=file, field=field
-        ) from None
+        raise InputError(f"{text!r} does not parse: {reason}", file=file, field=field) from None
 
 
 def as_formula(f: str | Formula, *, field: str = "formula") -> Formula:
