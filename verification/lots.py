@@ -20,8 +20,13 @@ the initial table, the automaton state and observed W^B counts of a replan other
 Idle steps of a plan (∅ letters where nothing moves) are not entries of T, so a followed
 entry produces only the letters of actions, exactly like ``tamp.lots.planner.follow_table``.
 
-Entry points: `check_build` (one table, typed), `check_controller` (the table in use),
-`check_run` / `check_table` (the two checks), `check_task_file` (``tamp-verify lots``: the
+A finished run is judged on what happened (`judge_word`): the run's word — the robot's
+deliveries and the W^B states its camera saw, in order (`tamp.lots.word.RunWord`) — followed
+by the accepting cycle of the round it completed, must be accepted by the task automaton;
+the witness word is cross-checked against the formula by our own translation.
+
+Entry points: `judge_word` (a finished run), `check_build` (one table, typed),
+`check_controller` (the table in use), `check_run` / `check_table` (the two checks), `check_task_file` (``tamp-verify lots``: the
 controller run over the symbolic world with an interference script, every table checked).
 """
 
@@ -196,6 +201,47 @@ def check_build(aut: Automaton, lots: Lots, build: Build) -> Report:
     )
 
 
+def judge_word(controller: LotsController) -> Verdict:
+    """The run's word (what happened) followed by its round's cycle: accepted by the task?
+
+    `RunWord` reads every attribution of the objects a person brought into W^B; the witness
+    it gives (the accepted one, if any) is checked again from ``q_0`` by Spot and against the
+    formula itself by `check_trace`: all three must agree for the verdict to hold.
+    """
+    aut, word = controller.aut, controller.word
+    cycle = list(controller.plan.cycle)
+    letters, _ = word.witness(cycle)
+    q = word.accepting(cycle)
+    subject = "LOTS run's word"
+    lasso = Word.lasso(letters, cycle)
+    spot_ok, explored = accepts_lasso(aut.spot_aut, letters, cycle)
+    ours = check_trace(aut.spot_formula, lasso, subject=subject)
+    ours.states_explored += explored
+    if q is not None and spot_ok and ours.holds:
+        return ours
+    if ours.holds:  # the formula holds but the automaton disagrees: say so, never pass it
+        ce = Counterexample(lasso, "", accepting_word=None)
+        ce.reason = "the task automaton rejects the run's word but the formula holds on it"
+        ce.aps = list(aut.ap)
+        return Verdict(subject, str(aut.spot_formula), "infinite", False, explored, ce)
+    ce = ours.counterexample
+    ce.reason = (
+        "what happened (robot deliveries, then the round's cycle forever) does not satisfy "
+        "the task: " + ce.reason
+    )
+    ce.steps = [f"{who}: {what}" for who, what in word.events]
+    return ours
+
+
+def judge_verdict(controller: LotsController) -> tuple[bool, dict]:
+    """`judge_word` as ``tamp.lots.run.run_task``'s ``judge``: (holds, the verdict's JSON)."""
+    v = judge_word(controller)
+    # the task's own text, and no count of explored states: Spot's printing of a commutative
+    # formula and its automata's sizes depend on what else the process has built
+    data = {k: x for k, x in v.to_json().items() if k != "states_explored"}
+    return v.holds, data | {"formula": controller.task.formula}
+
+
 def check_controller(controller: LotsController) -> Report:
     """The controller's table in use (`LotsController.build`), from where it was built."""
     return check_build(controller.aut, controller.lots, controller.build)
@@ -266,4 +312,6 @@ __all__ = [
     "check_table",
     "check_task_file",
     "follow",
+    "judge_verdict",
+    "judge_word",
 ]

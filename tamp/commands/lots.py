@@ -1,7 +1,11 @@
 """`tamp lots TASK.yaml`: run the LOTS reactive planner (Zhou et al. Alg. 1-3) symbolically.
 
 Prints the automaton size, Lemma 1's number of W^B states, the planned run, the robot's
-actions under the scripted human interference, the number of replans and the final counts.
+actions under the scripted human interference, the number of replans, the final counts, and
+the run's word (the robot's deliveries and the W^B states the camera saw) with the task
+automaton's verdict on it: the task is satisfied only when that word is accepted. The robot
+has Zhou et al.'s actions (deliver from W^A to W^B, discard into the waste basket);
+--return-action adds our extension, taking an object from W^B back to W^A.
 Exit status: 0 task satisfied, 1 infeasible (with the reason), 2 bad input.
 """
 
@@ -19,6 +23,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("task", help="LTL task file (YAML, version 1) or a packaged scenario name")
     add_interference_argument(p)
+    add_return_argument(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the random tree update")
     p.add_argument(
         "--tree",
@@ -39,24 +44,52 @@ def add_interference_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument("--interference", metavar="EVENTS.yaml", help="human interference script")
 
 
+def add_return_argument(p: argparse.ArgumentParser) -> None:
+    """``--return-action``, the same on ``tamp lots`` and ``tamp simulate lots``."""
+    p.add_argument(
+        "--return-action",
+        action="store_true",
+        help=(
+            "allow our extension of Zhou et al.'s action set: take an object from W^B back "
+            "to W^A (to deliver it again); same as 'actions: {return: true}' in the task file"
+        ),
+    )
+
+
+def with_returns(task, args: argparse.Namespace):
+    """``task`` with the return action switched on when ``--return-action`` asks for it."""
+    import dataclasses
+
+    if getattr(args, "return_action", False):
+        return dataclasses.replace(task, returns=True)
+    return task
+
+
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from tamp.commands.output import output_file, print_json
     from tamp.errors import InfeasibleError, InputError
-    from tamp.lots.run import run_task
+    from tamp.lots.run import run_task, run_word_json
     from tamp.lots.task import load_events, load_task
 
     if args.max_waits < 1:
         raise InputError("must be >= 1", field="--max-waits")
     if args.dot:
         output_file(args.dot, "--dot")
-    task = load_task(args.task)
+    task = with_returns(load_task(args.task), args)
     events = load_events(args.interference, task) if args.interference else []
     from verification import gate
+    from verification.lots import judge_verdict
 
     report = run_task(
-        task, events, mode=args.tree, seed=args.seed, max_waits=args.max_waits, check=gate
+        task,
+        events,
+        mode=args.tree,
+        seed=args.seed,
+        max_waits=args.max_waits,
+        check=gate,
+        judge=judge_verdict,
     )
     c = report.controller
     if args.dot:
@@ -91,6 +124,9 @@ def run(args: argparse.Namespace) -> int:
             print(f"      {e.never_happened()}")
         print(f"replans: {report.replans}")
         print(f"final: W^A {counts['A']}  W^B {counts['B']}  waste {counts['waste']}")
+        word = " ".join("{" + ",".join(x) + "}" for x in run_word_json(c)["trace"])
+        verdict_word = "accepted" if report.word_accepted else "rejected"
+        print(f"run's word: {word or '(empty)'}  — {verdict_word} by the task automaton")
         verdict = "task satisfied" if report.satisfied else f"task infeasible: {report.reason}"
         if report.unfired_events:
             verdict += f" ({len(report.unfired_events)} scripted event(s) never happened)"

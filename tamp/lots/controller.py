@@ -27,6 +27,14 @@ with FAILURE and the reason; it never loops forever. A skill that fails is start
 the looks that start each retry do not break the row (a pick that never finds a grasp stops
 the robot after ``max_retries`` retries, not at the action bound).
 
+The run's word (`tamp.lots.word.RunWord`: the robot's deliveries and the W^B states the
+camera saw, in order) is kept as the run goes: a table entry is used only when the word can
+have led the automaton to the entry's state, and a replan starts only from such states (the
+tree update of Alg. 3 is restricted to them), so the robot never takes an object that was
+already in W^B, or that a person brought, for a delivery that did not happen. Without our
+return action (`Task.returns`, off by default: Zhou et al.'s actions only deliver from W^A
+or discard) a replanned run delivers no more objects than W^A was last seen to hold.
+
 Every table the controller builds (the initial one, Alg. 1 line 3, and each rebuilt after an
 unforeseen W^B state, line 20) is described by a :class:`Build` — the plan, the table and the
 pair ``(q, s^B)`` it starts from — and handed to the optional ``check`` (the verification
@@ -46,6 +54,7 @@ from tamp.lots.cell import WASTE, held_kind, skill, visible_counts
 from tamp.lots.lots import Counts, Lots
 from tamp.lots.planner import Entry, Plan, Planner, Table, Tree, initial_lasso, round_goals
 from tamp.lots.task import Task
+from tamp.lots.word import RunWord
 from tamp.world.actions import Action
 from tamp.world.interface import Status, World
 
@@ -219,6 +228,7 @@ class LotsController:
         prop_class = {p.name: idx[p.cls] for p in task.propositions}
         self.lots = Lots(task.classes, prop_class, final, round_goals(self.aut, task, final))
         self.planner = Planner(self.aut, self.lots, task)
+        self.planner.round_cycle = list(cycle)
         b0 = self.lots.vector(task.initial_b)
         root = (self.aut.initial, b0)
         cost = sum(self.planner.step_cost(s) for s in steps)
@@ -247,6 +257,10 @@ class LotsController:
         self.result: Status | None = None
         self.reason = ""
         self.final_b: Counts | None = None  # W^B seen when the round was found complete
+        #: the run's word so far (robot deliveries, observed W^B states), read by the automaton
+        self.word = RunWord(self.aut, self.lots, b0)
+        self._history: tuple[Letter, ...] = ()  # a word of the run reaching the plan's start
+        self._a_seen: Counts | None = None  # W^A at the last look there (the stock)
         self.check = check
         if check is not None:
             check(self)
@@ -254,9 +268,7 @@ class LotsController:
     @property
     def build(self) -> Build:
         """The table in use (``self.table``), its plan and where that plan starts."""
-        start = self.plan.start
-        history = tuple(self.tree.letters_to(start)) if start in self.tree else ()
-        return Build(self.tables[-1][0], self.plan, self.table, history)
+        return Build(self.tables[-1][0], self.plan, self.table, self._history)
 
     # ------------------------------------------------------------------ Alg. 1 lines 12-24
     def decide(self, b: Counts) -> Entry | None:
@@ -265,14 +277,31 @@ class LotsController:
         While W^B is where the current run expects it, the run's next entry is used (a run may
         pass one W^B state twice); otherwise ``T[b]`` (one dict lookup).
         """
+        states = self.word.peek(b)
         if self._last is not None:
             e = self.table.next_after(self._last, b)
-            if e is not None:
+            if e is not None and self._fits(e, states):
                 return e
         e = self.table.get(b)
-        if e is not None:
+        if e is not None and self._fits(e, states):
             return e
         return self._replan(b)
+
+    def _fits(self, e: Entry, states: dict[int, tuple[Letter, ...]]) -> bool:
+        """Does following ``T`` from ``e`` complete the task after what happened?
+
+        Yes when the word can be in ``e``'s automaton state; otherwise when the rest of the
+        planned run, read from a state the word can be in, still ends where the round's
+        cycle is accepted (a person's delivery may have done part of the run already).
+        """
+        if e.q in states:
+            return True
+        rest: list[Letter] = []
+        for r in self.table.run[e.index :]:
+            if r.kind == "done":
+                break
+            rest.append(r.letter)
+        return self.word.completes(states, rest, list(self.plan.cycle))
 
     def _replan(self, b: Counts, cap: Counts | None = None) -> Entry | None:
         """Alg. 1 lines 15-21: tree update (Alg. 3) for W^B ``b`` and a new table ``T``.
@@ -280,10 +309,13 @@ class LotsController:
         ``cap`` (objects per class that exist) is given when the table's way needs a class
         W^A has run out of: the replan then considers only the ways still possible.
         """
-        found = self.tree.update(b, cap)
+        states = self.word.peek(b)
+        stock = None if self.task.returns else self._a_seen
+        found = self.tree.update(b, cap, stock, allowed=states)
         if found is None:
             return None
-        _, plan = found
+        q, plan = found
+        self._history = states[q]
         self.replans += 1
         self._last = None
         self.tree.add_plan(plan)
@@ -304,7 +336,10 @@ class LotsController:
         return self.lots.needs(i, b)
 
     def _needs_later(self, entry: Entry) -> bool:
-        """Keep a removed object (back to W^A) when the rest of the plan delivers its class."""
+        """Keep a removed object (back to W^A) when the rest of the plan delivers its class
+        (only with our return action; Zhou et al.'s robot discards it)."""
+        if not self.task.returns:
+            return False
         rest = self.table.run[entry.index + 1 :]
         return any(e.kind == "move" and e.cls == entry.cls for e in rest)
 
@@ -385,6 +420,8 @@ class LotsController:
         new.tables = list(self.tables)
         new.belief = copy.deepcopy(self.belief, memo)
         new.actions = list(self.actions)
+        new.word = copy.copy(self.word)
+        new.word.events = list(self.word.events)
         return new
 
     # ------------------------------------------------------------------ Alg. 1, one skill at a time
@@ -425,6 +462,7 @@ class LotsController:
         if b_obs is None:
             self._on_failure(done, world)
             return None
+        self.word.observe(b_obs)
         return self.belief.on_b(b_obs)
 
     def _wait(self, note: str, *, blocked: bool = False) -> None:
@@ -457,6 +495,7 @@ class LotsController:
             self._on_failure(done, world)
             return
         lots = self.lots
+        self._a_seen = a_obs
         b = self.belief.on_a(a_obs)  # Alg. 1 lines 5-11
         self.looks += 1
         if self.looks > 8:  # observations keep disagreeing: let an action slot pass
@@ -474,9 +513,10 @@ class LotsController:
                 entry, missing = other, False
         if entry is None or missing:
             if entry is None:
-                reason = (
+                reason = self._shortage(b, a_obs) or (
                     f"W^B state {lots.format(b)} cannot lead to completion of "
                     f"{self.task.formula!r} (tree update exhausted {len(self.tree)} pairs)"
+                    + ("" if self.task.returns else _NO_RETURN)
                 )
             else:
                 reason = f"no {lots.classes[entry.cls]} left in W^A for {entry.prop}"
@@ -491,6 +531,22 @@ class LotsController:
         else:  # move: pick in W^A, carry to W^B, look before placing
             c = entry.cls
             self._next("picked", "Pick", lots.classes[c], "A", b=b, entry=entry, cls=c)
+
+    def _shortage(self, b: Counts, a_obs: Counts) -> str | None:
+        """Why no run is left, when W^A's stock is the cause: the class a run would need."""
+        if self.task.returns:
+            return None
+        states = self.word.peek(b)
+        found = self.tree.update(b, None, None, allowed=states)
+        if found is None:
+            return None
+        left = list(a_obs)
+        for s in found[1].steps:
+            if s.kind == "move":
+                if left[s.cls] == 0:
+                    return f"no {self.lots.classes[s.cls]} left in W^A for {s.prop}"
+                left[s.cls] -= 1
+        return None
 
     def _blocked(self, reason: str) -> None:
         self.looks = 0
@@ -543,6 +599,7 @@ class LotsController:
 
     def _on_removed(self, done: Pending, world: World) -> None:
         self.belief.removed(done.cls, done.dest)
+        self.word.remove(done.cls)
         if done.entry is not None:
             self._last = done.entry
         self._record("remove", done.cls, dest=done.dest, note=done.note)
@@ -573,6 +630,7 @@ class LotsController:
 
     def _on_placed(self, done: Pending, world: World) -> None:
         self.belief.placed()
+        self.word.deliver(done.entry.prop)
         self._last = done.entry
         self._record("move", done.cls, prop=done.entry.prop)
 
@@ -583,6 +641,13 @@ class LotsController:
     def _on_discarded(self, done: Pending, world: World) -> None:
         self.belief.dropped()
         self._record("discard_held", done.cls)
+
+
+#: what a blocked run adds when our return action is off (the user may switch it on)
+_NO_RETURN = (
+    " with Zhou et al.'s actions (deliver W^A→W^B, discard); our return action W^B→W^A "
+    "is off (--return-action or 'actions: {return: true}')"
+)
 
 
 def _carry(p: Pending) -> dict[str, Any]:

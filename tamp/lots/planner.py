@@ -24,7 +24,7 @@ import heapq
 import itertools
 import random
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Collection, Iterator
 from dataclasses import dataclass, field
 
 from tamp.lots.automaton import EMPTY, Automaton, Letter
@@ -86,10 +86,13 @@ def initial_lasso(aut: Automaton, task: Task) -> tuple[list[Step], list[Letter],
     Dijkstra on ``(phase, q, b, q_F)``: phase 0 walks to an accepting state ``q_F``; a free
     switch starts phase 1, which must return to ``q_F`` with at least one letter. ``b`` is
     W^B, from ``s^B_0`` (objects already there at the start), bounded by the objects that
-    exist; a step delivers, reads ∅, or takes one object out of W^B back to W^A (∅, at
-    ``remove_cost``) — so an object of a needed class that starts in W^B is removed and
-    delivered again when the formula needs its delivery event. Ties: fewer steps, then
-    letter order. Returns (round steps = prefix then one cycle, the cycle letters, s^B_final).
+    exist; a step delivers, reads ∅, or takes one object out of W^B (∅, at
+    ``remove_cost``). With Zhou et al.'s action set (Def. 3, the default) that object goes
+    into the waste basket and is gone: the node also carries what is left in W^A, and a
+    delivery needs an object there. With our return action (``task.returns``) it goes back to
+    W^A — so an object of a needed class that starts in W^B is removed and delivered again
+    when the formula needs its delivery event. Ties: fewer steps, then letter order. Returns
+    (round steps = prefix then one cycle, the cycle letters, s^B_final).
     """
     classes = task.classes
     idx = {c: i for i, c in enumerate(classes)}
@@ -98,7 +101,9 @@ def initial_lasso(aut: Automaton, task: Task) -> tuple[list[Step], list[Letter],
     avail = tuple(task.initial_a.get(c, 0) + task.initial_b.get(c, 0) for c in classes)
     b0 = tuple(task.initial_b.get(c, 0) for c in classes)
     box = Lots(classes, prop_class, avail)
-    start = (0, aut.initial, b0, -1, False)
+    # W^A's stock, tracked only without the return action (a discarded object is gone)
+    stock0 = None if task.returns else tuple(task.initial_a.get(c, 0) for c in classes)
+    start = (0, aut.initial, b0, -1, False, stock0)
     tie = itertools.count()
     heap = [((0.0, 0), next(tie), start)]
     best: dict = {start: (0.0, 0)}
@@ -107,24 +112,30 @@ def initial_lasso(aut: Automaton, task: Task) -> tuple[list[Step], list[Letter],
         key, _, node = heapq.heappop(heap)
         if best.get(node) != key:
             continue
-        phase, q, b, qf, moved = node
+        phase, q, b, qf, moved, stock = node
         if phase == 1 and moved and q == qf:
             return _lasso_from(parent, node, box)
         succ: list = []
         if phase == 0 and q in aut.live_accepting:
-            succ.append(((1, q, b, q, False), 0.0, None))
+            succ.append(((1, q, b, q, False, stock), 0.0, None))
         for letter in aut.letters:
             nb = box.deliver(b, letter)
             if nb is None:
                 continue
+            ns = stock
+            if letter and stock is not None:
+                i = prop_class[next(iter(letter))]
+                if stock[i] == 0:
+                    continue
+                ns = stock[:i] + (stock[i] - 1,) + stock[i + 1 :]
             c = cost_of[next(iter(letter))] if letter else 0.0
             for nq in aut.successors(q, letter):
-                succ.append(((phase, nq, nb, qf, moved or phase == 1), c, letter))
+                succ.append(((phase, nq, nb, qf, moved or phase == 1, ns), c, letter))
         for i in range(len(b)):  # take one object out of W^B (letter ∅; the int marks it)
             nb = box.remove(b, i)
             if nb is not None:
                 for nq in aut.successors(q, EMPTY):
-                    nxt = (phase, nq, nb, qf, moved or phase == 1)
+                    nxt = (phase, nq, nb, qf, moved or phase == 1, stock)
                     succ.append((nxt, task.remove_cost, i))
         for nxt, c, letter in succ:
             nkey = (key[0] + c, key[1] + (letter is not None))
@@ -132,9 +143,18 @@ def initial_lasso(aut: Automaton, task: Task) -> tuple[list[Step], list[Letter],
                 best[nxt] = nkey
                 parent[nxt] = (node, letter)
                 heapq.heappush(heap, (nkey, next(tie), nxt))
+    why = (
+        ""
+        if task.returns
+        else (
+            "; Zhou et al.'s actions only deliver from W^A to W^B (or discard into the waste "
+            "basket), so no object can be delivered twice — the return action W^B→W^A "
+            "(task field 'actions: {return: true}' or --return-action) is our extension"
+        )
+    )
     raise_infeasible(
         f"the formula {task.formula!r} has no accepting run that moves one object at a time "
-        f"with the objects available ({dict(zip(classes, avail, strict=True))})"
+        f"with the objects available ({dict(zip(classes, avail, strict=True))}){why}"
     )
     raise AssertionError  # unreachable
 
@@ -192,7 +212,7 @@ def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]
                 nb = b[:i] + (b[i] + 1,) + b[i + 1 :]
                 for nq in aut.successors(q, letter):
                     yield nq, nb, sat
-            elif avail[i]:  # every object of the class is in W^B: one out (∅), then again
+            elif avail[i] and task.returns:  # all of the class in W^B: one back to W^A, again
                 for mid in aut.successors(q, EMPTY):
                     for nq in aut.successors(mid, letter):
                         yield nq, b, True
@@ -327,6 +347,23 @@ class Planner:
                     out.append((self.cost_of[p], p, lots.prop_class[p], nq))
             self._trans.append(out)
         self._empty = [aut.successors(q, EMPTY) for q in range(aut.num_states)]
+        #: the round's accepting cycle (the initial lasso's), and the states that accept it
+        #: forever: a relaxed goal (`plan_from`) may end in one of them
+        self.round_cycle: list[Letter] = []
+        self._cycle_ok: frozenset[int] | None = None
+
+    def cycle_ok(self) -> frozenset[int]:
+        """Automaton states from which ``round_cycle^ω`` is accepted (computed once)."""
+        if self._cycle_ok is None:
+            from tamp.ltl.automata import accepts_lasso
+
+            self._cycle_ok = frozenset(
+                q
+                for q in range(self.aut.num_states)
+                if self.round_cycle
+                and accepts_lasso(self.aut.spot_aut, [], self.round_cycle, start=q)[0]
+            )
+        return self._cycle_ok
 
     def heuristic(self, b: Counts, goals: tuple[Counts, ...] | None = None) -> float:
         """Admissible: every object missing for the nearest goal (default: every round end)
@@ -388,35 +425,61 @@ class Planner:
             return EMPTY
         raise ValueError(f"no executable step from {a} to {b}")
 
-    def plan_from(self, q: int, b: Counts, cap: Counts | None = None) -> Plan | None:
+    def plan_from(
+        self,
+        q: int,
+        b: Counts,
+        cap: Counts | None = None,
+        stock: Counts | None = None,
+        *,
+        relaxed: bool = False,
+    ) -> Plan | None:
         """Cheapest run from ``(q, b)`` to a live accepting ``q_F`` with W^B at the end of a
         round of some accepting way (``s^B_final`` or another way's, `Lots.goals`), or None.
 
         ``cap``: the objects of each class that exist (W^A, W^B and the hand): W^B never
-        holds more, so a way whose class was taken away is not planned. A* on pairs (key:
-        cost + h, then the deeper node, then fewer steps); an exhausted search marks every
-        pair it closed as dead for that ``cap`` (none of them can complete the task), so later
-        calls prune them.
+        holds more, so a way whose class was taken away is not planned. ``stock``: the
+        objects in W^A, given with Zhou et al.'s action set (no return W^B→W^A): an object
+        taken out of W^B is discarded, so the run delivers at most ``stock[i]`` objects of
+        class ``i`` (a search node then carries what is left; a stock of at least
+        ``|Q|·|S^B|`` cannot run out along a cheapest run and is not tracked). A* on pairs
+        (key: cost + h, then the deeper node, then fewer steps); an exhausted search marks
+        every node it closed as dead for that ``cap`` and ``stock`` (none of them can
+        complete the task), so later calls prune them. ``relaxed``: a goal may also be a
+        state from which the round's cycle (``round_cycle``) repeated forever is accepted
+        — a person delivered part of a recurring task early (``GF``), so the round ends with
+        W^B complete before the automaton is back in ``q_F``; the plan's cycle is then the
+        round's.
         """
         lots = self.lots
         bound = lots.bound if cap is None else tuple(map(min, lots.bound, cap))
         goals = tuple(gl for gl in lots.goals if all(map(int.__le__, gl, bound)))
-        dead = self.dead if cap is None else self._dead_capped.setdefault(bound, set())
-        if not goals or not lots.in_box(b) or (q, b) in dead:
+        if stock is not None:
+            plenty = self.aut.num_states * lots.num_wb_states()
+            stock = tuple(-1 if n >= plenty else n for n in stock)  # -1: not tracked
+            if all(n < 0 for n in stock):
+                stock = None
+        if cap is None and stock is None and not relaxed:
+            dead = self.dead
+        else:
+            dead = self._dead_capped.setdefault((bound, stock, relaxed), set())
+        if not goals or not lots.in_box(b) or (q, b, stock) in dead:
             return None
         goal_set = frozenset(goals)
         # one goal: the heuristic changes by one class's cheapest cost per step (exact sums)
         single = goals == (bound,)
         hfun = self.heuristic
         final, live = bound, self.aut.live_accepting
+        if relaxed:
+            live = live | self.cycle_ok()
         trans, empty, min_cost, rc = self._trans, self._empty, self._min_cost, self.remove_cost
-        start = (q, b)
+        start = (q, b, stock)
         tie = itertools.count()
-        g: dict[Pair, tuple[float, int]] = {start: (0.0, 0)}
-        parent: dict[Pair, tuple[Pair, str | None, int]] = {}
+        g: dict = {start: (0.0, 0)}
+        parent: dict = {}
         h0 = hfun(b, goals)
         heap = [(h0, 0.0, 0, next(tie), start, h0)]
-        closed: set[Pair] = set()
+        closed: set = set()
         push = heapq.heappush
         while heap:
             _, negc, nsteps, _, node, h = heapq.heappop(heap)
@@ -425,24 +488,29 @@ class Planner:
                 continue
             closed.add(node)
             self.expanded += 1
-            nq_, nb_ = node
+            nq_, nb_, st = node
             if nq_ in live and nb_ in goal_set:
                 return self._plan(start, node, parent, cost)
             ns = nsteps + 1
             succ = []
             for c, p, ci, nq in trans[nq_]:
                 if p is None:
-                    succ.append(((nq, nb_), c, h, None, -1))
+                    succ.append(((nq, nb_, st), c, h, None, -1))
                 elif nb_[ci] < final[ci]:
+                    nst = st
+                    if st is not None and st[ci] >= 0:
+                        if st[ci] == 0:
+                            continue
+                        nst = st[:ci] + (st[ci] - 1,) + st[ci + 1 :]
                     nb = nb_[:ci] + (nb_[ci] + 1,) + nb_[ci + 1 :]
                     nh = h - min_cost[ci] if single else hfun(nb, goals)
-                    succ.append(((nq, nb), c, nh, p, ci))
+                    succ.append(((nq, nb, nst), c, nh, p, ci))
             for ci, x in enumerate(nb_):
                 if x:
                     nb = nb_[:ci] + (x - 1,) + nb_[ci + 1 :]
                     nh = h + min_cost[ci] if single else hfun(nb, goals)
                     for nq in empty[nq_]:
-                        succ.append(((nq, nb), rc, nh, None, ci))
+                        succ.append(((nq, nb, st), rc, nh, None, ci))
             for nxt, c, nh, p, ci in succ:
                 if nxt in dead or nxt in closed:
                     continue
@@ -455,7 +523,7 @@ class Planner:
         dead |= closed
         return None
 
-    def _plan(self, start: Pair, node: Pair, parent: dict, cost: float) -> Plan:
+    def _plan(self, start: tuple, node: tuple, parent: dict, cost: float) -> Plan:
         steps: list[Step] = []
         while node != start:
             prev, p, ci = parent[node]
@@ -468,7 +536,8 @@ class Planner:
             node = prev
         steps.reverse()
         end_q = steps[-1].q_next if steps else start[0]
-        return Plan(start, steps, self.cycle_from(end_q), cost)
+        cycle = self.cycle_from(end_q) if end_q in self.aut.live_accepting else self.round_cycle
+        return Plan((start[0], start[1]), steps, list(cycle), cost)
 
     def cycle_from(self, qf: int) -> list[Letter]:
         """Cheapest non-empty accepting cycle ``q_F → q_F`` (`cheapest_cycle`, cached)."""
@@ -656,25 +725,54 @@ class Tree:
         f[i], f[-1] = f[-1], f[i]
         return f.pop()
 
-    def _best(self, b: Counts, cap: Counts | None = None) -> tuple[int, Plan] | None:
+    def _best(
+        self,
+        b: Counts,
+        cap: Counts | None = None,
+        stock: Counts | None = None,
+        allowed: Collection[int] | None = None,
+        *,
+        relaxed: bool = False,
+    ) -> tuple[int, Plan] | None:
         best: tuple[int, Plan] | None = None
-        for q in sorted(self.by_b.get(b, ())):
-            plan = self.planner.plan_from(q, b, cap)
+        qs = self.by_b.get(b, ()) if allowed is None else allowed
+        for q in sorted(qs):
+            plan = self.planner.plan_from(q, b, cap, stock, relaxed=relaxed)
             if plan is not None and (best is None or plan.cost < best[1].cost):
                 best = (q, plan)
         return best
 
-    def update(self, b: Counts, cap: Counts | None = None) -> tuple[int, Plan] | None:
+    def update(
+        self,
+        b: Counts,
+        cap: Counts | None = None,
+        stock: Counts | None = None,
+        *,
+        allowed: Collection[int] | None = None,
+    ) -> tuple[int, Plan] | None:
         """Alg. 3: grow TR until it holds a pair ``(q, b)`` that can complete the task.
 
         Returns that automaton state and its plan (the cheapest among the pairs with ``b``
         found so far, to the end of a round of any accepting way, with at most ``cap``
-        objects per class), or None once every reachable pair has been generated without
+        objects per class, delivering at most ``stock`` from W^A when given), or None once
+        every reachable pair has been generated without
         one — the W^B state cannot lead to completion (Alg. 1 line 23: wait).
+
+        ``allowed``: the automaton states the run's word can be in (`tamp.lots.word`). Given,
+        the pairs ``(q, b)`` for those states are added and planned from directly — a pair
+        with another ``q`` would stand for a history that did not happen.
         """
         if not self.planner.lots.in_box(b):
             return None
-        found = self._best(b, cap)
+        if allowed is not None:
+            for q in sorted(allowed):
+                self.add((q, b), None)
+            strict = self._best(b, cap, stock, allowed)
+            loose = self._best(b, cap, stock, allowed, relaxed=True)
+            if strict is None or (loose is not None and loose[1].cost < strict[1].cost):
+                return loose
+            return strict
+        found = self._best(b, cap, stock)
         while found is None and self._frontier:
             node = self._pop()
             self.expansions += 1
@@ -683,5 +781,5 @@ class Tree:
                 if self.add(child, node) and child[1] == b:
                     hit = True
             if hit:
-                found = self._best(b, cap)
+                found = self._best(b, cap, stock)
         return found

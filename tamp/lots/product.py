@@ -4,7 +4,8 @@ The classical approach ([7]-[10] in Zhou et al.) assumes global observability: t
 transition system is the whole workspace — counts in W^A *and* W^B for every class — and the
 planner searches the explicit product ``TS × B``. This module builds that product
 (every TS state × every automaton state, every executable letter: deliveries, ∅, and taking
-an object out of W^B back to W^A or into the waste basket) and runs Dijkstra in it from the
+an object out of W^B into the waste basket, or back to W^A with our return action,
+`Task.returns`) and runs Dijkstra in it from the
 observed product state to a goal (accepting automaton state, W^B = ``s^B_final``) — the same
 goal (a live accepting state with W^B at the end of a round of some accepting way,
 `Lots.goals`) and costs as the LOTS planner, so both return runs of equal cost.
@@ -39,13 +40,25 @@ class ProductPlan:
 class ProductPlanner:
     """Explicit ``TS × B`` over global counts; Dijkstra from the observed product state."""
 
-    def __init__(self, aut: Automaton, lots: Lots, task: Task, totals: Counts):
+    def __init__(
+        self,
+        aut: Automaton,
+        lots: Lots,
+        task: Task,
+        totals: Counts,
+        goal_states: frozenset[int] | None = None,
+    ):
         self.aut = aut
+        #: automaton states a goal may end in (default the live accepting ones; the LOTS
+        #: controller also ends a round where the round's cycle is accepted forever,
+        #: `Planner.cycle_ok`)
+        self.goal_states = aut.live_accepting if goal_states is None else goal_states
         self.lots = lots
         self.props = [p.name for p in task.propositions]
         self.cost_of = [p.cost for p in task.propositions]
         self.prop_cls = [lots.prop_class[p] for p in self.props]
         self.remove_cost = task.remove_cost
+        self.returns = task.returns
         if len(self.props) > 31 or len(lots.classes) > 31:
             raise ValueError("the product baseline packs proposition indices in 5 bits")
         self.builds = 0
@@ -93,7 +106,7 @@ class ProductPlanner:
             digits_of.append(digits)
             if tuple(self._pairs[c][d][1] for c, d in enumerate(digits)) in goals:
                 goal_ts[s] = 1
-        live = self.aut.live_accepting
+        live = self.goal_states
         self.goal = [bool(goal_ts[s]) and q in live for s in range(n_ts) for q in range(nq)]
         # edges: node = s * nq + q; each edge packed as (succ << 8 | code << 5 | arg)
         # with arg the proposition or class index (< 32)
@@ -117,7 +130,8 @@ class ProductPlanner:
                     if da is None:
                         continue
                     for q2 in succ_empty[q]:
-                        out.append((((s + da) * nq + q2) << 8) | (_TO_A << 5) | c)
+                        if self.returns:
+                            out.append((((s + da) * nq + q2) << 8) | (_TO_A << 5) | c)
                         out.append((((s + dw) * nq + q2) << 8) | (_TO_WASTE << 5) | c)
         self.adj = adj
 

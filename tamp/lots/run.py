@@ -32,6 +32,9 @@ class Report:
     satisfied: bool
     reason: str = ""
     tables: list[tuple[str, list[dict]]] = field(default_factory=list)
+    #: the automaton's verdict on the run's word (`judge_run`): accepted, and its JSON
+    word_accepted: bool = False
+    word_verdict: dict[str, Any] = field(default_factory=dict)
 
     @property
     def unfired_events(self) -> list[Event]:
@@ -53,7 +56,8 @@ class Report:
             "formula": self.task.formula,
             "automaton": c.aut.summary(),
             "w_b_states": lots.num_wb_states(),
-            "final_w_b": lots.named(lots.final),
+            "final_w_b": lots.named(c.plan.end[1]),  # the plan in use (follows a replan)
+            "returns": self.task.returns,
             "plan": {
                 "prefix": [_letter(x) for x in c.initial_plan.prefix],
                 "cycle": [_letter(x) for x in c.initial_plan.cycle],
@@ -67,6 +71,9 @@ class Report:
             "unfired_events": [e.unfired_json() for e in self.unfired_events],
             "replans": c.replans,
             "final": self.counts(),
+            "word": run_word_json(c),
+            "word_accepted": self.word_accepted,
+            "word_verdict": self.word_verdict,
             "satisfied": self.satisfied,
             "verdict": "satisfied" if self.satisfied else "infeasible",
             "reason": self.reason,
@@ -75,6 +82,23 @@ class Report:
 
 def _letter(letter: Letter) -> list[str]:
     return sorted(letter)
+
+
+def run_word_json(c: LotsController) -> dict[str, Any]:
+    """The run's word: what happened (in order), one word of it and the round's cycle."""
+    letters, _ = c.word.witness(list(c.plan.cycle))
+    return {
+        "events": c.word.to_json(),
+        "trace": [_letter(x) for x in letters],
+        "cycle": [_letter(x) for x in c.plan.cycle],
+    }
+
+
+def judge_run(c: LotsController) -> tuple[bool, dict[str, Any]]:
+    """The automaton's verdict on the run's word, without the verification module (a front
+    end passes ``verification.lots.judge_word`` instead, which also checks the formula)."""
+    ok = c.word.accepting(list(c.plan.cycle)) is not None
+    return ok, {"holds": ok, "subject": "LOTS run's word"}
 
 
 def lots_world(task: Task, *, skill_ticks: int | Mapping[str, int] = 1) -> SymbolicWorld:
@@ -94,6 +118,7 @@ def run_task(
     policy: Policy | None = None,
     check: Callable[[LotsController], Any] | None = None,
     skill_ticks: int | Mapping[str, int] = 1,
+    judge: Callable[[LotsController], tuple[bool, dict[str, Any]]] | None = None,
 ) -> Report:
     """Run Alg. 1 to the end. Infeasibility is reported (``satisfied`` False, ``reason``).
 
@@ -103,6 +128,10 @@ def run_task(
     verification gate of the architecture). What ``check`` raises propagates, even an
     `InfeasibleError` such as `VerificationError`: a rejected table is not an infeasible task
     (the controller itself reports infeasibility by stopping with FAILURE, never by raising).
+
+    The run is satisfied when the controller completed its round, W^B holds the end of a
+    round (ground truth), and the run's word is accepted: ``judge`` (default `judge_run`)
+    gives the verdict on it; the front ends pass `verification.lots.judge_verdict`.
     """
     controller = LotsController(task, mode=mode, seed=seed, max_waits=max_waits, check=check)
     controller.max_actions = (
@@ -117,8 +146,23 @@ def run_task(
 
     status = controller.run(world, step=step)
     truth = controller.lots.vector(side_counts(world.state)["B"])  # ground truth, not belief
-    ok = status is Status.SUCCESS and controller.lots.is_goal(truth)
+    word_ok, word_json = (judge or judge_run)(controller)
+    ok = status is Status.SUCCESS and controller.lots.is_goal(truth) and word_ok
     reason = "" if status is Status.SUCCESS else controller.reason
+    if status is Status.SUCCESS and not word_ok:
+        reason = (
+            "the round looked complete but the run's word is not accepted by the task "
+            "automaton (what happened does not satisfy the formula)"
+        )
     return Report(
-        task, controller, world, person, controller.actions, ok, reason, controller.tables
+        task,
+        controller,
+        world,
+        person,
+        controller.actions,
+        ok,
+        reason,
+        controller.tables,
+        word_ok,
+        word_json,
     )

@@ -12,7 +12,15 @@ Task file (what each proposition moves, the formula in Spot syntax, the initial 
     initial:
       A: {bottom: 1, body: 2, peak: 1}
       B: {}
-    remove_cost: 1.0   # optional: one object out of W^B (back to W^A or to the waste basket)
+    remove_cost: 1.0   # optional: one object out of W^B (into the waste basket)
+    actions: {return: false}   # optional: true switches on our return action (W^B -> W^A)
+
+The robot's actions are Zhou et al.'s (Def. 3): ``a_B^A(o_i)`` picks an object from W^A and
+places it in W^B, and discarding an object into the waste basket. ``actions: {return: true}``
+adds an extension of ours, not in the paper: taking an object out of W^B *back to W^A*, so
+that it can be delivered again (one hammer delivered twice for ``F(p1 & F p2)``). Lemma 1
+and Theorem 1 assume that W^B's counts never go back under the robot's own actions; with
+the return action they do, so it is off unless the task (or ``--return-action``) asks for it.
 
 Interference file (human actions, §III-B: dis_1 moves, dis_2 adds/removes)::
 
@@ -62,6 +70,8 @@ class Task:
     remove_cost: float = 1.0
     name: str = "task"
     file: str | None = None
+    #: our extension (not Zhou et al.'s action set): an object may go back from W^B to W^A
+    returns: bool = False
 
     @property
     def props(self) -> tuple[str, ...]:
@@ -142,7 +152,16 @@ def load_task(path: str | Path) -> Task:
     data, name = load_yaml(resolve(path, "lots"), kind="LTL task")
     f = Fields(data, name)
     f.check_keys(
-        ["version", "name", "description", "formula", "propositions", "initial", "remove_cost"]
+        [
+            "version",
+            "name",
+            "description",
+            "formula",
+            "propositions",
+            "initial",
+            "remove_cost",
+            "actions",
+        ]
     )
     formula = f.str("formula")
     props_f = f.sub("propositions")
@@ -170,8 +189,20 @@ def load_task(path: str | Path) -> Task:
         remove_cost=f.float("remove_cost", 1.0, min=0.0, strict_min=True),
         name=f.str("name", Path(name).stem),
         file=name,
+        returns=_returns(f),
     )
     return task
+
+
+def _returns(f: Fields) -> bool:
+    """``actions: {return: BOOL}``: is our return action (W^B back to W^A) switched on?"""
+    if not f.has("actions"):
+        return False
+    acts = f.sub("actions")
+    if not isinstance(acts.data, dict):
+        raise f.error("actions", "expected a mapping, e.g. {return: true}")
+    acts.check_keys(["return"])
+    return acts.bool("return", False)
 
 
 def _counts(init: Fields, side: str) -> dict[str, int]:

@@ -58,6 +58,7 @@ def random_tasks(shapes: tuple[str, ...]):
         )
         init_a = {c: draw(st.integers(0, 2)) for c in CLASSES}
         init_b = {c: draw(st.integers(0, 1)) for c in CLASSES}
-        return Task(shape.format("p0", "p1", "p2"), props, init_a, init_b)
+        # ways that deliver one object twice need our return action (W^B back to W^A)
+        return Task(shape.format("p0", "p1", "p2"), props, init_a, init_b, returns=True)
 
     return task()

@@ -78,6 +78,7 @@ TAKE_CUP = take_away("cup")
 IN_B = """version: 1
 name: inb
 formula: "F p"
+actions: {return: true}   # the cup in W^B goes back to W^A to be delivered (our extension)
 propositions:
   p: {class: cup}
 initial:

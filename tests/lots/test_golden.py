@@ -2,8 +2,11 @@
 
 The files under ``golden/`` were written by ``tamp lots`` before `tamp.ltl` existed (text,
 ``--json`` and ``--dot``) for every packaged task, alone and with each packaged interference
-script, with both tree-update variants. Any change in the automaton (state numbers, edge
-order, labels), the plan or the robot's actions shows up here.
+script, with both tree-update variants; they were rewritten once when runs were first judged
+on their word (a ``run's word`` line, the ``word`` keys) and the robot lost the return action
+by default (Example 1 with its interference no longer takes the screwdriver back). Any change
+in the automaton (state numbers, edge order, labels), the plan or the robot's actions shows
+up here.
 """
 
 from __future__ import annotations

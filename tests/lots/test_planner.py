@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from dataclasses import replace
 
 import pytest
 
@@ -66,8 +67,12 @@ def _all_pairs(c):
 
 @pytest.mark.parametrize("name", ["example1", "tower", "model_building"])
 def test_plans_match_the_product_baseline(name, request):
-    """Peers as oracles: same optimum from every pair (q, s^B), given enough objects in W^A."""
-    task = request.getfixturevalue(name)
+    """Peers as oracles: same optimum from every pair (q, s^B), given enough objects in W^A.
+
+    ``plan_from`` without a stock assumes W^A holds what the run needs; the product's W^A
+    is ``final - b``, so a run that takes an object out and delivers it again needs our
+    return action there too: both planners run with it."""
+    task = replace(request.getfixturevalue(name), returns=True)
     c = LotsController(task)
     base = ProductPlanner(c.aut, c.lots, task, c.lots.final)
     feasible = 0

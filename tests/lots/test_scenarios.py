@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import replace
 
 import pytest
 
@@ -31,20 +32,26 @@ def test_example1_without_interference(example1, mode):
 
 def test_example1_unforeseen_state_runs_the_tree_update(example1):
     r = run_task(example1, events("example1_interference.yaml", example1))
-    assert r.satisfied
+    assert r.satisfied and r.word_accepted
     assert r.replans == 1
-    # the screwdriver came too early for the automaton's order: it goes back to W^A and is
-    # delivered again when the run reaches p3
-    assert keys(r) == [
-        ("move", "p4"),
-        ("remove", "screwdriver"),
-        ("move", "p3"),
-        ("move", "p2"),
-        ("move", "p1"),
-    ]
-    assert r.actions[1].dest == "A"
+    # the person's screwdriver counts as a delivery of p3 (the run's word starts with it);
+    # with Zhou et al.'s actions it stays in W^B: the robot delivers the rest of the round
+    # (the GF task's cycle then repeats the whole round) and never takes an object back
+    assert r.controller.word.events[0] == ("seen", "W^B hammer^0 screw^0 screwdriver^1")
+    assert sorted(k for _, k in keys(r)) == ["p1", "p2", "p2"]
+    assert all(a.kind == "move" for a in r.actions)
     assert r.counts()["B"] == {"hammer": 1, "screw": 2, "screwdriver": 1}
     assert len(r.tables) == 2  # initial table, rebuilt once
+
+
+def test_example1_with_the_return_action_is_satisfied_too(example1):
+    """Our extension (`Task.returns`) does not change Example 1: the cheapest round leaves
+    the early screwdriver where it is (taking it back would cost two more actions)."""
+    task = replace(example1, returns=True)
+    r = run_task(task, events("example1_interference.yaml", task))
+    assert r.satisfied and r.word_accepted
+    assert all(a.kind == "move" for a in r.actions)
+    assert r.counts()["B"] == {"hammer": 1, "screw": 2, "screwdriver": 1}
 
 
 def test_model_building_fig8(model_building):
@@ -124,7 +131,8 @@ def test_every_hammer_taken_away_is_infeasible(model_building):
     assert not r.satisfied
     assert "no hammer left in W^A for p3" in r.reason
     assert [a.kind for a in r.actions][-2:] == ["wait", "wait"]
-    assert r.counts()["B"] == {"saw": 1, "scissors": 1}
+    # W^A holds no hammer: no run completes, so the robot puts the scissors it carries back
+    assert r.counts()["B"] == {"saw": 1}
 
 
 def test_person_fixes_the_task_while_the_robot_waits(model_building):
@@ -132,4 +140,10 @@ def test_person_fixes_the_task_while_the_robot_waits(model_building):
     back = Event(after=3, kind="add", cls="hammer", side="A")  # after the first wait
     r = run_task(model_building, [gone, back], max_waits=3)
     assert r.satisfied
-    assert keys(r) == [("move", "p1"), ("move", "p2"), ("wait", None), ("move", "p3")]
+    assert keys(r) == [
+        ("move", "p1"),
+        ("return_held", "scissors"),  # no hammer in W^A: no run completes, so it waits
+        ("wait", None),
+        ("move", "p2"),
+        ("move", "p3"),
+    ]

@@ -148,6 +148,7 @@ def oracle_can_complete(task: Task, aut, ends: set, q: int, b: tuple, cap: tuple
 TWICE = """version: 1
 name: twice
 formula: "F(p & F(q & F p)) | F r"
+actions: {return: true}   # the way 'p q p' delivers one cup twice: our return action
 propositions:
   p: {class: cup}
   q: {class: mug}
@@ -230,7 +231,7 @@ PLAIN = "(F p0 & F p2) | F(p1 & F p2)"
 def _task(formula, classes, a, b):
     props = tuple(Proposition(f"p{i}", c, cost) for i, (c, cost) in enumerate(classes))
     init_a, init_b = (dict(zip(CLASSES, n, strict=True)) for n in (a, b))
-    return Task(formula, props, init_a, init_b)
+    return Task(formula, props, init_a, init_b, returns=True)
 
 
 @settings(max_examples=int(os.environ.get("TAMP_WAYS_EXAMPLES", "40")), deadline=None)
