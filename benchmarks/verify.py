@@ -1,6 +1,7 @@
-"""Verification speed: a 1,000-step trace, an RG of 2^12 states, a BT of the Case 3 size.
+"""Verification speed: a 1,000-step trace, an RG of 2^12 states, a BT of the Case 3 size,
+and both plan gates on generated demonstrations of 10 / 30 / 72 / 300 goals.
 
-Each row is measured side by side with a peer in the same run:
+Each row of the first table is measured side by side with a peer in the same run:
 - trace: our check (automaton of f, conjunct by conjunct, shortest-bad-prefix walk) vs the
   direct Spot route (translate !f, ``parse_word``, ``intersects``; what the tests use as
   oracle); for LTLf, vs a direct recursive evaluator of the formula on the trace;
@@ -9,7 +10,16 @@ Each row is measured side by side with a peer in the same run:
 - BT: our exploration of every execution (skill failures up to k) vs one plain symbolic
   execution of the same executor (`tamp.bt.SymbolicWorld`), i.e. the cost per execution.
 
-Prints a table and one JSON line. ``--quick`` skips the slow whole-formula RG peer.
+The scale table (``--scale``): demonstrations of four objects, each moved up its own column
+(`tests.demo.generate`, ``multi`` with 4 objects: 72 goals = four chains of 18 steps). Per
+size: the tree gate (`verification.gate.gate_tree`: every execution of the grown tree, at
+most one skill failure; states explored, wall and CPU seconds), the same exploration without
+the reduction where it runs in reasonable time (``--explicit-up-to``), and the order gate
+(`verification.gate.gate_order`).
+
+Prints the tables and one JSON line; ``--out FILE`` also writes the JSON there
+(``benchmarks/results/verify.json`` is the committed run). ``--quick`` skips the slow
+whole-formula RG peer; ``--scale-only`` runs only the scale table.
 """
 
 from __future__ import annotations
@@ -38,6 +48,9 @@ from verification.kripke import to_kripke  # noqa: E402
 from verification.rg import constraint_formula, rg_system  # noqa: E402
 from verification.traces import check_trace  # noqa: E402
 from verification.words import Word  # noqa: E402
+
+#: the sizes of the scale table (goals; four objects)
+SCALE_GOALS = (10, 30, 72, 300)
 
 
 def timed(fn, repeat: int = 5) -> tuple[float, object]:
@@ -229,21 +242,117 @@ def bench_bt() -> list[dict]:
     return rows
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="skip the slow whole-formula RG peer")
-    args = ap.parse_args()
-    rows = bench_trace() + bench_rg(quick=args.quick) + bench_bt()
-    head = f"{'case':<52} {'holds':>5} {'states':>7} {'ours ms':>9} {'peer ms':>9}  peer"
+def _clocked(fn) -> tuple[float, float, object]:
+    """Wall and CPU seconds of one call, and its result."""
+    w, c = time.perf_counter(), time.process_time()
+    out = fn()
+    return time.perf_counter() - w, time.process_time() - c, out
+
+
+def bench_scale(sizes=SCALE_GOALS, explicit_up_to: int = 10) -> list[dict]:
+    """Both plan gates on four chains of goals of each size (module docstring)."""
+    import tempfile
+
+    from tests.demo.generate import write_demo
+
+    with tempfile.TemporaryDirectory() as tmp:
+        return [
+            scale_row(
+                load_demonstration(write_demo(Path(tmp) / f"d{n}.yaml", n, "multi", 4)),
+                explicit=n <= explicit_up_to,
+            )
+            for n in sizes
+        ]
+
+
+def scale_row(demo, *, explicit: bool) -> dict:
+    """One size: the tree gate, the explicit exploration (when ``explicit``), the order gate."""
+    from tamp.rg import plan
+    from verification.gate import gate_order, gate_tree
+
+    result = plan(demo)
+    order = list(result.order)
+    state = demo.initial_world()
+    wall, cpu, tree = _clocked(lambda: gate_tree(executor_for(demo, order), state))
+    row = dict(
+        goals=len(demo.goals),
+        tree_status=tree.status,
+        tree_states=tree.states_explored,
+        tree_s=wall,
+        tree_cpu_s=cpu,
+        explicit_states=None,
+        explicit_s=None,
+    )
+    if explicit:
+        ew, _, full = _clocked(lambda: check_tree(executor_for(demo, order), state, reduce=False))
+        assert full.status == tree.status
+        row.update(explicit_states=full.states_explored, explicit_s=ew)
+    ow, ocpu, checked = _clocked(lambda: gate_order(result))
+    row.update(
+        order_status=checked.status,
+        order_states=checked.states_explored,
+        order_s=ow,
+        order_cpu_s=ocpu,
+    )
+    return row
+
+
+def print_scale(rows: list[dict]) -> None:
+    head = (
+        f"{'goals':>5} {'tree':>6} {'states':>7} {'wall s':>7} {'cpu s':>6} "
+        f"{'explicit states':>15} {'explicit s':>10} {'order':>6} {'order s':>8}"
+    )
     print(head)
     print("-" * len(head))
     for r in rows:
-        peer = "-" if r["peer_ms"] is None else f"{r['peer_ms']:9.1f}"
+        es = "-" if r["explicit_states"] is None else str(r["explicit_states"])
+        et = "-" if r["explicit_s"] is None else f"{r['explicit_s']:.2f}"
         print(
-            f"{r['case']:<52} {str(r['holds']):>5} {r['states']:>7} {r['ours_ms']:9.1f} "
-            f"{peer:>9}  {r['peer']}"
+            f"{r['goals']:>5} {r['tree_status']:>6} {r['tree_states']:>7} {r['tree_s']:>7.2f} "
+            f"{r['tree_cpu_s']:>6.2f} {es:>15} {et:>10} {r['order_status']:>6} "
+            f"{r['order_s']:>8.3f}"
         )
-    print(json.dumps({"benchmark": "verify", "rows": rows}, default=str))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="skip the slow whole-formula RG peer")
+    ap.add_argument("--scale-only", action="store_true", help="only the 10/30/72/300 table")
+    ap.add_argument(
+        "--explicit-up-to",
+        type=int,
+        default=30,
+        metavar="GOALS",
+        help="run the unreduced exploration too up to this many goals (default 30)",
+    )
+    ap.add_argument("--out", metavar="FILE", help="also write the JSON document to FILE")
+    args = ap.parse_args()
+    rows: list[dict] = []
+    if not args.scale_only:
+        rows = bench_trace() + bench_rg(quick=args.quick) + bench_bt()
+        head = f"{'case':<52} {'holds':>5} {'states':>7} {'ours ms':>9} {'peer ms':>9}  peer"
+        print(head)
+        print("-" * len(head))
+        for r in rows:
+            peer = "-" if r["peer_ms"] is None else f"{r['peer_ms']:9.1f}"
+            print(
+                f"{r['case']:<52} {str(r['holds']):>5} {r['states']:>7} {r['ours_ms']:9.1f} "
+                f"{peer:>9}  {r['peer']}"
+            )
+        print()
+    scale = bench_scale(explicit_up_to=args.explicit_up_to)
+    print_scale(scale)
+    doc = {
+        "benchmark": "verify",
+        "machine": {"cpus": os.cpu_count(), "load_1min": os.getloadavg()[0]},
+        "rows": rows,
+        "scale": scale,
+    }
+    text = json.dumps(doc, default=str)
+    print(text)
+    if args.out:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.out).write_text(json.dumps(doc, default=str, indent=1) + "\n")
 
 
 if __name__ == "__main__":

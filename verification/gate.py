@@ -8,7 +8,8 @@ each returns the `Report` (what ``--json`` front ends print) or raises `Verifica
   encoding of C, and every path of the plan's reachability graph (`verification.rg`);
 - `gate_tree` — a `tamp.bt.PaBtExecutor` before it ticks: every execution of the grown tree
   from ``state`` (appearances, bounded skill failures) against the safety properties and
-  ``F goal`` (`verification.bt`); the executor itself is not ticked;
+  ``F goal`` (`verification.bt`, explored goal subtree by goal subtree); the executor itself
+  is not ticked; a tree that its state budget cannot cover is refused as unknown;
 - `gate_table` — a `tamp.lots.controller.LotsController`: the planned run and every entry
   of its current table T, from where that table was built (`verification.lots`);
 - `gate_program` — a refinement `tamp.refine.Program`: every execution of its state

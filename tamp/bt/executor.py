@@ -200,12 +200,23 @@ class PaBtExecutor(TreeGrowth):
         self._start_key: tuple | None = None
         self._pending_areas: list[Area] = []
         self._fruitless = 0
+        #: goal conditions a fork shares untouched with the executor it came from, with
+        #: their parent there (`fork`); empty for every other executor
+        self._borrowed: list[tuple[Condition, Node]] = []
 
     # -- Alg. 2 main loop body -------------------------------------------------------------
     def tick(self, world: World) -> Status:
         """Tick the tree once against ``world``; grow it if it failed (between ticks)."""
         if self.result is not None:
             return self.result
+        if self._borrowed:
+            try:
+                return self._tick(world)
+            finally:
+                self._return_borrowed()
+        return self._tick(world)
+
+    def _tick(self, world: World) -> Status:
         self.tick_id += 1
         self.stats.ticks += 1
         state = world.observe()
@@ -287,6 +298,8 @@ class PaBtExecutor(TreeGrowth):
             stack.extend(reversed(n.children))
 
     def _grow(self, state: WorldState, world: World) -> Status:
+        if self._borrowed:  # growth edits the conditions this tick reached: own them first
+            self._return_borrowed()
         self._fruitless += 1
         if self._fruitless > self.max_fruitless:
             return self._stop(
@@ -579,8 +592,7 @@ class PaBtExecutor(TreeGrowth):
         nodes = [(root.__class__.__name__, len(root.children), root.state_key(tick))]
         for child in root.children[done:]:
             if child.__class__ is Condition:  # most of them: the goals not reached yet
-                position[child.uid] = len(nodes)
-                nodes.append(child.state_key(tick))
+                nodes.append(child.key if _untouched(child) else child.state_key(tick))
                 continue
             for n in child.walk():
                 position[n.uid] = len(nodes)
@@ -609,18 +621,61 @@ class PaBtExecutor(TreeGrowth):
         )
 
     def fork(self) -> PaBtExecutor:
-        """A copy that continues the run from here and shares the finished goal subtrees
-        (`finished_goals`) with this executor instead of copying them.
+        """A copy that continues the run from here, sharing with this executor (the lender)
+        what it would otherwise copy for nothing: a copy costs the live part of the tree,
+        not the whole grown tree.
 
-        Neither executor ticks or edits those subtrees again, so sharing them is safe for
-        running; it makes a copy cost the live part of the tree, not the whole grown tree.
-        Their parent links point into this executor's tree: export or inspect the tree of
-        the executor the fork came from, not of the fork.
+        - The finished goal subtrees (`finished_goals`): neither executor ticks or edits them
+          again.
+        - The goal conditions after the cursor that are untouched since the executor built
+          them: the fork makes the ones a tick reaches its own (`_return_borrowed`) before
+          anything reads their parent or edits them, and leaves the lender's untouched.
+
+        Shared nodes keep their parent links into the lender: ``copy.deepcopy`` of a fork
+        gives a whole tree of its own (export that, or the lender, not the fork itself).
+        What the verification explorer continues each state from.
         """
         memo: dict = {}
-        for child in self.root.children[: self.finished_goals()]:
+        children = self.root.children
+        done = self.finished_goals()
+        for child in children[:done]:
             memo[id(child)] = child
-        return copy.deepcopy(self, memo)
+        borrowed = []
+        for child in children[done + 1 :]:
+            if _untouched(child):
+                memo[id(child)] = child
+                borrowed.append((child, child.parent))
+        twin = copy.deepcopy(self, memo)
+        twin._borrowed = borrowed
+        return twin
+
+    def _return_borrowed(self) -> None:
+        """After a tick of a fork (and before it grows): the goal conditions it borrowed
+        untouched (`fork`) and this tick reached are made its own, and the lender's are
+        untouched again.
+
+        The root ticks its children in order and growth edits only ticked nodes, so the
+        touched ones are a prefix of the borrowed list: the first untouched one ends it.
+        A touched condition still in this tree is replaced by a copy of its new values; one
+        that growth replaced is only reset.
+        """
+        borrowed = self._borrowed
+        k = 0
+        root = self.root
+        for node, owner in borrowed:
+            if node.tick_id == -1 and node.parent is owner:
+                break
+            k += 1
+            if node.parent is owner:
+                mine = node.__deepcopy__({id(owner): root})
+                root.children[root.index_of(node)] = mine
+                if self.running is node:  # pragma: no cover - a condition never runs
+                    self.running = mine
+            node.status = None
+            node.tick_id = -1
+            node.parent = owner
+        if k:
+            self._borrowed = borrowed[k:]
 
     def state_key(self) -> tuple:
         """A hashable value of everything that decides what this executor does next.
@@ -654,6 +709,10 @@ class PaBtExecutor(TreeGrowth):
             elif k in self._SHALLOW:
                 setattr(new, k, copy.copy(v))
         new.root = copy.deepcopy(self.root, memo)
+        for mine, theirs in zip(new.root.children, self.root.children, strict=True):
+            if mine is not theirs:  # copied (a fork's lent children had their parent elsewhere)
+                mine.parent = new.root
+        new._borrowed = []
         new.running = None if self.running is None else memo[id(self.running)]
         new.preempt = [memo.get(id(n), n) for n in self.preempt]
         new.attempts = [copy.copy(r) for r in self.attempts]
@@ -715,6 +774,11 @@ def _fingerprint(state: WorldState | None) -> tuple:
     if not isinstance(state, WorldState):
         return (id(state),)
     return (state.robot, state.held, tuple(sorted((k, o.pos) for k, o in state.objects.items())))
+
+
+def _untouched(node: Node) -> bool:
+    """A goal condition as the executor built it: never ticked, never expanded."""
+    return node.__class__ is Condition and node.tick_id == -1 and node.status is None
 
 
 def _cursor(root: Node) -> int:

@@ -19,7 +19,8 @@ Two ways, same verdicts (a property test compares them):
   there (where an earlier skill failed, which ids the growth gave to its nodes) merge at
   the goal boundary, and a copy costs the live subtree, not the grown tree. The states
   grow linearly with the goals (per goal: its executions for each remaining failure
-  budget) instead of quadratically, and a state costs the same at goal 70 as at goal 1.
+  budget) instead of quadratically, and a state costs about the same at goal 300 as at
+  goal 10.
   Why the merge is exact, not an approximation, is written down in docs/verification.md
   ("Why the reduced exploration is exact").
 - ``reduce=False``: the key is the whole tree (`PaBtExecutor.state_key`) and each tick
