@@ -166,3 +166,18 @@ def test_a_complete_custom_domain_still_plans(capsys, tmp_path) -> None:
     demo = _demo_with_domain(tmp_path, MOVE + PICK + PLACE)
     code, out, _ = _run(capsys, "plan", demo)
     assert code == 0 and "G2 -> G1 -> G0" in out
+
+
+@pytest.mark.parametrize("budget", ["0", "-3"])
+def test_a_verify_budget_below_one_is_bad_input(capsys, budget) -> None:
+    code, out, err = _run(capsys, "plan", "case1.yaml", "--execute", "--verify-budget", budget)
+    assert code == 2 and out == "" and "--verify-budget" in err and "must be >= 1" in err
+
+
+def test_a_tree_beyond_the_verify_budget_is_unknown_exit_1(capsys) -> None:
+    """The gate neither passes nor calls unsafe a tree it could not cover: it names the
+    budget and how to raise it, once."""
+    code, out, err = _run(capsys, "plan", "case1.yaml", "--execute", "--verify-budget", "5")
+    assert code == 1 and out == ""
+    assert "verification unknown" in err and "budget of 5 states" in err
+    assert "raise it with --verify-budget N" in err and err.count("verification unknown") == 1
