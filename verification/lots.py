@@ -26,8 +26,9 @@ by the accepting cycle of the round it completed, must be accepted by the task a
 the witness word is cross-checked against the formula by our own translation.
 
 Entry points: `judge_word` (a finished run), `check_build` (one table, typed),
-`check_controller` (the table in use), `check_run` / `check_table` (the two checks), `check_task_file` (``tamp-verify lots``: the
-controller run over the symbolic world with an interference script, every table checked).
+`check_controller` (the table in use), `check_run` / `check_table` (the two checks),
+`check_task_file` (``tamp-verify lots``: the controller run over the symbolic world with an
+interference script, every table checked).
 """
 
 from __future__ import annotations

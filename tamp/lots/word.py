@@ -127,8 +127,7 @@ class RunWord:
         for x in letters:
             states = self._read(states, [x])
         return any(
-            q in self.aut.live_accepting
-            and accepts_lasso(self.aut.spot_aut, [], cycle, start=q)[0]
+            q in self.aut.live_accepting and accepts_lasso(self.aut.spot_aut, [], cycle, start=q)[0]
             for q in sorted(states)
         )
 

@@ -12,9 +12,11 @@ draws the seed's perturbation, builds the controller (its initial table passes t
 verification gate before anything moves), simulates in chunks until the controller stops or
 the time limit, and measures the result on the plant: counts per class in W^A, W^B and the
 waste basket from the objects' poses. The run is a SUCCESS only when the controller
-completed its round and the plant's W^B is a W^B state that ends a round of the task
-(`Lots.is_goal`: the same verdict as ``tamp lots``, which applies it to its symbolic ground
-truth). `LotsWorkcell` (``WORKCELL``) is the cell's `tamp.sim.core.workcell.Workcell`.
+completed its round, the plant's W^B is a W^B state that ends a round of the task
+(`Lots.is_goal`), and the run's word — the robot's deliveries and the W^B states its camera
+saw, in order — is accepted by the task automaton (`verification.lots.judge_word`): the
+same verdict as ``tamp lots``, which applies it to its symbolic ground truth.
+`LotsWorkcell` (``WORKCELL``) is the cell's `tamp.sim.core.workcell.Workcell`.
 Drake is imported only inside functions, so listing the workcells builds nothing.
 """
 
@@ -112,6 +114,11 @@ class LotsSimResult(RunResult):
     task: str = ""
     formula: str = ""
     satisfied: bool = False
+    #: the run's word (robot deliveries, observed W^B states) and the automaton's verdict
+    word: dict[str, Any] = field(default_factory=dict)
+    word_accepted: bool = False
+    word_verdict: dict[str, Any] = field(default_factory=dict)
+    final_w_b: dict[str, int] = field(default_factory=dict)  # the plan in use (after replans)
     controller_status: str = "TIMEOUT"  # the controller's result (TIMEOUT: none in time)
     actions: list[ActionLog] = field(default_factory=list)
     robot_actions: list[ActionRecord] = field(default_factory=list)
@@ -131,6 +138,10 @@ class LotsSimResult(RunResult):
             "task": self.task,
             "grasp": self.network,
             "satisfied": self.satisfied,
+            "word": self.word,
+            "word_accepted": self.word_accepted,
+            "word_verdict": self.word_verdict,
+            "final_w_b": self.final_w_b,
             "controller_status": self.controller_status,
             "actions": [a.to_json() for a in self.actions],
             "robot_actions": [a.to_json() for a in self.robot_actions],
@@ -164,6 +175,10 @@ class LotsSimResult(RunResult):
         lines += [e.never_happened() for e in self.never_happened]
         c = self.final_counts
         lines.append(f"final (plant): W^A {c['A']}  W^B {c['B']}  waste {c['waste']}")
+        if self.word:
+            letters = " ".join("{" + ",".join(x) + "}" for x in self.word.get("trace", []))
+            verdict = "accepted" if self.word_accepted else "rejected"
+            lines.append(f"run's word: {letters or '(empty)'}  — {verdict} by the task automaton")
         if self.elsewhere:
             lines.append(f"elsewhere: {', '.join(self.elsewhere)}")
         for stop in self.safety_stops:
@@ -326,9 +341,11 @@ def simulate_lots(
     carries them out, and the run also waits (at most `PERSON_GRACE` s) for the person to
     finish what it started."""
     from tamp.lots.controller import LotsController
+    from tamp.lots.run import run_word_json
     from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
     from tamp.sim.core.runner import make_simulator, run_in_chunks
     from tamp.world.interface import Status
+    from verification.lots import judge_verdict
 
     run, applied = perturbed_run(scenario, seed)  # the run's draw of its perturbation
     cell_scenario, task = run.cell, run.task
@@ -367,12 +384,18 @@ def simulate_lots(
     controller_status = s.result.value if s.result is not None else "TIMEOUT"
     why = s.reason if s.result is not None else f"no result within {limit:g} s of sim time"
     truth = c.lots.vector(counts["B"])
-    satisfied = s.result is Status.SUCCESS and c.lots.is_goal(truth)
-    if s.result is Status.SUCCESS and not satisfied:
+    word_ok, word_verdict = judge_verdict(c)  # what happened, read by the task automaton
+    satisfied = s.result is Status.SUCCESS and c.lots.is_goal(truth) and word_ok
+    if s.result is Status.SUCCESS and not c.lots.is_goal(truth):
         why = (
             f"the controller completed its round, but the plant's W^B holds "
             f"{c.lots.format(truth)}, which ends no round of the task "
-            f"(planned: {c.lots.format(c.lots.final)})"
+            f"(planned: {c.lots.format(c.plan.end[1])})"
+        )
+    elif s.result is Status.SUCCESS and not word_ok:
+        why = (
+            "the controller completed its round, but the run's word is not accepted by the "
+            "task automaton (what happened does not satisfy the formula)"
         )
     log = list(s.log)
     status, cause = lots_verdict(controller_status, satisfied, log)
@@ -400,6 +423,10 @@ def simulate_lots(
         task=task.name,
         formula=task.formula,
         satisfied=satisfied,
+        word=run_word_json(c),
+        word_accepted=word_ok,
+        word_verdict=word_verdict,
+        final_w_b=c.lots.named(c.plan.end[1]),
         controller_status=controller_status,
         actions=log,
         robot_actions=list(c.actions),
@@ -444,6 +471,12 @@ class LotsWorkcell:
             folder="lots",
         ),
         Option("grasp", "grasp network (default: the scenario's)", choices=tuple(NETWORKS)),
+        Option(
+            "return_action",
+            "allow our extension of Zhou et al.'s action set: take an object from W^B back to "
+            "W^A (same as 'actions: {return: true}' in the task file)",
+            action="store_true",
+        ),
     )
     replay = "tamp simulate lots --task {scenario} --seed {seed}"
 
@@ -454,6 +487,7 @@ class LotsWorkcell:
         scenario: str | Path | None = None,
         interference: str | Path | None = None,
         grasp: str | None = None,
+        return_action: bool = False,
     ) -> LotsScenario:
         """The task (file or packaged name), the workcell scenario (default: the packaged
         one named like the task) with grasp network ``grasp``, and the interference events,
@@ -464,6 +498,8 @@ class LotsWorkcell:
         from tamp.sim.lots.scenario import load_cell_scenario
 
         task = load_task(name_or_path)
+        if return_action:
+            task = dataclasses.replace(task, returns=True)
         events = load_events(interference, task) if interference else []
         if scenario is None and not resolve(task.name, "lots_sim").is_file():
             raise InputError(

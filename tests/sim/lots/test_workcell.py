@@ -30,6 +30,7 @@ def test_the_cell_declares_the_contract():
         "scenario": ("load", True, "lots_sim"),
         "interference": ("load", True, "lots"),
         "grasp": ("load", False, None),
+        "return_action": ("load", False, None),  # campaigns: the task file's 'actions'
     }
     assert options["grasp"].choices == tuple(NETWORKS)
     assert WORKCELL.replay.format(scenario="tower", seed=4) == (
@@ -100,3 +101,30 @@ def test_the_result_is_a_run_result_with_its_own_keys_and_report():
         "FAILURE: task NOT satisfied: a skill failed; sim 12.00 s, wall 4.00 s, "
         "real-time factor 3.00x",
     ]
+
+
+def test_the_return_action_is_off_unless_asked_for():
+    """Zhou et al.'s action set by default; ``--return-action`` switches our extension on."""
+    assert WORKCELL.load("tower").task.returns is False
+    assert WORKCELL.load("tower", return_action=True).task.returns is True
+    assert "--return-action" in [o.spelling for o in WORKCELL.options]
+
+
+def test_the_result_carries_the_runs_word_and_the_automatons_verdict():
+    r = LotsSimResult(
+        scenario="tower",
+        task="tower",
+        formula="F(p1 & F(p2 & F p3))",
+        status="FAILURE",
+        reason="task NOT satisfied: the run's word is not accepted",
+        word={"events": [], "trace": [["p2"], ["p3"]], "cycle": [[]]},
+        word_accepted=False,
+        word_verdict={"holds": False},
+        final_w_b={"bottom": 1, "body": 1, "peak": 1},
+        final_counts={"A": {}, "B": {}, "waste": {}},
+        grasps={"attempts": 0, "successes": 0},
+    )
+    doc = r.to_json()
+    assert doc["word"]["trace"] == [["p2"], ["p3"]] and doc["word_accepted"] is False
+    assert doc["final_w_b"] == {"bottom": 1, "body": 1, "peak": 1}
+    assert "run's word: {p2} {p3}  — rejected by the task automaton" in r.report_lines()
