@@ -198,3 +198,79 @@ def test_verify_lots_checks_every_table_of_the_run_with_interference(capsys):
     assert subjects[2] == "LOTS planned run (replan 1 at W^B hammer^0 screw^0 screwdriver^1)"
     assert verify_main(["lots", "example1.yaml"]) == 0  # no interference: the initial table
     assert capsys.readouterr().out.count("holds") == 2
+
+
+# -- Zhou et al.'s action set by default; the return action W^B -> W^A is ours, opt-in -------
+
+ONE_HAMMER = """version: 1
+formula: "{formula}"
+propositions:
+  p1: {{class: hammer}}
+  p2: {{class: hammer}}
+initial:
+  A: {{hammer: 1}}
+{extra}"""
+
+
+@pytest.mark.parametrize("formula", ["F(p1 & F p2)", "GF p1 & GF p2"])
+def test_one_hammer_delivered_twice_needs_the_return_action(capsys, tmp_path, formula):
+    """Both propositions move a hammer from W^A to W^B and there is one hammer: with the
+    paper's actions (Def. 3) no run exists (exit 1, the reason names the return action);
+    with our return action switched on, by flag or task field, the task is satisfied."""
+    task = write(tmp_path, "t.yaml", ONE_HAMMER.format(formula=formula, extra=""))
+    assert main(["lots", task]) == 1
+    err = capsys.readouterr().err
+    assert "no accepting run" in err and "--return-action" in err
+    code, data = run_json(capsys, task, "--return-action")
+    assert code == 0 and data["satisfied"] and data["returns"] and data["word_accepted"]
+    assert ("remove", "hammer") in [(a["kind"], a["class"]) for a in data["actions"]]
+    on = ONE_HAMMER.format(formula=formula, extra="actions: {return: true}\n")
+    code, data = run_json(capsys, write(tmp_path, "on.yaml", on))
+    assert code == 0 and data["satisfied"]
+
+
+@pytest.mark.parametrize(
+    "extra, field",
+    [
+        ("actions: {return: maybe}\n", "actions.return"),
+        ("actions: {teleport: true}\n", "actions"),
+        ("actions: [return]\n", "actions"),
+    ],
+)
+def test_bad_actions_field_is_bad_input(capsys, tmp_path, extra, field):
+    task = write(tmp_path, "t.yaml", ONE_HAMMER.format(formula="F p1", extra=extra))
+    assert main(["lots", task]) == 2
+    assert field in capsys.readouterr().err
+
+
+FALSE_SUCCESS = """version: 1
+formula: "F(p1 & F(p2 & F p3))"
+propositions:
+  p1: {class: block}
+  p2: {class: block}
+  p3: {class: cap}
+initial:
+  A: {block: 2, cap: 1}
+  B: {block: 1}
+"""
+
+
+def test_a_block_that_started_in_wb_is_no_delivery(capsys, tmp_path):
+    """A person adds a block to W^A before the first action (dis_2): the robot must still
+    deliver two blocks and the cap — the block that started in W^B is not p1's delivery —
+    and the JSON carries the run's word and the automaton's verdict on it."""
+    task = write(tmp_path, "t.yaml", FALSE_SUCCESS)
+    ev = write(
+        tmp_path,
+        "ev.yaml",
+        "version: 1\nevents:\n  - {after: 0, kind: add, class: block, side: A}\n",
+    )
+    code, data = run_json(capsys, task, "--interference", ev)
+    assert code == 0 and data["satisfied"]
+    moves = [a["prop"] for a in data["actions"] if a["kind"] == "move"]
+    assert moves == ["p1", "p2", "p3"]
+    assert data["word"]["trace"] == [["p1"], ["p2"], ["p3"]]
+    assert data["word_accepted"] is True and data["word_verdict"]["holds"] is True
+    assert data["final"]["B"] == {"block": 3, "cap": 1}
+    assert data["final_w_b"] == {"block": 3, "cap": 1}  # the plan in use, after the replan
+    assert data["replans"] >= 1
