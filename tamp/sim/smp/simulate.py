@@ -25,10 +25,10 @@ from typing import TYPE_CHECKING, Any
 
 from tamp.errors import InputError
 from tamp.sim.core.workcell import Option
-from tamp.sim.smp.scenario import SimScenario
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # imported where used: listing the workcells (`tamp --help`) stays light
     from tamp.sim.smp.runner import SimResult
+    from tamp.sim.smp.scenario import SimScenario
 
 
 @dataclass
