@@ -1,16 +1,21 @@
 """``tamp refine TASK.yaml``: refine a two-robot program in Drake (Figueroa Heredia et al. 2018).
 
-    tamp refine TASK.yaml [--category I|II|III] [--json] [--gantt out.svg]
-                          [--record out.html] [--out refined.yaml] [--no-verify] [--seed N]
+    tamp refine TASK.yaml [--category I|II|III] [--scale base|all] [--json]
+                          [--gantt out.svg] [--record out.html] [--out refined.yaml]
+                          [--no-verify] [--seed N]
 
 Simulates the original program, then the program after each refinement phase
 (parallelized, speed-adjusted, rate-refined; `tamp.refine.refinement`, every run measured
-by the Drake workcell's `tamp.sim.refine.simulate.simulate`), and prints the measured task
-time of each, the rate found, the reduction and the refined program. Every program passes
-the LTL ordering gate before it is simulated. ``--seed N`` draws the program file's
-``perturbation`` section (robot start poses; `tamp.sim.refine.simulate.perturbed_program`).
-Exit 0 on success, 1 when a program cannot finish or a refinement breaks the ordering
-property (with the counterexample), 2 on a bad file or option.
+by the Drake workcell's `tamp.sim.refine.simulate.simulate`). A phase is accepted only if
+its run finishes, meets the task's goal on the plant and adds no collision the original
+run did not have; otherwise its change is reverted, undone or (the rate) backed off. Prints
+what each phase tried, measured and kept, the reduction and the refined program (the last
+accepted one; ``--out`` writes it). Every program passes the LTL ordering gate before it is
+simulated; a parallelization the property refuses is dropped. ``--scale`` (Step 3): the
+rate scales the base's speed (the paper's, default) or every section's. ``--seed N`` draws
+the program file's ``perturbation`` section (robot start poses). Exit 0 when the refined
+program meets the goal, 1 when no accepted program does (the original misses it) or the
+original cannot finish (with the reason), 2 on a bad file or option.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ import argparse
 
 from tamp.commands.output import add_no_verify, output_file, print_json, progress, warn_unverified
 from tamp.commands.simulate import add_seed
+from tamp.errors import InfeasibleError
 
 
 def register(subparsers) -> None:
@@ -29,6 +35,12 @@ def register(subparsers) -> None:
     )
     p.add_argument("task", help="program file (YAML, version 1) or a packaged name (task4)")
     p.add_argument("--category", choices=("I", "II", "III"), help="architecture category")
+    p.add_argument(
+        "--scale",
+        choices=("base", "all"),
+        default="base",
+        help="Step 3: the new rate scales the base's speed (the paper's) or every section's",
+    )
     p.add_argument("--gantt", metavar="SVG", help="write Fig. 12-style timelines per phase")
     p.add_argument("--record", metavar="HTML", help="Meshcat animation of the refined run")
     p.add_argument("--out", metavar="YAML", help="write the refined program")
@@ -76,6 +88,7 @@ def run(args: argparse.Namespace) -> int:
         gate=None if args.no_verify else gate_program,
         check_run=check_run,
         category=args.category,
+        scale=args.scale,
         record=args.record,
         progress=lambda m: progress(m, quiet=args.json),
     )
@@ -88,18 +101,32 @@ def run(args: argparse.Namespace) -> int:
             args.gantt,
             title=f"{program.name}, Category {result.program.communication.category}",
         )
-    if args.out:
+    if args.out and result.goal_met:  # the last accepted program; none when none meets the goal
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         Path(args.out).write_text(dump_program(result.program))
     if args.json:
         payload = result.to_json()
-        payload["refined_program"] = None if args.out else dump_program(result.program)
+        refined = dump_program(result.program) if result.goal_met else None
+        payload["refined_program"] = None if args.out else refined
         payload["gantt"] = args.gantt
         payload["recording"] = result.phases[-1].run.recording
         payload["seed"] = applied.seed
         payload["perturbation"] = applied.to_json()
         print_json(payload)
-        return 0
+    else:
+        _print_text(result, args)
+    if not result.goal_met:
+        import sys
+
+        print(f"tamp refine: error: {result.failure}", file=sys.stderr)
+        return InfeasibleError.exit_code
+    return 0
+
+
+def _print_text(result, args: argparse.Namespace) -> None:
+    from tamp.refine.loader import dump_program
+
+    program = result.phases[0].program
     cat = result.program.communication.category
     print(f"program {program.name} (Category {cat}):")
     first = result.phases[0].task_time
@@ -107,24 +134,34 @@ def run(args: argparse.Namespace) -> int:
         change = "" if p is result.phases[0] else f"  ({p.task_time / first - 1:+.1%})"
         line = f"  {p.name:<15} {p.task_time:8.1f} s{change:<10}  {p.run.outcome.summary()}"
         print(line.rstrip())
-    for p in result.parallelized:
-        print(f"  parallelized: {p.describe()}")
-    for p, cs in result.reverted:
-        print(
-            f"  reverted: {p.describe()} (collision {cs[0][0]} with {cs[0][1]} at {cs[0][2]:.1f} s)"
-        )
-    for c in result.speed_changes:
-        print(f"  speed: {c.describe()}")
-    found = result.tuning.found_rates() if result.tuning else {}
+    print("tried:")
+    for a in result.attempts:
+        t = f"{a.run.task_time:.1f} s" if a.run.finished else "unfinished"
+        verdict = "accepted" if a.rejected is None else f"NOT accepted: {a.rejected}"
+        what = "; ".join(a.tried) or "as given"
+        print(f"  {a.phase:<15} {what}: {t}, {verdict}")
+    for p, report in result.refused:
+        print(f"  refused by the ordering property: {p.describe()}")
+        print("    " + report.splitlines()[0])
+    for p, why, _ in result.reverted:
+        print(f"  reverted: {p.describe()} ({why})")
+    if result.speed_undone:
+        print(f"  speed change undone ({result.speed_undone})")
+    found = result.rates_found
     print(
-        f"  rate found: {', '.join(f'{k} {v:g} Hz' for k, v in found.items())}; "
-        f"applied {result.rate_hz:g} Hz"
+        f"  rate found: {', '.join(f'{k} {v:g} Hz' for k, v in found.items()) or 'none'}; "
+        f"kept {result.rate_hz:g} Hz (Step 3 scales the {result.scale} speed)"
+        if result.rate_hz
+        else f"  rate found: {', '.join(f'{k} {v:g} Hz' for k, v in found.items()) or 'none'}; "
+        "none kept"
     )
     print(
         f"reduction {result.reduction:.1%}; sim {result.sim_time:.0f} s in "
-        f"{result.wall_time:.0f} s wall"
+        f"{result.wall_time:.0f} s wall, {result.cpu_time:.0f} s CPU"
     )
-    if args.out:
+    if not result.goal_met:
+        print(f"NOT refined: {result.failure}")
+    elif args.out:
         print(f"refined program: {args.out}")
     else:
         print("refined program:")
@@ -133,4 +170,3 @@ def run(args: argparse.Namespace) -> int:
         print(f"gantt: {args.gantt}")
     if args.record:
         print(f"recording: {result.phases[-1].run.recording}")
-    return 0

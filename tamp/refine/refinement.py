@@ -1,29 +1,37 @@
-"""The refinement of a program, phase by phase, every task time measured by execution.
+"""The refinement of a program, phase by phase, every phase accepted only if the task still works.
 
-Figueroa Heredia et al. 2018 §3 (Fig. 3, Fig. 12). Phases:
+Figueroa Heredia et al. 2018 §3 (Fig. 3–6, Fig. 12): the program is modified "without
+compromising the successful execution of the task" (§1.2). Every modified program is
+executed (by the `Measure` the caller gives) and *accepted* only if its run finishes,
+meets the scene's goal on the plant (`Run.outcome`) and has no collision the original run
+did not have (`accept`). Phases:
 
-1. **original**: the program as given.
-2. **parallelized** (Step 1 + Step 2): `tamp.refine.steps.parallelize` on the durations
-   the original run measured. The result is executed once; a parallelization after which
-   a collision appears that the original run did not have (in the workcell: a chassis
-   touching anything, a robot touching the other or the table) is reverted (`revert`,
-   latest first) and the program runs again without it.
+1. **original**: the program as given. Its run is the reference; a program whose original
+   run does not meet the goal has nothing to be refined against: the result stops there
+   (``goal_met`` False, the reason in ``failure``; `tamp refine` exits 1).
+2. **parallelized** (Step 1 + Step 2, §3.2, Fig. 4): `steps.parallelize` on the original
+   run's measured durations. Each parallelization first passes the ordering gate on its
+   own (one the task's LTL property refuses is dropped with the counterexample,
+   ``refused``); the program with the rest is executed once, and while it is not accepted
+   the latest parallelization is reverted (``reverted``, with the reason) and the program
+   runs again. With nothing left the phase is the original program and run.
 3. **speed-adjusted** (Fig. 6(c)): `adjust_base_speed` on the parallelized run's
-   durations.
-4. **rate-refined** (Fig. 5): a tuning run of the speed-adjusted program, each robot's
-   rate searched online; the lower of the robots' found rates is applied to both
-   (`apply_rate`, Step 3: every speed scales by the same ratio, the base's included), as in
-   the paper, and the program runs again.
+   durations; a run that is not accepted undoes the change (the phase keeps the
+   parallelized program and run, ``speed_undone`` says why).
+4. **rate-refined** (Fig. 5): a tuning run of the speed-adjusted program searches each
+   robot's rate online; the lower found rate is applied to both robots (`apply_rate`,
+   Step 3: the base's speed by the same ratio, or every section's with ``scale="all"``).
+   A run that is not accepted backs the rate off one search step at a time until the task
+   holds (our addition: the paper stops at the last rate without sensor delay and does
+   not say what to do when the task fails there); at the starting rate nothing is kept.
 
-Nothing here simulates: every run comes from the `Measure` the caller gives
-(`tamp.refine.measure`; the Drake workcell's is `tamp.sim.refine.simulate.simulate`). The
-ordering property is checked the same way, by functions the caller gives (the verification
-layer's `gate_program` and `check_run`): every program passes the ``gate`` before it is
-measured (a refinement that lets some execution break the task's ordering property is
-refused with the counterexample: the gate raises), and each measured run's event order is
-checked too (`Phase.run_holds`). A program that cannot finish (`check_can_finish`, or an
-event that did not fire in a measured run, or a rate search that did not end) is
-`InfeasibleError`.
+Every attempt (program tried, measured task time, goal, new collisions, accepted or why
+not) is kept in ``attempts`` in the order it ran, so the JSON lists what each phase tried,
+measured and kept. The ordering property is checked by functions the caller gives (the
+verification layer's `gate_program` and `check_run`): every program passes the ``gate``
+before it is measured, and each measured run's event order is checked too
+(`Phase.run_holds`). Nothing here simulates. The original program not finishing (or a
+cycle, `check_can_finish`) is `InfeasibleError`.
 """
 
 from __future__ import annotations
@@ -43,14 +51,15 @@ from tamp.refine.steps import (
     SpeedChange,
     adjust_base_speed,
     apply_rate,
+    join,
     parallelize,
     revert,
 )
 
 
 class Gate(Protocol):
-    """Refuses ``program`` (raises, with the counterexample) when some execution of it breaks
-    its ordering property; ``subject`` names it in the report
+    """Refuses ``program`` (raises an `InfeasibleError`, with the counterexample) when some
+    execution of it breaks its ordering property; ``subject`` names it in the report
     (`verification.gate.gate_program`)."""
 
     def __call__(self, program: Program, *, subject: str) -> object: ...
@@ -69,16 +78,66 @@ class RunCheck(Protocol):
 
 PHASES = ("original", "parallelized", "speed-adjusted", "rate-refined")
 
+Collision = tuple[str, str, float]  # (robot body, other body, first contact time)
+
+
+def new_collisions(run: Run, reference: Run) -> list[Collision]:
+    """Collisions of ``run`` whose pair the ``reference`` run did not have, with first times."""
+    return [
+        (*k, run.collisions[k]) for k in sorted(set(run.collisions) - set(reference.collisions))
+    ]
+
+
+def accept(run: Run, reference: Run) -> str | None:
+    """Why ``run`` is not accepted (None: it is): it did not finish, it missed the goal on
+    the plant, or it has a collision the ``reference`` (original) run did not."""
+    if not run.finished:
+        stuck = [r.event for r in run.timeline.records if r.end is None]
+        return f"did not finish within {run.sim_time:.0f} s: {', '.join(stuck)} never fired"
+    if not run.outcome.achieved:
+        return "goal not met: " + "; ".join(run.outcome.failed())
+    new = new_collisions(run, reference)
+    if new:
+        a, b, t = new[0]
+        return f"new collision {a} with {b} at {t:.1f} s"
+    return None
+
+
+@dataclass
+class Attempt:
+    """One executed program of a phase: what it tried, the run, and why it was not
+    accepted (``rejected`` None: accepted)."""
+
+    phase: str
+    tried: list[str]
+    run: Run
+    rejected: str | None
+    new_collisions: list[Collision] = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        return {
+            "phase": self.phase,
+            "tried": list(self.tried),
+            "task_time": round(self.run.task_time, 3) if self.run.finished else None,
+            "finished": self.run.finished,
+            "goal_met": self.run.outcome.achieved,
+            "outcome": self.run.outcome.summary(),
+            "new_collisions": [[a, b, round(t, 3)] for a, b, t in self.new_collisions],
+            "accepted": self.rejected is None,
+            "rejected": self.rejected,
+        }
+
 
 @dataclass
 class Phase:
-    """One phase: its program, the (finished) run that measured it and whether the run's
-    event order satisfies the ordering property."""
+    """One phase: its accepted program, the run that measured it, whether the run's event
+    order satisfies the ordering property and what the phase kept (in words)."""
 
     name: str
     program: Program
     run: Run
     run_holds: bool
+    kept: list[str] = field(default_factory=list)
 
     @property
     def task_time(self) -> float:
@@ -87,22 +146,33 @@ class Phase:
 
 @dataclass
 class Refinement:
-    """All phases, what each step changed, the tuning run and the found rate."""
+    """All phases, what each step tried and kept, the tuning run and the kept rate."""
 
     phases: list[Phase]
+    attempts: list[Attempt] = field(default_factory=list)
     parallelized: list[Parallelization] = field(default_factory=list)
-    # each reverted parallelization with the new collisions (robot body, other, first time)
-    reverted: list[tuple[Parallelization, list[tuple[str, str, float]]]] = field(
-        default_factory=list
-    )
+    # each parallelization the ordering gate refused, with the gate's report
+    refused: list[tuple[Parallelization, str]] = field(default_factory=list)
+    # each reverted parallelization with the reason and the new collisions of its run
+    reverted: list[tuple[Parallelization, str, list[Collision]]] = field(default_factory=list)
     speed_changes: list[SpeedChange] = field(default_factory=list)
+    speed_undone: str | None = None
     tuning: Run | None = None
-    rate_hz: float = 0.0
+    rates_found: dict[str, float] = field(default_factory=dict)
+    rate_hz: float = 0.0  # the rate kept (0: none)
+    rates_tried: list[float] = field(default_factory=list)
+    scale: str = "base"
+    failure: str | None = None  # why no accepted program meets the goal
     verified: bool = True
 
     @property
+    def goal_met(self) -> bool:
+        """The last accepted program meets the goal on the plant."""
+        return self.failure is None
+
+    @property
     def program(self) -> Program:
-        """The refined program (the last phase's)."""
+        """The refined program: the last accepted phase's."""
         return self.phases[-1].program
 
     @property
@@ -111,24 +181,32 @@ class Refinement:
         first, last = self.phases[0].task_time, self.phases[-1].task_time
         return 1.0 - last / first if first > 0 else 0.0
 
+    def _runs(self) -> list[Run]:
+        return [a.run for a in self.attempts] + ([self.tuning] if self.tuning else [])
+
     @property
     def sim_time(self) -> float:
-        runs = [p.run for p in self.phases] + ([self.tuning] if self.tuning else [])
-        return sum(r.sim_time for r in runs)
+        return sum(r.sim_time for r in self._runs())
 
     @property
     def wall_time(self) -> float:
-        runs = [p.run for p in self.phases] + ([self.tuning] if self.tuning else [])
-        return sum(r.wall_time for r in runs)
+        return sum(r.wall_time for r in self._runs())
+
+    @property
+    def cpu_time(self) -> float:
+        return sum(r.cpu_time for r in self._runs())
 
     def to_json(self) -> dict:
         return {
             "program": self.phases[0].program.name,
             "category": self.program.communication.category,
+            "goal_met": self.goal_met,
+            "failure": self.failure,
             "phases": [
                 {
                     "name": p.name,
                     "task_time": round(p.task_time, 3),
+                    "kept": list(p.kept),
                     "timeline": p.run.timeline.to_json()["behaviors"],
                     "max_wait": {k: round(v, 5) for k, v in p.run.max_wait.items()},
                     "run_satisfies_ordering": p.run_holds,
@@ -139,10 +217,11 @@ class Refinement:
                 }
                 for p in self.phases
             ],
+            "attempts": [a.to_json() for a in self.attempts],
             "rate_hz": self.rate_hz,
-            "rates_found": {k: v for k, v in self.tuning.found_rates().items()}
-            if self.tuning
-            else {},
+            "rates_found": dict(self.rates_found),
+            "rates_tried": list(self.rates_tried),
+            "scale": self.scale,
             "probes": {
                 n: [[r, round(w, 5)] for r, w in s.probes]
                 for n, s in (self.tuning.searches.items() if self.tuning else [])
@@ -150,26 +229,22 @@ class Refinement:
             },
             "reduction": round(self.reduction, 4),
             "parallelized": [p.describe() for p in self.parallelized],
+            "refused": [{"parallelization": p.describe(), "report": r} for p, r in self.refused],
             "reverted": [
                 {
                     "parallelization": p.describe(),
+                    "reason": why,
                     "collisions": [[a, b, round(t, 3)] for a, b, t in cs],
                 }
-                for p, cs in self.reverted
+                for p, why, cs in self.reverted
             ],
             "speed_changes": [c.describe() for c in self.speed_changes],
+            "speed_undone": self.speed_undone,
             "verified": self.verified,
             "sim_time": round(self.sim_time, 3),
             "wall_time": round(self.wall_time, 3),
+            "cpu_time": round(self.cpu_time, 3),
         }
-
-
-def _not_finished(run: Run, what: str) -> InfeasibleError:
-    stuck = [r.event for r in run.timeline.records if r.end is None]
-    return InfeasibleError(
-        f"the {what} program did not finish within {run.sim_time:.0f} s of sim time: "
-        f"{', '.join(stuck)} never fired"
-    )
 
 
 def refine(
@@ -180,6 +255,7 @@ def refine(
     gate: Gate | None,
     check_run: RunCheck,
     category: str | None = None,
+    scale: str = "base",
     record: str | Path | None = None,
     progress: Callable[[str], None] = lambda _: None,
 ) -> Refinement:
@@ -187,8 +263,10 @@ def refine(
 
     ``gate``: the ordering gate every program passes before it is measured (None: no gate,
     the result says ``verified`` False); ``check_run``: the check of each measured event
-    order; ``category`` replaces the program's architecture category; ``record`` asks the
-    refined program's run for an animation."""
+    order; ``category`` replaces the program's architecture category; ``scale``: Step 3
+    scales the base's speed (``"base"``, the paper's) or every section's (``"all"``);
+    ``record`` asks each rate-refined run for an animation (the last one written is the
+    last rate tried)."""
     if category is not None:
         program = program.with_category(category)
     check_can_finish(program)
@@ -201,53 +279,103 @@ def refine(
     def run(p: Program, phase: str, **kw) -> Run:
         progress(f"simulating the {phase} program ...")
         r = measure(p, architecture, **kw)
-        progress(f"  {phase}: {r.task_time:.1f} s (wall {r.wall_time:.1f} s)")
+        if r.finished:
+            progress(
+                f"  {phase}: {r.task_time:.1f} s, {r.outcome.summary()} (wall {r.wall_time:.1f} s)"
+            )
         return r
 
-    def phase(name: str, p: Program, r: Run) -> Phase:
-        if not r.finished:
-            raise _not_finished(r, name)
-        return Phase(name, p, r, check_run(p, r.timeline.order()).holds)
+    def phase(name: str, p: Program, r: Run, kept: list[str]) -> Phase:
+        holds = check_run(p, r.timeline.order()).holds if r.finished else False
+        return Phase(name, p, r, holds, kept)
 
-    original = run(gated(program, "original"), "original")
-    phases = [phase("original", program, original)]
-    out = Refinement(phases, verified=gate is not None)
+    out = Refinement([], verified=gate is not None, scale=scale)
 
-    p1, done = parallelize(program, original.timeline.durations())
-    out.parallelized = list(done)
-    r1 = run(gated(p1, "parallelized"), "parallelized")
-    while True:
-        new = [
-            (*k, r1.collisions[k]) for k in sorted(set(r1.collisions) - set(original.collisions))
-        ]
-        if not new or not out.parallelized:
+    def attempt(name: str, p: Program, tried: list[str], reference: Run | None, **kw):
+        r = run(gated(p, name), name, **kw)
+        why = accept(r, reference or r)
+        new = new_collisions(r, reference) if reference is not None else []
+        out.attempts.append(Attempt(name, tried, r, why, new))
+        if why is not None:
+            progress(f"  {name} not accepted: {why}")
+        return r, why
+
+    # 1. original
+    original, why = attempt("original", program, [], None)
+    if not original.finished:
+        raise InfeasibleError(f"the original program {why}")
+    out.phases.append(phase("original", program, original, []))
+    if why is not None:
+        failed = "; ".join(original.outcome.failed())
+        out.failure = f"the original program does not meet the goal on the plant: {failed}"
+        return out
+
+    # 2. parallelized: each parallelization gated on its own, then run once and reverted
+    _, candidates = parallelize(program, original.timeline.durations())
+    p1, kept = program, []
+    for c in candidates:
+        trial = join(p1, c)
+        if gate is not None:
+            try:
+                gate(trial, subject=f"parallelized program {trial.name} ({c.describe()})")
+            except InfeasibleError as e:
+                out.refused.append((c, str(e)))
+                progress(f"  refused by the ordering property: '{c.describe()}'")
+                continue
+        p1, kept = trial, kept + [c]
+    r1 = original
+    while kept:
+        r, why = attempt("parallelized", p1, [c.describe() for c in kept], original)
+        if why is None:
+            r1 = r
             break
-        bad = out.parallelized.pop()  # the latest parallelization first
-        out.reverted.append((bad, new))
-        a, b, t = new[0]
-        progress(f"  collision ({a}, {b}) at {t:.1f} s: reverting '{bad.describe()}'")
+        bad = kept.pop()  # the latest parallelization first
+        out.reverted.append((bad, why, new_collisions(r, original)))
+        progress(f"  reverting '{bad.describe()}'")
         p1 = revert(p1, bad)
-        r1 = run(gated(p1, "parallelized"), "parallelized")
-    phases.append(phase("parallelized", p1, r1))
+    out.parallelized = kept
+    out.phases.append(phase("parallelized", p1, r1, [c.describe() for c in kept]))
 
-    p2, changes = adjust_base_speed(p1, r1.timeline.durations())
-    out.speed_changes = changes
-    r2 = run(gated(p2, "speed-adjusted"), "speed-adjusted")
-    phases.append(phase("speed-adjusted", p2, r2))
+    # 3. speed-adjusted (Fig. 6(c)); undone when its run is not accepted
+    p2, r2 = p1, r1
+    trial, changes = adjust_base_speed(p1, r1.timeline.durations())
+    if changes:
+        r, why = attempt("speed-adjusted", trial, [c.describe() for c in changes], original)
+        if why is None:
+            p2, r2, out.speed_changes = trial, r, changes
+        else:
+            out.speed_undone = why
+    out.phases.append(phase("speed-adjusted", p2, r2, [c.describe() for c in out.speed_changes]))
 
+    # 4. rate-refined (Fig. 5): tuning run, then back off one step while not accepted
     progress("tuning the command rate (Fig. 5) ...")
     tuning = measure(p2, architecture, tune=True)
-    found = tuning.found_rates()
-    if len(found) != len(p2.robots):
-        raise InfeasibleError(
-            f"the rate search did not end within {tuning.sim_time:.0f} s of sim time"
-        )
     out.tuning = tuning
-    out.rate_hz = min(found.values())
-    progress(f"  rates found {found}: applying {out.rate_hz:g} Hz to both robots")
-    p3 = p2
-    for r in p2.robots:
-        p3 = apply_rate(p3, r.name, out.rate_hz)
-    r3 = run(gated(p3, "rate-refined"), "rate-refined", record=record)
-    phases.append(phase("rate-refined", p3, r3))
+    out.rates_found = tuning.found_rates()
+    p3, r3, rate_kept = p2, r2, []
+    if len(out.rates_found) != len(p2.robots):
+        progress(f"  the rate search did not end within {tuning.sim_time:.0f} s of sim time")
+    else:
+        start = max(p2.rate(b) for _, _, b in p2.behaviors())
+        rate = min(out.rates_found.values())
+        progress(f"  rates found {out.rates_found}: trying {rate:g} Hz on both robots")
+        while rate > start + 1e-9:
+            trial = p2
+            for robot in p2.robots:
+                trial = apply_rate(trial, robot.name, rate, scale=scale)
+            out.rates_tried.append(rate)
+            r, why = attempt(
+                "rate-refined",
+                trial,
+                [f"{rate:g} Hz, {scale} speed scaled"],
+                original,
+                record=record,
+            )
+            if why is None:
+                p3, r3, out.rate_hz = trial, r, rate
+                rate_kept = [f"{rate:g} Hz on both robots ({scale} speed scaled)"]
+                break
+            rate -= architecture.rate_step_hz
+            progress(f"  backing the rate off to {rate:g} Hz")
+    out.phases.append(phase("rate-refined", p3, r3, rate_kept))
     return out

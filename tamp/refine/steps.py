@@ -15,9 +15,9 @@ Refining the communication rate (§3.3, Fig. 5):
   delay (wait below the threshold); on the first delayed probe keep the previous P. The
   same object drives the offline search (`refine_rate`, any measured wait function) and
   the RateTuningSupervisor in the simulation.
-- `apply_rate` (Step 3): set the robot's P and scale the base speed by the same ratio. A
-  section advances one step per command, so the arm's and gripper's speeds follow P by
-  construction; the file states every speed at its behavior's rate, so they scale too.
+- `apply_rate` (Step 3): set the robot's P (per behavior) and scale the base speed by the
+  same ratio, as the paper says; scaling every section (the step per command kept) is an
+  option (``scale="all"``).
 """
 
 from __future__ import annotations
@@ -98,11 +98,20 @@ def parallelize(
             )
             if ta is None or tb is None or not ta < tb or obstruction(cur, n) is not None:
                 continue
-            program = program.with_behavior(
-                r.name, n + 1, replace(b, parallel_with=a.name, rate_hz=a.rate_hz)
-            )
-            done.append(Parallelization(r.name, a.name, b.name))
+            p = Parallelization(r.name, a.name, b.name)
+            program = join(program, p)
+            done.append(p)
     return program, done
+
+
+def join(program: Program, p: Parallelization) -> Program:
+    """Apply one parallelization: the host starts together with the absorbed behavior (at
+    its rate: behaviors that run in parallel share one command rate)."""
+    r = program.robot(p.robot)
+    i = r.index(p.host)
+    absorbed = r.behavior(p.absorbed)
+    new = replace(r.behaviors[i], parallel_with=p.absorbed, rate_hz=absorbed.rate_hz)
+    return program.with_behavior(p.robot, i, new)
 
 
 def revert(program: Program, p: Parallelization) -> Program:
@@ -218,12 +227,34 @@ def refine_rate(search: RateSearch, measure: Callable[[float], float]) -> RateSe
     return search
 
 
-def apply_rate(program: Program, robot: str, rate: float) -> Program:
-    """Step 3: robot ``robot`` commands at ``rate``; every motion's speed scales by the
-    ratio of the new rate to the behavior's old one, so the step per command is kept."""
+SCALES = ("base", "all")
+
+
+def apply_rate(
+    program: Program,
+    robot: str,
+    rate: float | Mapping[str, float],
+    *,
+    scale: str = "base",
+) -> Program:
+    """Step 3: robot ``robot``'s behaviors command at ``rate`` (one rate, or behavior name
+    -> rate as Fig. 5 finds them per behavior; behaviors not named keep theirs).
+
+    ``scale="base"`` is the paper's Step 3 ("if the behavior involves movement of the robot
+    base, the speed of the robot base is adjusted according to the percentage rate at which
+    the P rate was modified", §3.3): a base behavior's speed scales by the ratio of its new
+    rate to its old one; the arm's and gripper's speeds stay (each command moves them a
+    smaller step). ``scale="all"`` scales every section's speed (the step per command is
+    kept): an option of ours, reported beside the paper's."""
+    if scale not in SCALES:
+        raise ValueError(f"scale must be one of {SCALES}, got {scale!r}")
     r = program.robot(robot)
     for i, b in enumerate(r.behaviors):
-        ratio = rate / program.rate(b)
-        motion = replace(b.motion, speed=b.motion.speed * ratio)
-        program = program.with_behavior(robot, i, replace(b, rate_hz=rate, motion=motion))
+        new_rate = rate.get(b.name) if isinstance(rate, Mapping) else rate
+        if new_rate is None:
+            continue
+        ratio = new_rate / program.rate(b)
+        speed = b.motion.speed * ratio if scale == "all" or b.section == "base" else b.motion.speed
+        motion = replace(b.motion, speed=speed)
+        program = program.with_behavior(robot, i, replace(b, rate_hz=new_rate, motion=motion))
     return program

@@ -61,3 +61,69 @@ def test_packaged_programs_resolve_from_any_directory(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert load_program("task4").name == "task4"
     assert load_program("task2.yaml").scene == "flip_scale"
+
+
+def _fake_simulate(misses):
+    """The workcell's `simulate` replaced by the timeline model of the loop's tests: every
+    behavior lasts its nominal time; runs of programs ``misses`` says True for leave the
+    chair shut (hinge 0.2 rad, goal >= 0.35); a tuning run finds 23 Hz."""
+    from tamp.refine.measure import Goal, Outcome, Run
+    from tamp.refine.steps import RateSearch
+    from tests.refine.test_refinement import timeline
+
+    goal = Goal("folding_chair.hinge", 0.35, "the chair is open")
+
+    def simulate(program, architecture, *, tune=False, max_sim_time=None, record=None, scene=None):
+        run = Run(program, timeline(program), sim_time=100.0)
+        run.outcome = Outcome({"folding_chair.hinge": 0.2 if misses(program) else 0.48}, (goal,))
+        if tune:
+            run.searches = {
+                r.name: RateSearch(10.0, 1.0, 0.03, 200.0, found=23.0) for r in program.robots
+            }
+        return run
+
+    return simulate
+
+
+def test_no_accepted_program_meeting_the_goal_exits_1_with_the_reason(
+    tmp_path, capsys, monkeypatch
+):
+    import tamp.sim.refine.simulate as workcell
+
+    monkeypatch.setattr(workcell, "simulate", _fake_simulate(lambda p: True))
+    out = tmp_path / "refined.yaml"
+    assert tamp_main(["refine", "task4", "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    assert "the original program does not meet the goal on the plant" in captured.err
+    assert "folding_chair.hinge = 0.200 < 0.35" in captured.err
+    assert "NOT refined" in captured.out
+    assert not out.exists()  # no accepted program: nothing written
+    assert tamp_main(["refine", "task4", "--json"]) == 1
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["goal_met"] is False and doc["refined_program"] is None
+    assert [p["name"] for p in doc["phases"]] == ["original"]
+
+
+def test_a_harmful_rate_is_backed_off_and_the_last_accepted_program_written(
+    tmp_path, capsys, monkeypatch
+):
+    import tamp.sim.refine.simulate as workcell
+
+    def too_fast(p):
+        return any((b.rate_hz or 10.0) > 21.0 for _, _, b in p.behaviors())
+
+    monkeypatch.setattr(workcell, "simulate", _fake_simulate(too_fast))
+    out = tmp_path / "refined.yaml"
+    assert tamp_main(["refine", "task4", "--json", "--out", str(out)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["rates_tried"] == [23.0, 22.0, 21.0] and doc["rate_hz"] == 21.0
+    rate = [a for a in doc["attempts"] if a["phase"] == "rate-refined"]
+    assert [a["accepted"] for a in rate] == [False, False, True]
+    assert rate[0]["rejected"].startswith("goal not met")
+    assert all(b.rate_hz == 21.0 for _, _, b in load_program(out).behaviors())
+    assert doc["goal_met"] is True
+    assert tamp_main(["refine", "task4"]) == 0
+    text = capsys.readouterr().out
+    assert (
+        "rate-refined    23 Hz, base speed scaled" in text and "NOT accepted: goal not met" in text
+    )

@@ -104,15 +104,33 @@ def test_rate_search_keeps_the_rate_before_the_first_delay():
     assert s.observe(1.0).observe(0.0).found == 10.0  # done: further probes change nothing
 
 
-def test_apply_rate_scales_speeds_with_p():
+def test_apply_rate_scales_the_base_speed_with_p_as_the_papers_step_3():
     p = apply_rate(task(4), "R1", 23.0)
     for b0, b1 in zip(task(4).robot("R1").behaviors, p.robot("R1").behaviors, strict=True):
         assert b1.rate_hz == 23.0
-        assert b1.motion.speed == pytest.approx(b0.motion.speed * 2.3)
-        # the step per command is unchanged
-        assert b1.motion.speed / 23.0 == pytest.approx(b0.motion.speed / 10.0)
+        factor = 2.3 if b0.section == "base" else 1.0  # the arm keeps its speed
+        assert b1.motion.speed == pytest.approx(b0.motion.speed * factor)
     assert p.robot("R2") == task(4).robot("R2")
     assert p.rate(p.robot("R2").behaviors[0]) == 10.0
+
+
+def test_apply_rate_can_scale_every_section_keeping_the_step_per_command():
+    p = apply_rate(task(4), "R1", 23.0, scale="all")
+    for b0, b1 in zip(task(4).robot("R1").behaviors, p.robot("R1").behaviors, strict=True):
+        assert b1.motion.speed == pytest.approx(b0.motion.speed * 2.3)
+        assert b1.motion.speed / 23.0 == pytest.approx(b0.motion.speed / 10.0)
+    with pytest.raises(ValueError, match="scale"):
+        apply_rate(task(4), "R1", 23.0, scale="arm")
+
+
+def test_apply_rate_per_behavior():
+    p = apply_rate(task(4), "R1", {"approach": 20.0, "pull_out": 15.0})
+    r0, r1 = task(4).robot("R1"), p.robot("R1")
+    assert [b.rate_hz for b in r1.behaviors] == [None, 20.0, 15.0, None]
+    assert r1.behavior("approach").motion.speed == pytest.approx(
+        r0.behavior("approach").motion.speed * 2.0
+    )
+    assert r1.behavior("lower_arm") == r0.behavior("lower_arm")
 
 
 EVENTS = sorted(set(task(1).events() + task(3).events() + task(4).events()))

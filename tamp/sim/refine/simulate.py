@@ -2,12 +2,11 @@
 
 `simulate` is the workcell's `tamp.refine.measure.Measure`: it builds the station of a
 program in its scene and runs it to the end. The simulator advances in chunks
-(`tamp.sim.core.runner.run_in_chunks`); between chunks the loop reads the plant's contact
-results (SceneGraph's contact surfaces and point pairs; `RefineStation.collision` says
-which are collisions: a robot's chassis or lever touching anything, a robot touching the
-other robot or the fixed scenery), with the first time of each (Step 2 reverts a
-parallelization that causes one), and stops when both state machines have fired every
-event, or, in a tuning run, when the supervisor's searches have ended. Nothing is computed
+(`tamp.sim.core.runner.run_in_chunks`) and stops when both state machines have fired every
+event, or, in a tuning run, when the supervisor's searches have ended. The collisions are
+the station's `ContactMonitor`'s (`tamp.sim.refine.contacts`: contacts judged at every
+plant step; a pair in contact for `MIN_CONTACT` s in all is a collision), each with its
+first time. Nothing is computed
 from the program's numbers: start and end times are when the machines started behaviors
 and fired events in sim time. At the end it measures what the objects did
 (`tamp.sim.refine.outcome`: the chair's hinge angle, the scale's tilt) against the scene's
@@ -22,8 +21,10 @@ robot's name). The scene's objects lie where the scene puts them. A start moved 
 object shows as a collision or an unfinished run, which is what a perturbation is for.
 
 `RefineWorkcell` (``WORKCELL``) is the cell's `tamp.sim.core.workcell.Workcell`: ONE
-seeded run of a program as given (no refinement), judged by its events and its measured
-event order. Drake is imported only inside functions, so listing the workcells builds
+seeded run of a program as given (no refinement), judged (`judge`) by its events, its
+measured event order, the scene's goal read on the plant and its collisions against the
+unperturbed run's (`reference_run`): SUCCESS only when the goal is met and no new
+collision occurred. Drake is imported only inside functions, so listing the workcells builds
 nothing.
 """
 
@@ -46,6 +47,9 @@ if TYPE_CHECKING:
     from tamp.sim.refine.station import RefineStation
 
 CHUNK = 0.05  # s of sim time between the run loop's checks
+#: s of accumulated contact after which a colliding pair is a collision of the run (two
+#: plant steps; `tamp.sim.refine.contacts`)
+MIN_CONTACT = 0.02
 
 
 def time_limit(program: Program, architecture: Architecture, tune: bool) -> float:
@@ -88,32 +92,8 @@ def simulate(
     plant_ctx = cell.plant.GetMyContextFromRoot(root)
     ex_ctx = {n: e.GetMyContextFromRoot(root) for n, e in cell.machines.items()}
     sup_ctx = cell.supervisor.GetMyContextFromRoot(root)
-    collisions: dict[tuple[str, str], float] = {}
-    contacts = cell.plant.get_contact_results_output_port()
-
-    inspector = None
-
-    def body_of(geometry) -> int:
-        return int(cell.plant.GetBodyFromFrameId(inspector.GetFrameId(geometry)).index())
 
     def between(t: float) -> bool:
-        nonlocal inspector
-        results = contacts.Eval(plant_ctx)
-        pairs = []
-        for i in range(results.num_point_pair_contacts()):
-            info = results.point_pair_contact_info(i)
-            pairs.append((int(info.bodyA_index()), int(info.bodyB_index())))
-        if results.num_hydroelastic_contacts():
-            if inspector is None:
-                query = cell.plant.get_geometry_query_input_port().Eval(plant_ctx)
-                inspector = query.inspector()
-            for i in range(results.num_hydroelastic_contacts()):
-                surface = results.hydroelastic_contact_info(i).contact_surface()
-                pairs.append((body_of(surface.id_M()), body_of(surface.id_N())))
-        for a, b in pairs:
-            key = cell.collision(a, b)
-            if key is not None:
-                collisions.setdefault(key, t)
         if tune:
             return cell.supervisor.state(sup_ctx).done
         return all(e.machine.progress_of(e.state(ex_ctx[n])).done for n, e in cell.machines.items())
@@ -131,7 +111,8 @@ def simulate(
 
         recording = save_recording(cell.visualizer, meshcat, record)
     outcome = measure(cell.plant, plant_ctx, cell.objects, heights, scene.goals)
-    return _result(cell, root, chunked, collisions, recording, outcome)
+    contacts = cell.monitor.log(cell.monitor.GetMyContextFromRoot(root))
+    return _result(cell, root, chunked, contacts.collisions(MIN_CONTACT), recording, outcome)
 
 
 def _result(cell: RefineStation, root, chunked, collisions, recording, outcome) -> Run:
@@ -212,22 +193,52 @@ class RefineResult(RunResult):
         return lines
 
 
-def judge(program: Program, run: Run, check_run) -> tuple[str, str | None, str, bool | None]:
-    """(status, cause, reason, run_satisfies_ordering) of one run: SUCCESS when every event
-    fired and the measured event order satisfies the ordering property; TIMEOUT when some
-    event never fired within the time limit; FAILURE when the order breaks the property.
-    The scene's goals and the collisions are reported, not judged (a program as given is
-    what the run measures)."""
+def judge(
+    program: Program, run: Run, check_run, reference: Run | None = None
+) -> tuple[str, str | None, str, bool | None]:
+    """(status, cause, reason, run_satisfies_ordering) of one run: TIMEOUT (cause
+    ``timeout``) when some event never fired within the time limit; FAILURE when the
+    measured event order breaks the ordering property (``order_violated``), when the
+    scene's goal is not met on the plant (``goal_missed``) or when the run has a collision
+    the ``reference`` run (the program as given, unperturbed; None: none to compare) did not
+    have (``new_collision``); else SUCCESS."""
+    from tamp.refine.refinement import new_collisions
     from tamp.sim.core.outcome import run_cause
 
     if not run.finished:
         stuck = ", ".join(r.event for r in run.timeline.records if r.end is None)
         return "TIMEOUT", run_cause("TIMEOUT", [], False), f"{stuck} never fired", None
     holds = check_run(program, run.timeline.order()).holds
-    if holds:
-        return "SUCCESS", None, "every event fired in an order the property allows", True
-    cause = run_cause("FAILURE", ["order_violated"], False)
-    return "FAILURE", cause, "the measured event order breaks the ordering property", False
+    if not holds:
+        cause = run_cause("FAILURE", ["order_violated"], False)
+        return "FAILURE", cause, "the measured event order breaks the ordering property", False
+    if not run.outcome.achieved:
+        reason = "goal not met on the plant: " + "; ".join(run.outcome.failed())
+        return "FAILURE", run_cause("FAILURE", ["goal_missed"], False), reason, True
+    new = new_collisions(run, reference) if reference is not None else []
+    if new:
+        a, b, t = new[0]
+        reason = f"a collision the unperturbed run did not have: {a} with {b} at {t:.1f} s"
+        return "FAILURE", run_cause("FAILURE", ["new_collision"], False), reason, True
+    return (
+        "SUCCESS",
+        None,
+        "the goal is met, in an order the property allows, no new collision",
+        True,
+    )
+
+
+#: the unperturbed run of each program a process has judged runs of (`RefineWorkcell.run`)
+_REFERENCE: dict[tuple[Program, str | None], Run] = {}
+
+
+def reference_run(program: Program, architecture: Architecture, scene: Scene) -> Run:
+    """The run of ``program`` as given (no perturbation), simulated once per process: what a
+    seeded run's collisions are compared with."""
+    key = (program, architecture.file)
+    if key not in _REFERENCE:
+        _REFERENCE[key] = simulate(program, architecture, scene=scene)
+    return _REFERENCE[key]
 
 
 class RefineWorkcell:
@@ -294,7 +305,11 @@ class RefineWorkcell:
             record=record,
             scene=moved.scene,
         )
-        status, cause, reason, holds = judge(program, run, check_run)
+        reference = run
+        moved_robots = any(any(v) for v in applied.robots.values())
+        if moved_robots and run.finished and run.outcome.achieved:  # else judged without it
+            reference = reference_run(scenario.program, scenario.architecture, scenario.scene)
+        status, cause, reason, holds = judge(program, run, check_run, reference)
         return RefineResult(
             workcell=self.name,
             scenario=program.file or program.name,

@@ -6,6 +6,7 @@
                 Channel.actuation -> the robot's PD actuators (desired state)
                 the other machine's progress -> PioneerStateMachine.others
     Channels' deliveries -> RateTuningSupervisor -> rates -> both state machines
+    plant contact results -> ContactMonitor (colliding pairs, every step; `contacts`)
     MeshcatVisualizer (optional, `tamp.sim.core.recording`)
 
 Exported ports of the Diagram, per robot ``R``: ``R_state`` (its plant state),
@@ -37,7 +38,7 @@ import numpy as np
 from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import PdControllerGains, RevoluteJoint
+from pydrake.multibody.tree import BodyIndex, PdControllerGains, RevoluteJoint
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from tamp.errors import InputError
@@ -48,6 +49,7 @@ from tamp.refine.steps import RateSearch
 from tamp.sim.core.models import model_url, sdf_path
 from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.refine.channel import Channel, ChannelState
+from tamp.sim.refine.contacts import CollisionRule, ContactMonitor
 from tamp.sim.refine.scenario import Scene
 from tamp.sim.refine.sensors import SensorReadings
 from tamp.sim.refine.skills import PioneerStateMachine
@@ -88,22 +90,15 @@ class RefineStation:
     robot_of: dict[int, str] = field(default_factory=dict)  # body index -> robot name
     scenery: frozenset[int] = frozenset()  # bodies of the scene's fixed objects (the table)
 
+    monitor: ContactMonitor | None = None
+
     def collision(self, a: int, b: int) -> tuple[str, str] | None:
         """The contact of bodies ``a`` and ``b`` as a collision ``(robot body, other)``, or
-        None when it is intended: a chassis (`CHASSIS_BODIES`) touching anything, a
-        robot touching the other robot or the fixed scenery are collisions; a gripper
-        touching the task's objects (or the floor) is not."""
-        for mine, other in ((a, b), (b, a)):
-            robot = self.robot_of.get(mine)
-            if robot is None:
-                continue
-            if (
-                mine in self.chassis
-                or other in self.scenery
-                or self.robot_of.get(other, robot) != robot
-            ):
-                return (self.names.get(mine, str(mine)), self.names.get(other, str(other)))
-        return None
+        None when it is intended (`tamp.sim.refine.contacts.CollisionRule`)."""
+        return self.rule().classify(a, b)
+
+    def rule(self) -> CollisionRule:
+        return CollisionRule(self.robot_of, frozenset(self.chassis), self.scenery, self.names)
 
 
 def watched_sensors(program: Program, robot: str) -> tuple[str, ...]:
@@ -228,6 +223,18 @@ def build_station(
         builder.Connect(channel.actuation_port, plant.get_desired_state_input_port(m))
         machines[r.name], channels[r.name] = machine, channel
 
+    rule = CollisionRule(robot_of, frozenset(chassis), scenery, names)
+    geometry_body = {
+        g.get_value(): int(index)
+        for index in range(plant.num_bodies())
+        for g in plant.GetCollisionGeometriesForBody(plant.get_body(BodyIndex(index)))
+    }
+    contact_results = plant.get_contact_results_output_port()
+    monitor = builder.AddSystem(
+        ContactMonitor(rule, geometry_body, contact_results.Allocate(), TIME_STEP)
+    )
+    builder.Connect(contact_results, monitor.contact_port)
+
     watched = {r.name: watched_sensors(program, r.name) for r in program.robots}
     searches = None
     if tune:
@@ -276,6 +283,7 @@ def build_station(
         meshcat,
         robot_of,
         scenery,
+        monitor,
     )
 
 

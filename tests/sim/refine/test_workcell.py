@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from tamp.errors import InputError
-from tamp.refine.measure import Run
+from tamp.refine.measure import Goal, Outcome, Run
 from tamp.refine.timeline import BehaviorRecord, Timeline
 from tamp.scenarios import resolve
 from tamp.sim.core.workcell import Workcell, get, run_seeded
@@ -55,6 +55,29 @@ def test_judge_by_events_and_order():
     status, cause, reason, holds = judge(program, run, lambda p, o: Verdict(True))
     assert (status, cause, holds) == ("TIMEOUT", "timeout", None)
     assert reason == "R2.release never fired"
+
+
+def test_judge_needs_the_goal_on_the_plant_and_no_new_collision():
+    """A run whose order is fine still fails when the chair stays shut, or when it has a
+    collision the unperturbed run did not (one both runs have is no failure)."""
+    goal = Goal("folding_chair.hinge", 0.35, "the chair is open")
+    ok = lambda p, o: Verdict(True)  # noqa: E731
+    program, run = _run({})
+    run.outcome = Outcome({"folding_chair.hinge": 0.2}, (goal,))
+    status, cause, reason, holds = judge(program, run, ok)
+    assert (status, cause, holds) == ("FAILURE", "goal_missed", True)
+    assert (
+        reason == "goal not met on the plant: the chair is open: folding_chair.hinge = 0.200 < 0.35"
+    )
+    run.outcome = Outcome({"folding_chair.hinge": 0.48}, (goal,))
+    _, reference = _run({})
+    reference.collisions = {("R1.arm_link", "folding_chair.frame_b"): 3.0}
+    run.collisions = {("R1.arm_link", "folding_chair.frame_b"): 4.0}
+    assert judge(program, run, ok, reference)[0] == "SUCCESS"
+    run.collisions[("R1.base_link", "R2.base_link")] = 9.5
+    status, cause, reason, _ = judge(program, run, ok, reference)
+    assert (status, cause) == ("FAILURE", "new_collision")
+    assert reason.endswith("R1.base_link with R2.base_link at 9.5 s")
 
 
 def test_a_short_seeded_run_through_the_registry(tmp_path):
