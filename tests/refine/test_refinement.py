@@ -400,3 +400,24 @@ def test_the_category_option_replaces_the_programs():
     out = refine(task(4), model, category="III")
     assert all(p.communication.category == "III" for p, _ in model.calls)
     assert out.to_json()["category"] == "III"
+
+
+def test_the_packaged_property_refuses_a_wrong_parallelization_and_keeps_the_papers():
+    """Task 4 with its manipulation marks removed: Step 2 also proposes R2's grip with its
+    approach (a grip that closes on nothing); the task's property refuses it before any
+    run, and R1's lowering with its approach (the paper's) is kept."""
+    p = task(4)
+    loose = replace(
+        p,
+        robots=tuple(
+            replace(r, behaviors=tuple(replace(b, manipulates=False) for b in r.behaviors))
+            for r in p.robots
+        ),
+    )
+    out = refine(loose, Model())
+    assert [c.describe() for c, _ in out.refused] == ["R2: approach runs in parallel with grip"]
+    assert "G(R2.grip -> R2.approach)" in out.refused[0][1] or "R2.grip" in out.refused[0][1]
+    assert [c.describe() for c in out.parallelized] == [
+        "R1: lower_arm runs in parallel with approach"
+    ]
+    assert out.goal_met

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import pytest
 
-from tamp.refine.steps import parallelize
+from tamp.refine.steps import Parallelization, join, parallelize
 from tests.refine.helpers import task
 from verification.gate import gate, gate_program
 from verification.refine import check_program, check_run, executions
@@ -39,6 +39,66 @@ def test_refinement_that_breaks_the_property_is_refused():
     i = next(i for i in range(len(ce.word)) if "R1.approach" in ce.word.letter(i))
     assert "R1.lower_arm" not in ce.word.letter(i)
     assert exc.value.exit_code == 1
+
+
+WRONG = {
+    # past the manipulation boundary: the fork would push before it lifted, the lever
+    # would follow before the push
+    1: [("R1", "lift", "push"), ("R1", "push", "follow")],
+    2: [("R1", "lift", "push"), ("R1", "push", "follow")],
+    # the fingers would close with the approach; the fork would lift before the pull
+    4: [("R2", "approach", "grip"), ("R1", "pull_out", "raise_arm")],
+}
+
+
+@pytest.mark.parametrize(
+    "n,wrong", [(n, w) for n, ws in WRONG.items() for w in ws], ids=lambda x: str(x)
+)
+def test_each_task_property_refuses_a_wrong_parallelization(n, wrong):
+    """Each packaged task states what a parallelization past its manipulation boundary
+    breaks; the paper-style parallelization (Step 1 + Step 2) satisfies it."""
+    p = task(n)
+    refined, done = parallelize(p, {e: float(i + 1) for i, e in enumerate(p.events())})
+    assert done and check_program(refined).holds
+    bad = join(p, Parallelization(*wrong))
+    verdict = check_program(bad)
+    assert not verdict.holds and verdict.counterexample is not None
+    robot, absorbed, host = wrong
+    # the counterexample is an execution where the host's event fired first
+    word = verdict.counterexample.word
+    i = next(i for i in range(len(word)) if f"{robot}.{host}" in word.letter(i))
+    assert f"{robot}.{absorbed}" not in word.letter(i)
+
+
+def test_task3_property_refuses_lifting_before_the_hold_and_the_approach():
+    """Task 3's wrong refinement: R1's lift no longer waits for R2's hold (a cross-robot
+    wait relaxed) and runs with the approach: both properties of the task break."""
+    p = task(3)
+    lift = p.robot("R1").index("lift")
+    relaxed = p.with_behavior("R1", lift, replace(p.robot("R1").behaviors[lift], waits_for=()))
+    assert not check_program(relaxed).holds
+    bad = join(relaxed, Parallelization("R1", "approach", "lift"))
+    with pytest.raises(VerificationError) as exc:
+        gate_program(bad)
+    assert "R1.lift" in str(exc.value)
+
+
+def test_without_the_manipulation_boundary_the_gate_refuses_what_step_2_proposes():
+    """Task 4 with its `manipulates` marks removed: Step 1 locates every behavior and
+    Step 2 proposes R2's grip with its approach; the task's property refuses it."""
+    p = task(4)
+    loose = replace(
+        p,
+        robots=tuple(
+            replace(r, behaviors=tuple(replace(b, manipulates=False) for b in r.behaviors))
+            for r in p.robots
+        ),
+    )
+    durations = {"R2.approach": 28.6, "R2.grip": 37.5} | T4
+    refined, done = parallelize(loose, durations)
+    assert "R2: approach runs in parallel with grip" in [d.describe() for d in done]
+    with pytest.raises(VerificationError):
+        gate_program(refined)
 
 
 def test_executions_system_size():
