@@ -2,7 +2,7 @@
 
 from tamp.demo.build import cyclic_swap, make_demonstration
 from tamp.demo.frames import UNITY_TO_ROS, MRFrame
-from tamp.demo.loader import load_demonstration
+from tamp.demo.loader import demonstration_from_dict, load_demonstration
 from tamp.demo.model import Demonstration, Goal
 
 __all__ = [
@@ -11,6 +11,7 @@ __all__ = [
     "Goal",
     "MRFrame",
     "cyclic_swap",
+    "demonstration_from_dict",
     "load_demonstration",
     "make_demonstration",
 ]

@@ -31,14 +31,15 @@ Format (positions of objects, steps and free areas are in the user's MR frame)::
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from tamp.demo.build import make_demonstration
 from tamp.demo.frames import IDENTITY, UNITY_TO_ROS, MRFrame, check_rotation
 from tamp.demo.model import Demonstration
-from tamp.errors import InputError
-from tamp.fileio import Fields, check_vector, gc_paused, load_yaml
+from tamp.errors import InputError, short_repr
+from tamp.fileio import SUPPORTED_VERSIONS, Fields, check_vector, gc_paused, load_yaml
 from tamp.scenarios import resolve
 from tamp.world.events import Appear, check_events, parse_appear
 from tamp.world.geometry import Area, Point, Pose, Quaternion
@@ -100,6 +101,34 @@ def _load_demonstration(path: str | Path) -> Demonstration:
             file=str(path),
         )
     data, file = load_yaml(source, kind="demonstration")
+    return _from_data(data, file)
+
+
+def demonstration_from_dict(data: Any, source: str) -> Demonstration:
+    """The same validation and eq. (1)–(5) as `load_demonstration`, for a mapping already
+    in memory (a live MR session sends one): ``data`` has the file format above, ``source``
+    names it in errors (``source: field: reason``). A relative ``robot.domain`` is refused,
+    since there is no file to resolve it against."""
+    if not isinstance(data, dict):
+        raise InputError("a demonstration must be a mapping", file=source)
+    version = data.get("version")
+    if version is None:
+        raise InputError("missing field", file=source, field="version")
+    if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
+        raise InputError(
+            f"unsupported version {short_repr(version)} (supported: {list(SUPPORTED_VERSIONS)})",
+            file=source,
+            field="version",
+        )
+    robot = data.get("robot")
+    domain = robot.get("domain") if isinstance(robot, dict) else None
+    if isinstance(domain, str) and not Path(domain).is_absolute():
+        raise InputError("must be an absolute path here", file=source, field="robot.domain")
+    with gc_paused():
+        return _from_data(data, source)
+
+
+def _from_data(data: dict[str, Any], file: str) -> Demonstration:
     f = Fields(data, file)
     f.check_keys(_KEYS)
     for key, limit in (("objects", MAX_OBJECTS), ("steps", MAX_STEPS)):
