@@ -147,14 +147,13 @@ def _print_text(result, args: argparse.Namespace) -> None:
         print(f"  reverted: {p.describe()} ({why})")
     if result.speed_undone:
         print(f"  speed change undone ({result.speed_undone})")
-    found = result.rates_found
-    print(
-        f"  rate found: {', '.join(f'{k} {v:g} Hz' for k, v in found.items()) or 'none'}; "
-        f"kept {result.rate_hz:g} Hz (Step 3 scales the {result.scale} speed)"
-        if result.rate_hz
-        else f"  rate found: {', '.join(f'{k} {v:g} Hz' for k, v in found.items()) or 'none'}; "
-        "none kept"
-    )
+    found = ", ".join(f"{k} {v:g} Hz" for k, v in result.rates_found.items()) or "none"
+    print(f"  rates found (per trigger sensor): {found}")
+    if result.behavior_rates:
+        kept = ", ".join(f"{k} {v:g}" for k, v in result.behavior_rates.items())
+        print(f"  rates kept per behavior (Hz; Step 3 scales the {result.scale} speed): {kept}")
+    else:
+        print("  no rate kept")
     print(
         f"reduction {result.reduction:.1%}; sim {result.sim_time:.0f} s in "
         f"{result.wall_time:.0f} s wall, {result.cpu_time:.0f} s CPU"

@@ -116,6 +116,7 @@ class Run:
     program: Program
     timeline: Timeline
     collisions: dict[tuple[str, str], float] = field(default_factory=dict)
+    # the rate searches of a tuning run, keyed ``ROBOT.SENSOR`` (or ``ROBOT``: one per robot)
     searches: dict[str, RateSearch | None] = field(default_factory=dict)
     max_wait: dict[str, float] = field(default_factory=dict)  # robot -> longest sensor wait
     sim_time: float = 0.0
@@ -137,8 +138,21 @@ class Run:
         return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
 
     def found_rates(self) -> dict[str, float]:
-        """Robot -> the rate its search found (Fig. 5), for the searches that ended."""
-        return {n: s.found for n, s in self.searches.items() if s is not None and s.done}
+        """Robot -> the lowest rate its searches found (Fig. 5), for the robots whose
+        searches all ended."""
+        out: dict[str, float] = {}
+        unfinished: set[str] = set()
+        for key, s in self.searches.items():
+            robot = key.partition(".")[0]
+            if s is None or not s.done or s.found is None:
+                unfinished.add(robot)
+            else:
+                out[robot] = min(out.get(robot, s.found), s.found)
+        return {r: v for r, v in out.items() if r not in unfinished}
+
+    def sensor_rates(self) -> dict[str, float]:
+        """``ROBOT.SENSOR`` -> the rate found watching that sensor (searches that ended)."""
+        return {k: s.found for k, s in self.searches.items() if s is not None and s.done}
 
 
 class Measure(Protocol):

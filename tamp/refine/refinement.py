@@ -18,12 +18,14 @@ did not have (`accept`). Phases:
 3. **speed-adjusted** (Fig. 6(c)): `adjust_base_speed` on the parallelized run's
    durations; a run that is not accepted undoes the change (the phase keeps the
    parallelized program and run, ``speed_undone`` says why).
-4. **rate-refined** (Fig. 5): a tuning run of the speed-adjusted program searches each
-   robot's rate online; the lower found rate is applied to both robots (`apply_rate`,
-   Step 3: the base's speed by the same ratio, or every section's with ``scale="all"``).
-   A run that is not accepted backs the rate off one search step at a time until the task
-   holds (our addition: the paper stops at the last rate without sensor delay and does
-   not say what to do when the task fails there); at the starting rate nothing is kept.
+4. **rate-refined** (Fig. 5): a tuning run of the speed-adjusted program searches the rate
+   online per robot and trigger sensor; each behavior gets the rate of the sensor that
+   triggers its event (`behavior_rates`; parallel behaviors share their group's lowest)
+   and `apply_rate` writes it (Step 3: the base's speed by the same ratio, or every
+   section's with ``scale="all"``). A run that is not accepted backs every rate off one
+   search step at a time until the task holds (our addition: the paper stops at the last
+   rate without sensor delay and does not say what to do when the task fails there); at
+   the starting rates nothing is kept.
 
 Every attempt (program tried, measured task time, goal, new collisions, accepted or why
 not) is kept in ``attempts`` in the order it ran, so the JSON lists what each phase tried,
@@ -51,6 +53,7 @@ from tamp.refine.steps import (
     SpeedChange,
     adjust_base_speed,
     apply_rate,
+    behavior_rates,
     join,
     parallelize,
     revert,
@@ -158,8 +161,9 @@ class Refinement:
     speed_changes: list[SpeedChange] = field(default_factory=list)
     speed_undone: str | None = None
     tuning: Run | None = None
-    rates_found: dict[str, float] = field(default_factory=dict)
-    rate_hz: float = 0.0  # the rate kept (0: none)
+    rates_found: dict[str, float] = field(default_factory=dict)  # ROBOT.SENSOR -> Hz
+    rate_hz: float = 0.0  # the lowest rate kept (0: none)
+    behavior_rates: dict[str, float] = field(default_factory=dict)  # event id -> Hz kept
     rates_tried: list[float] = field(default_factory=list)
     scale: str = "base"
     failure: str | None = None  # why no accepted program meets the goal
@@ -220,6 +224,7 @@ class Refinement:
             "attempts": [a.to_json() for a in self.attempts],
             "rate_hz": self.rate_hz,
             "rates_found": dict(self.rates_found),
+            "behavior_rates": dict(self.behavior_rates),
             "rates_tried": list(self.rates_tried),
             "scale": self.scale,
             "probes": {
@@ -351,31 +356,28 @@ def refine(
     progress("tuning the command rate (Fig. 5) ...")
     tuning = measure(p2, architecture, tune=True)
     out.tuning = tuning
-    out.rates_found = tuning.found_rates()
+    out.rates_found = tuning.sensor_rates()
     p3, r3, rate_kept = p2, r2, []
-    if len(out.rates_found) != len(p2.robots):
+    if len(tuning.found_rates()) != len(p2.robots):
         progress(f"  the rate search did not end within {tuning.sim_time:.0f} s of sim time")
     else:
-        start = max(p2.rate(b) for _, _, b in p2.behaviors())
-        rate = min(out.rates_found.values())
-        progress(f"  rates found {out.rates_found}: trying {rate:g} Hz on both robots")
-        while rate > start + 1e-9:
+        progress(f"  rates found per trigger sensor: {out.rates_found}")
+        back_off = 0.0
+        while rates := behavior_rates(p2, out.rates_found, back_off=back_off):
             trial = p2
-            for robot in p2.robots:
-                trial = apply_rate(trial, robot.name, rate, scale=scale)
-            out.rates_tried.append(rate)
-            r, why = attempt(
-                "rate-refined",
-                trial,
-                [f"{rate:g} Hz, {scale} speed scaled"],
-                original,
-                record=record,
-            )
+            for robot, rs in rates.items():
+                trial = apply_rate(trial, robot, rs, scale=scale)
+            flat = {f"{robot}.{b}": v for robot, rs in rates.items() for b, v in rs.items()}
+            lo, hi = min(flat.values()), max(flat.values())
+            span = f"{hi:g} Hz" if lo == hi else f"{lo:g}-{hi:g} Hz"
+            words = f"{span} per behavior ({len(flat)} behaviors), {scale} speed scaled"
+            out.rates_tried.append(hi)
+            r, why = attempt("rate-refined", trial, [words], original, record=record)
             if why is None:
-                p3, r3, out.rate_hz = trial, r, rate
-                rate_kept = [f"{rate:g} Hz on both robots ({scale} speed scaled)"]
+                p3, r3, out.rate_hz, out.behavior_rates = trial, r, lo, flat
+                rate_kept = [words]
                 break
-            rate -= architecture.rate_step_hz
-            progress(f"  backing the rate off to {rate:g} Hz")
+            back_off += architecture.rate_step_hz
+            progress(f"  backing the rates off by {back_off:g} Hz")
     out.phases.append(phase("rate-refined", p3, r3, rate_kept))
     return out

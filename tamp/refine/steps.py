@@ -227,6 +227,37 @@ def refine_rate(search: RateSearch, measure: Callable[[float], float]) -> RateSe
     return search
 
 
+def behavior_rates(
+    program: Program, found: Mapping[str, float], *, back_off: float = 0.0
+) -> dict[str, dict[str, float]]:
+    """Fig. 5, Steps 2 and 4: each behavior's rate, robot -> behavior -> Hz.
+
+    ``found``: the rate found watching each sensor, keyed ``ROBOT.SENSOR`` (a key ``ROBOT``
+    stands for all of that robot's sensors). A behavior gets the rate of the sensor that
+    triggers its event; one triggered by another robot's event (no sensor of its own) gets
+    its robot's lowest found rate; behaviors that run in parallel share the lowest rate of
+    their group (one command stream). ``back_off`` is subtracted from every rate, which
+    never goes below the behavior's current one; behaviors left at their current rate are
+    not named (nothing to apply)."""
+    out: dict[str, dict[str, float]] = {}
+    for r in program.robots:
+        own = {k.partition(".")[2]: v for k, v in found.items() if k.partition(".")[0] == r.name}
+        if not own:
+            continue
+        lowest = min(own.values())
+        wanted = [own.get(b.event.sensor or "", own.get("", lowest)) for b in r.behaviors]
+        rates: dict[str, float] = {}
+        for group in r.groups():
+            rate = min(wanted[i] for i in group) - back_off
+            for i in group:
+                b = r.behaviors[i]
+                if rate > program.rate(b) + 1e-9:
+                    rates[b.name] = rate
+        if rates:
+            out[r.name] = rates
+    return out
+
+
 SCALES = ("base", "all")
 
 

@@ -78,20 +78,21 @@ def timeline(program: Program, unfired: frozenset[str] = frozenset()) -> Timelin
 class Model:
     """A measuring function (`tamp.refine.measure.Measure`) over `timeline`.
 
-    ``collide``: collisions (robot body, other) -> time, reported by runs of programs with a
-    parallel group (``always``: by every run); ``unfired``: events that never fire in the
-    n-th run that is not a tuning run (without reverts: 0 original, 1 parallelized, 2
-    speed-adjusted, 3 rate-refined); ``misses``: the goal (the chair's hinge >= 0.35 rad)
-    is missed by the runs of programs it says True for; ``found``: each robot's rate found
-    by the tuning run (None: the search never ends). ``calls`` records (program, options)
-    of every call.
+        ``collide``: collisions (robot body, other) -> time, reported by runs of programs with a
+        parallel group (``always``: by every run); ``unfired``: events that never fire in the
+        n-th run that is not a tuning run (without reverts: 0 original, 1 parallelized, 2
+        speed-adjusted, 3 rate-refined); ``misses``: the goal (the chair's hinge >= 0.35 rad)
+        is missed by the runs of programs it says True for; ``found``: each robot's rate found
+        by the tuning run for each of its trigger sensors, or (``ROBOT.SENSOR``) for one sensor
+    (None: the search never ends). ``calls`` records (program, options)
+        of every call.
     """
 
     collide: dict[tuple[str, str], float] = field(default_factory=dict)
     always: bool = False
     unfired: dict[int, frozenset[str]] = field(default_factory=dict)
     misses: Callable[[Program], bool] = lambda program: False
-    found: dict[str, float | None] = field(default_factory=lambda: {"R1": 29.0, "R2": 23.0})
+    found: dict[str, float | None] = field(default_factory=lambda: {"R1": 23.0, "R2": 23.0})
     calls: list[tuple[Program, dict]] = field(default_factory=list)
 
     def __call__(self, program, architecture, *, tune=False, max_sim_time=None, record=None):
@@ -105,10 +106,18 @@ class Model:
         parallel = any(b.parallel_with for _, _, b in program.behaviors())
         if self.always or parallel:
             run.collisions = dict(self.collide)
-        if tune:
+        if tune:  # one search per robot and trigger sensor, as the supervisor's
             run.searches = {
-                r.name: RateSearch(10.0, 3.0, 0.03, 200.0, found=self.found[r.name])
+                f"{r.name}.{b.event.sensor}": RateSearch(
+                    10.0,
+                    3.0,
+                    0.03,
+                    200.0,
+                    found=self.found.get(f"{r.name}.{b.event.sensor}", self.found[r.name]),
+                )
                 for r in program.robots
+                for b in r.behaviors
+                if b.event.sensor
             }
         return run
 
@@ -159,8 +168,14 @@ def test_the_four_phases_shorten_the_task_as_each_step_intends():
     assert change.new == pytest.approx(0.7 / 60.0)  # 0.7 m in the lift's 60 s
     adjusted = out.phases[2].program.robot("R1").behavior("approach")
     assert adjusted.motion.speed == pytest.approx(change.new)
-    # rate phase: the lower of the two found rates, on both robots, base speeds scaled
-    assert out.rate_hz == 23.0 and out.rates_found == {"R1": 29.0, "R2": 23.0}
+    # rate phase: each behavior at its trigger sensor's found rate, base speeds scaled
+    assert out.rate_hz == 23.0 and out.rates_found == {
+        "R1.imu": 23.0,
+        "R1.odometry": 23.0,
+        "R2.odometry": 23.0,
+        "R2.force": 23.0,
+    }
+    assert out.behavior_rates == {e: 23.0 for e in task(4).events()}
     assert model.calls[3][0] == out.phases[2].program  # the tuning run is of the adjusted one
     for r2, r3 in zip(out.phases[2].program.robots, out.program.robots, strict=True):
         for b2, b3 in zip(r2.behaviors, r3.behaviors, strict=True):
@@ -178,7 +193,7 @@ def test_the_four_phases_shorten_the_task_as_each_step_intends():
         [],
         ["R1: lower_arm runs in parallel with approach"],
         [change.describe()],
-        ["23 Hz on both robots (base speed scaled)"],
+        ["23 Hz per behavior (7 behaviors), base speed scaled"],
     ]
     assert [(a["phase"], a["accepted"], a["goal_met"]) for a in doc["attempts"]] == [
         ("original", True, True),
@@ -421,3 +436,25 @@ def test_the_packaged_property_refuses_a_wrong_parallelization_and_keeps_the_pap
         "R1: lower_arm runs in parallel with approach"
     ]
     assert out.goal_met
+
+
+def test_each_behavior_gets_its_trigger_sensors_rate_and_a_group_shares_the_lowest():
+    """Fig. 5 per behavior: R1's IMU-triggered behaviors at 29 Hz, its odometry-triggered
+    ones at 25 Hz, except the approach that runs with the (IMU) lowering: the group's
+    lowest, 25 Hz; R2 at 23 Hz. The back-off lowers every rate by one step."""
+    found = {"R1": 23.0, "R2": 23.0, "R1.imu": 29.0, "R1.odometry": 25.0}
+    out = refine(task(4), Model(found=found))
+    assert out.behavior_rates == {
+        "R1.lower_arm": 25.0,
+        "R1.approach": 25.0,
+        "R1.pull_out": 25.0,
+        "R1.raise_arm": 29.0,
+        "R2.approach": 23.0,
+        "R2.grip": 23.0,
+        "R2.release": 23.0,
+    }
+    assert [b.rate_hz for b in out.program.robot("R1").behaviors] == [25.0, 25.0, 25.0, 29.0]
+    model = Model(found=found, misses=lambda p: rate_of(p) > 27.0)
+    out = refine(task(4), model)
+    assert out.rates_tried == [29.0, 28.0, 27.0]
+    assert out.behavior_rates["R1.raise_arm"] == 27.0 and out.behavior_rates["R2.grip"] == 21.0

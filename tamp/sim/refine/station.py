@@ -242,9 +242,10 @@ def build_station(
         for r in program.robots:
             current = program.rate(r.behaviors[0])
             limit = min(comm.sensor_rate_hz, 1.0 / TIME_STEP)
-            searches[r.name] = architecture.search(
-                comm.category, current, limit, watched=watched[r.name] or ("force",)
-            )
+            searches[r.name] = {
+                sensor: architecture.search(comm.category, current, limit, watched=(sensor,))
+                for sensor in watched[r.name] or ("force",)
+            }
     supervisor = builder.AddSystem(
         RateTuningSupervisor(watched, period, architecture.probe_window, empty, searches)
     )
@@ -334,8 +335,9 @@ def _check_goals(plant, scene: Scene, objects: dict[str, Any]) -> None:
             )
 
 
-def search_of(station: RefineStation, context) -> dict[str, RateSearch | None]:
-    """The supervisor's searches in ``context`` (root context of the diagram)."""
+def search_of(station: RefineStation, context) -> dict[str, RateSearch]:
+    """The supervisor's searches in ``context`` (root context of the diagram), keyed
+    ``ROBOT.SENSOR``."""
     sup = station.supervisor
     s = sup.state(sup.GetMyContextFromRoot(context))
-    return {n: w.search for n, w in s.robots.items()}
+    return {f"{n}.{k}": v for n, w in s.robots.items() for k, v in w.searches.items()}

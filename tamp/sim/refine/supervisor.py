@@ -1,15 +1,18 @@
 """RateTuningSupervisor: Fig. 5 online, one search per robot, on the Channels' deliveries.
 
-Step 1: each robot starts from its current command rate P. Step 2: the supervisor sets P
-(its ``rates`` output, read by the state machines) to the search's probe rate and watches the
-robot's triggering sensors (those its behaviors' events read) for one probe window of sim
-time; the probe's measurement is the longest *wait* any of their samples had in the
+Step 1: each robot starts from its current command rate P. Step 2, per behavior: the
+sensor that triggers a behavior's event is watched while P rises. The supervisor runs one
+search per robot and triggering sensor (the sensors its behaviors' events read); P is one
+per robot, so the searches probe the same rates together and each judges its own sensor:
+for one probe window of sim time, the longest *wait* of that sensor's samples in the
 Channel (delivery - creation - service times: the queueing the architecture caused). A
-wait under the threshold (`tamp.refine.architecture.Architecture.wait_threshold`) raises P
-by a step; the first delayed probe ends the search with the P before the last increment
-(`tamp.refine.steps.RateSearch`). Step 3 needs nothing here: a section advances one step
-per command, so the base (and every section) moves faster by the same ratio as P while
-the search runs, and `tamp.refine.steps.apply_rate` writes it into the program.
+wait under the sensor's threshold (`tamp.refine.architecture.Architecture.wait_threshold`)
+raises P by a step; the first delayed probe ends that sensor's search with the P before
+the last increment (`tamp.refine.steps.RateSearch`); P keeps rising while another
+sensor's search runs. A behavior's rate is its trigger sensor's (Step 4: every behavior
+analysed; `tamp.refine.refinement.behavior_rates`). While the search runs each section
+moves one step per command, so it moves faster with P; what the refined program keeps is
+Step 3's (`tamp.refine.steps.apply_rate`).
 
 With ``tune=False`` the supervisor only watches: it records the longest wait per robot (the
 check that the refined program's rate really delivers without delay) and leaves the rates
@@ -19,7 +22,7 @@ to the program.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, LeafSystem
@@ -31,16 +34,31 @@ from tamp.sim.refine.messages import RateOverride
 
 @dataclass(frozen=True)
 class RobotWatch:
-    """One robot: its search (None: not tuning), the current probe and the longest wait."""
+    """One robot: its watched sensors, one search per sensor (empty: not tuning), the
+    current probe's start and longest wait per sensor, and the longest wait of the run."""
 
     watched: tuple[str, ...]
-    search: RateSearch | None = None
+    searches: dict[str, RateSearch] = field(default_factory=dict)
     probe_start: float = 0.0
-    probe_wait: float = 0.0
+    probe_waits: dict[str, float] = field(default_factory=dict)
     max_wait: float = 0.0
 
     def __deepcopy__(self, memo: dict) -> RobotWatch:
         return self
+
+    @property
+    def done(self) -> bool:
+        return all(s.done for s in self.searches.values())
+
+    def rate(self) -> float | None:
+        """The rate the robot commands at now: the probe of the searches still running
+        (they step together: one P per robot), or the lowest found once all ended."""
+        if not self.searches:
+            return None
+        running = [s.rate for s in self.searches.values() if not s.done]
+        if running:
+            return min(running)
+        return min(s.found for s in self.searches.values() if s.found is not None)
 
 
 @dataclass(frozen=True)
@@ -53,18 +71,20 @@ class SupervisorState:
     @property
     def done(self) -> bool:
         """Every search has ended (True when not tuning)."""
-        return all(w.search is None or w.search.done for w in self.robots.values())
+        return all(w.done for w in self.robots.values())
 
     def rates(self) -> dict[str, float]:
         out = {}
         for name, w in self.robots.items():
-            if w.search is not None:
-                out[name] = w.search.found if w.search.done else w.search.rate
+            rate = w.rate()
+            if rate is not None:
+                out[name] = rate
         return out
 
 
 class RateTuningSupervisor(LeafSystem):
-    """Fig. 5 per robot (``searches``) or a watcher of the waits (``searches`` None)."""
+    """Fig. 5 per robot and watched sensor (``searches``: robot -> sensor -> search) or a
+    watcher of the waits (``searches`` None)."""
 
     def __init__(
         self,
@@ -72,7 +92,7 @@ class RateTuningSupervisor(LeafSystem):
         period: float,
         window: float,
         empty: ChannelState,
-        searches: Mapping[str, RateSearch] | None = None,
+        searches: Mapping[str, Mapping[str, RateSearch]] | None = None,
     ):
         super().__init__()
         self.set_name("rate_tuning_supervisor")
@@ -84,7 +104,7 @@ class RateTuningSupervisor(LeafSystem):
         }
         initial = SupervisorState(
             {
-                n: RobotWatch(tuple(watched[n]), None if searches is None else searches[n])
+                n: RobotWatch(tuple(watched[n]), {} if searches is None else dict(searches[n]))
                 for n in self.names
             }
         )
@@ -106,11 +126,20 @@ class RateTuningSupervisor(LeafSystem):
         robots = {}
         for name, w in s.robots.items():
             ch: ChannelState = self.delivered_ports[name].Eval(context)
-            waits = [d.wait for d in ch.recent if d.message.stream in w.watched]
-            worst = max(waits, default=0.0)
-            w = replace(w, probe_wait=max(w.probe_wait, worst), max_wait=max(w.max_wait, worst))
-            if w.search is not None and not w.search.done and t - w.probe_start >= self.window:
-                w = replace(w, search=w.search.observe(w.probe_wait), probe_start=t, probe_wait=0.0)
+            waits = dict(w.probe_waits)
+            worst = 0.0
+            for d in ch.recent:
+                sensor = d.message.stream
+                if sensor in w.watched:
+                    waits[sensor] = max(waits.get(sensor, 0.0), d.wait)
+                    worst = max(worst, d.wait)
+            w = replace(w, probe_waits=waits, max_wait=max(w.max_wait, worst))
+            if w.searches and not w.done and t - w.probe_start >= self.window:
+                searches = {
+                    k: v.observe(waits.get(k, 0.0)) if not v.done else v
+                    for k, v in w.searches.items()
+                }
+                w = replace(w, searches=searches, probe_start=t, probe_waits={})
             robots[name] = w
         state.get_mutable_abstract_state(self._state).set_value(SupervisorState(robots))
         return EventStatus.Succeeded()

@@ -77,8 +77,11 @@ def test_online_search_finds_the_queue_models_rate():
     ).found
     for robot, rate in found.items():
         assert abs(rate - offline) <= arch.rate_step_hz, robot
-        probes = tuned.searches[robot].probes
-        assert probes[-1][1] > tuned.searches[robot].threshold  # the last probe was delayed
+    # one search per robot and trigger sensor (Fig. 5 per behavior), each ended on a delay
+    assert set(tuned.searches) == {"R1.imu", "R1.odometry", "R2.odometry", "R2.force"}
+    for key, search in tuned.searches.items():
+        assert abs(search.found - offline) <= arch.rate_step_hz, key
+        assert search.probes[-1][1] > search.threshold, key  # the last probe was delayed
 
 
 @pytest.mark.slow
