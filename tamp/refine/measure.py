@@ -124,6 +124,8 @@ class Run:
     cpu_time: float = 0.0
     recording: str | None = None
     outcome: Outcome = field(default_factory=Outcome)  # what the objects did (the plant's)
+    # robot -> (first time its gripper touched a task object, the object's body)
+    touches: dict[str, tuple[float, str]] = field(default_factory=dict)
 
     @property
     def finished(self) -> bool:

@@ -9,12 +9,15 @@ did not have (`accept`). Phases:
 1. **original**: the program as given. Its run is the reference; a program whose original
    run does not meet the goal has nothing to be refined against: the result stops there
    (``goal_met`` False, the reason in ``failure``; `tamp refine` exits 1).
-2. **parallelized** (Step 1 + Step 2, §3.2, Fig. 4): `steps.parallelize` on the original
-   run's measured durations. Each parallelization first passes the ordering gate on its
-   own (one the task's LTL property refuses is dropped with the counterexample,
-   ``refused``); the program with the rest is executed once, and while it is not accepted
-   the latest parallelization is reverted (``reverted``, with the reason) and the program
-   runs again. With nothing left the phase is the original program and run.
+2. **parallelized** (Step 1 + Step 2, §3.2, Fig. 4): Step 1 finds where each robot's
+   manipulation starts in the original run (`steps.manipulation_starts`: its first
+   gripper/object contact; a robot without one and without a marked behavior is refused);
+   `steps.parallelize` on the original run's measured durations. Each parallelization
+   first passes the ordering gate on its own (one the task's LTL property refuses is
+   dropped with the counterexample, ``refused``); the program with the rest is executed
+   once, and while it is not accepted the latest parallelization is reverted
+   (``reverted``, with the reason) and the program runs again. With nothing left the
+   phase is the original program and run.
 3. **speed-adjusted** (Fig. 6(c)): `adjust_base_speed` on the parallelized run's
    durations; a run that is not accepted undoes the change (the phase keeps the
    parallelized program and run, ``speed_undone`` says why).
@@ -49,12 +52,14 @@ from tamp.refine.measure import Measure, Run
 from tamp.refine.order import check_can_finish
 from tamp.refine.program import Program
 from tamp.refine.steps import (
+    Boundary,
     Parallelization,
     SpeedChange,
     adjust_base_speed,
     apply_rate,
     behavior_rates,
     join,
+    manipulation_starts,
     parallelize,
     revert,
 )
@@ -153,6 +158,7 @@ class Refinement:
 
     phases: list[Phase]
     attempts: list[Attempt] = field(default_factory=list)
+    boundaries: dict[str, Boundary] = field(default_factory=dict)  # Step 1, per robot
     parallelized: list[Parallelization] = field(default_factory=list)
     # each parallelization the ordering gate refused, with the gate's report
     refused: list[tuple[Parallelization, str]] = field(default_factory=list)
@@ -233,6 +239,7 @@ class Refinement:
                 if s is not None
             },
             "reduction": round(self.reduction, 4),
+            "manipulation_starts": [b.to_json() for b in self.boundaries.values()],
             "parallelized": [p.describe() for p in self.parallelized],
             "refused": [{"parallelization": p.describe(), "report": r} for p, r in self.refused],
             "reverted": [
@@ -316,7 +323,12 @@ def refine(
         return out
 
     # 2. parallelized: each parallelization gated on its own, then run once and reverted
-    _, candidates = parallelize(program, original.timeline.durations())
+    spans = {r.event: (r.start, r.end) for r in original.timeline.records}
+    out.boundaries = manipulation_starts(
+        program, original.touches, spans, has_goal=bool(original.outcome.goals)
+    )
+    starts = {name: b.index for name, b in out.boundaries.items()}
+    _, candidates = parallelize(program, original.timeline.durations(), starts)
     p1, kept = program, []
     for c in candidates:
         trial = join(p1, c)

@@ -1,7 +1,9 @@
 """The refinement steps (Fig. 3–6, Fig. 13) as pure functions over programs.
 
 Refining the trajectory (§3.2, Fig. 4):
-- Step 1 `locate`: per robot, the behaviors before the manipulation of the object.
+- Step 1 `locate`: per robot, the behaviors before the manipulation of the object, which
+  starts where `manipulation_starts` finds it in the original run (first gripper/object
+  contact) or where the program marks it.
 - Step 2 `parallelize`: behavior n joins n + 1 (both before manipulation) when n took less
   time than n + 1 and nothing obstructs (different sections, n + 1 waits for nothing, n + 1
   is not already in a group with n's section). n is absorbed: its event becomes a
@@ -30,13 +32,101 @@ from tamp.refine.program import Program, RobotProgram, event_id
 # ----------------------------------------------------------------------------- Step 1
 
 
-def locate(program: Program) -> dict[str, tuple[int, ...]]:
-    """Step 1: indices of each robot's behaviors before its first manipulating behavior
-    (all of them when none is marked ``manipulates``)."""
+def locate(program: Program, starts: Mapping[str, int] | None = None) -> dict[str, tuple[int, ...]]:
+    """Step 1: indices of each robot's behaviors before its manipulation of the object.
+
+    ``starts``: robot -> index of its first manipulating behavior (`manipulation_starts`,
+    from a measured run); a robot not in it uses its first behavior marked
+    ``manipulates`` (all behaviors when none is)."""
     out = {}
     for r in program.robots:
         first = next((i for i, b in enumerate(r.behaviors) if b.manipulates), len(r.behaviors))
+        if starts is not None and r.name in starts:
+            first = starts[r.name]
         out[r.name] = tuple(range(first))
+    return out
+
+
+@dataclass(frozen=True)
+class Boundary:
+    """Where robot ``robot``'s manipulation starts: ``index`` of its first manipulating
+    behavior (len(behaviors): none), how it was found (``source``), and the first touch
+    of a task object in the original run (time, body) if there was one."""
+
+    robot: str
+    index: int
+    behavior: str | None
+    source: str  # "touch", "marked" or "no object in the task"
+    touch: tuple[float, str] | None = None
+    marked: str | None = None
+
+    def to_json(self) -> dict:
+        return {
+            "robot": self.robot,
+            "behavior": self.behavior,
+            "source": self.source,
+            "touch": None if self.touch is None else [round(self.touch[0], 3), self.touch[1]],
+            "marked": self.marked,
+        }
+
+
+def manipulation_starts(
+    program: Program,
+    touches: Mapping[str, tuple[float, str]],
+    spans: Mapping[str, tuple[float | None, float | None]],
+    *,
+    has_goal: bool,
+) -> dict[str, Boundary]:
+    """Step 1 from a measured run: where each robot's manipulation starts.
+
+    ``touches``: robot -> (first time its gripper touched a task object, the body);
+    ``spans``: event id -> (start, end) of each behavior in that run. The behavior running
+    at the first touch manipulates the object, unless it drives the base: a base motion
+    that reaches the object is the approach to it (the paper's Task 4 counts Robot 1's
+    forward motion under the chair before the manipulation, Fig. 13), and the manipulation
+    starts with the next behavior. A behavior marked ``manipulates`` earlier than that
+    moves the boundary earlier (the user's word is kept when it is more cautious). A robot
+    that never touched a task object and has no marked behavior is refused
+    (`InfeasibleError`) when the task has a goal; in a task without one (no object to
+    manipulate) all its behaviors come before manipulation."""
+    from tamp.errors import InfeasibleError
+
+    out = {}
+    for r in program.robots:
+        marked = next((i for i, b in enumerate(r.behaviors) if b.manipulates), None)
+        touch = touches.get(r.name)
+        found = None
+        if touch is not None:
+            t = touch[0]
+            for i, b in enumerate(r.behaviors):
+                start, end = spans.get(event_id(r.name, b.name), (None, None))
+                if start is not None and start <= t and (end is None or t <= end):
+                    found = i + 1 if b.section == "base" else i
+                    break
+            else:
+                found = next(
+                    (
+                        i
+                        for i, b in enumerate(r.behaviors)
+                        if (spans.get(event_id(r.name, b.name), (None, None))[0] or -1.0) >= t
+                    ),
+                    len(r.behaviors),
+                )
+        if found is None and marked is None:
+            if has_goal:
+                raise InfeasibleError(
+                    f"{r.name}: where its manipulation starts is unknown: its gripper never "
+                    "touched a task object in the original run and no behavior is marked "
+                    "'manipulates' (Step 1 needs it)"
+                )
+            index, source = len(r.behaviors), "no object in the task"
+        elif found is None or (marked is not None and marked < found):
+            index, source = marked, "marked"  # type: ignore[assignment]
+        else:
+            index, source = found, "touch"
+        behavior = r.behaviors[index].name if index < len(r.behaviors) else None
+        name = r.behaviors[marked].name if marked is not None else None
+        out[r.name] = Boundary(r.name, index, behavior, source, touch, name)
     return out
 
 
@@ -79,12 +169,15 @@ def obstruction(r: RobotProgram, n: int) -> str | None:
 
 
 def parallelize(
-    program: Program, durations: Mapping[str, float]
+    program: Program,
+    durations: Mapping[str, float],
+    starts: Mapping[str, int] | None = None,
 ) -> tuple[Program, list[Parallelization]]:
-    """Step 2 over the behaviors located by Step 1, using measured ``durations`` (event id ->
-    seconds). Returns the new program and what was parallelized, in order."""
+    """Step 2 over the behaviors located by Step 1 (``starts``: see `locate`), using
+    measured ``durations`` (event id -> seconds). Returns the new program and what was
+    parallelized, in order."""
     done: list[Parallelization] = []
-    pre = locate(program)
+    pre = locate(program, starts)
     for r in program.robots:
         idx = pre[r.name]
         for n in idx:

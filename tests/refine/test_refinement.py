@@ -92,6 +92,7 @@ class Model:
     always: bool = False
     unfired: dict[int, frozenset[str]] = field(default_factory=dict)
     misses: Callable[[Program], bool] = lambda program: False
+    touches: dict[str, tuple[float, str]] = field(default_factory=dict)
     found: dict[str, float | None] = field(default_factory=lambda: {"R1": 23.0, "R2": 23.0})
     calls: list[tuple[Program, dict]] = field(default_factory=list)
 
@@ -103,6 +104,7 @@ class Model:
         run.sim_time = 200.0
         hinge = 0.2 if self.misses(program) else 0.48
         run.outcome = Outcome({"folding_chair.hinge": hinge}, (OPEN,))
+        run.touches = dict(self.touches)
         parallel = any(b.parallel_with for _, _, b in program.behaviors())
         if self.always or parallel:
             run.collisions = dict(self.collide)
@@ -417,44 +419,62 @@ def test_the_category_option_replaces_the_programs():
     assert out.to_json()["category"] == "III"
 
 
-def test_the_packaged_property_refuses_a_wrong_parallelization_and_keeps_the_papers():
-    """Task 4 with its manipulation marks removed: Step 2 also proposes R2's grip with its
-    approach (a grip that closes on nothing); the task's property refuses it before any
-    run, and R1's lowering with its approach (the paper's) is kept."""
-    p = task(4)
-    loose = replace(
-        p,
+def unmarked(program: Program) -> Program:
+    """``program`` without its ``manipulates`` marks."""
+    return replace(
+        program,
         robots=tuple(
             replace(r, behaviors=tuple(replace(b, manipulates=False) for b in r.behaviors))
-            for r in p.robots
+            for r in program.robots
         ),
     )
-    out = refine(loose, Model())
+
+
+def test_step_1_finds_the_manipulation_from_the_first_touch_of_the_object():
+    """Without marks: R1's fork first touches the chair while its base approaches (60-126.7
+    s: reaching it, so the pull-out manipulates), R2's fingers while they close (the grip
+    manipulates): the paper's parallelization again."""
+    model = Model(touches={"R1": (120.0, "folding_chair.latch"), "R2": (60.0, "frame_a")})
+    out = refine(unmarked(task(4)), model)
+    assert {n: (b.behavior, b.source) for n, b in out.boundaries.items()} == {
+        "R1": ("pull_out", "touch"),
+        "R2": ("grip", "touch"),
+    }
+    assert [c.describe() for c in out.parallelized] == [
+        "R1: lower_arm runs in parallel with approach"
+    ]
+    doc = out.to_json()["manipulation_starts"]
+    assert doc[0] == {
+        "robot": "R1",
+        "behavior": "pull_out",
+        "source": "touch",
+        "touch": [120.0, "folding_chair.latch"],
+        "marked": None,
+    }
+
+
+def test_a_marked_behavior_earlier_than_the_touch_is_kept():
+    model = Model(touches={"R2": (150.0, "frame_a")})  # while R2 releases
+    out = refine(task(4), model)
+    assert out.boundaries["R2"].behavior == "grip" and out.boundaries["R2"].source == "marked"
+
+
+def test_a_robot_without_a_touch_or_a_mark_is_refused():
+    with pytest.raises(InfeasibleError, match="R1: where its manipulation starts is unknown"):
+        refine(unmarked(task(4)), Model(touches={"R2": (60.0, "frame_a")}))
+
+
+def test_the_packaged_property_refuses_a_wrong_parallelization_and_keeps_the_papers():
+    """A wrong boundary: R2's first touch measured while it releases (as if its fingers
+    closed on nothing), so Step 2 also proposes R2's grip with its approach; the task's
+    property (the fingers close only after the approach) refuses it before any run, and
+    R1's lowering with its approach (the paper's) is kept."""
+    model = Model(touches={"R1": (120.0, "latch"), "R2": (150.0, "frame_a")})
+    out = refine(unmarked(task(4)), model)
+    assert out.boundaries["R2"].behavior == "release"
     assert [c.describe() for c, _ in out.refused] == ["R2: approach runs in parallel with grip"]
-    assert "G(R2.grip -> R2.approach)" in out.refused[0][1] or "R2.grip" in out.refused[0][1]
+    assert "R2.grip" in out.refused[0][1]
     assert [c.describe() for c in out.parallelized] == [
         "R1: lower_arm runs in parallel with approach"
     ]
     assert out.goal_met
-
-
-def test_each_behavior_gets_its_trigger_sensors_rate_and_a_group_shares_the_lowest():
-    """Fig. 5 per behavior: R1's IMU-triggered behaviors at 29 Hz, its odometry-triggered
-    ones at 25 Hz, except the approach that runs with the (IMU) lowering: the group's
-    lowest, 25 Hz; R2 at 23 Hz. The back-off lowers every rate by one step."""
-    found = {"R1": 23.0, "R2": 23.0, "R1.imu": 29.0, "R1.odometry": 25.0}
-    out = refine(task(4), Model(found=found))
-    assert out.behavior_rates == {
-        "R1.lower_arm": 25.0,
-        "R1.approach": 25.0,
-        "R1.pull_out": 25.0,
-        "R1.raise_arm": 29.0,
-        "R2.approach": 23.0,
-        "R2.grip": 23.0,
-        "R2.release": 23.0,
-    }
-    assert [b.rate_hz for b in out.program.robot("R1").behaviors] == [25.0, 25.0, 25.0, 29.0]
-    model = Model(found=found, misses=lambda p: rate_of(p) > 27.0)
-    out = refine(task(4), model)
-    assert out.rates_tried == [29.0, 28.0, 27.0]
-    assert out.behavior_rates["R1.raise_arm"] == 27.0 and out.behavior_rates["R2.grip"] == 21.0

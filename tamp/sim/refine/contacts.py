@@ -13,7 +13,9 @@ contact solver, a body pressed for 20 ms is a collision.
 
 The rule (`CollisionRule.classify`): a robot's chassis (`base_link`, `arm_link`) touching
 anything, a robot touching the other robot, or a robot touching the scene's fixed objects
-(the table). A gripper touching the task's objects or the floor is the task.
+(the table). A gripper touching the task's objects or the floor is the task; the first
+such touch of each robot is kept too (``ContactLog.touches``): where its manipulation
+starts (`tamp.refine.steps.locate`).
 """
 
 from __future__ import annotations
@@ -33,6 +35,16 @@ class CollisionRule:
     chassis: frozenset[int]  # bodies whose every contact is a collision
     scenery: frozenset[int]  # bodies of the scene's fixed objects
     names: Mapping[int, str]  # body index -> "R1.base_link"
+    objects: frozenset[int] = frozenset()  # bodies of the scene's free (task) objects
+
+    def touch(self, a: int, b: int) -> tuple[str, str] | None:
+        """The contact as ``(robot, object body)`` when a robot's gripper (a body that is not
+        its chassis) touches a task object: an intended contact, where manipulation starts."""
+        for mine, other in ((a, b), (b, a)):
+            robot = self.robot_of.get(mine)
+            if robot is not None and mine not in self.chassis and other in self.objects:
+                return (robot, self.names.get(other, str(other)))
+        return None
 
     def classify(self, a: int, b: int) -> tuple[str, str] | None:
         """The contact of bodies ``a`` and ``b`` as ``(robot body, other)``, or None."""
@@ -51,9 +63,11 @@ class CollisionRule:
 
 @dataclass(frozen=True)
 class ContactLog:
-    """Per colliding pair: (first time in contact, total seconds in contact)."""
+    """Per colliding pair: (first time in contact, total seconds in contact); per robot: the
+    first time its gripper touched a task object, and which body (``touches``)."""
 
     spans: dict[tuple[str, str], tuple[float, float]] = field(default_factory=dict)
+    touches: dict[str, tuple[float, str]] = field(default_factory=dict)
 
     def __deepcopy__(self, memo: dict) -> ContactLog:
         return self  # immutable: a new log is made when something changes
@@ -85,21 +99,17 @@ class ContactMonitor(LeafSystem):
     def log(self, context) -> ContactLog:
         return context.get_abstract_state(self._state).get_value()
 
-    def _pairs(self, results) -> set[tuple[str, str]]:
-        out = set()
+    def _pairs(self, results) -> list[tuple[int, int]]:
+        out = []
         for i in range(results.num_point_pair_contacts()):
             info = results.point_pair_contact_info(i)
-            key = self._rule.classify(int(info.bodyA_index()), int(info.bodyB_index()))
-            if key is not None:
-                out.add(key)
+            out.append((int(info.bodyA_index()), int(info.bodyB_index())))
         for i in range(results.num_hydroelastic_contacts()):
             surface = results.hydroelastic_contact_info(i).contact_surface()
             a = self._body.get(surface.id_M().get_value())
             b = self._body.get(surface.id_N().get_value())
             if a is not None and b is not None:
-                key = self._rule.classify(a, b)
-                if key is not None:
-                    out.add(key)
+                out.append((a, b))
         return out
 
     def _update(self, context, state) -> EventStatus:
@@ -107,9 +117,19 @@ class ContactMonitor(LeafSystem):
         if not pairs:
             return EventStatus.DidNothing()
         t = context.get_time()
-        spans = dict(self.log(context).spans)
-        for key in pairs:
-            first, total = spans.get(key, (t, 0.0))
-            spans[key] = (first, total + self._period)
-        state.get_mutable_abstract_state(self._state).set_value(ContactLog(spans))
+        log = self.log(context)
+        spans, touches = log.spans, log.touches
+        for a, b in pairs:
+            key = self._rule.classify(a, b)
+            if key is not None:
+                if spans is log.spans:
+                    spans = dict(spans)
+                first, total = spans.get(key, (t, 0.0))
+                spans[key] = (first, total + self._period)
+            touch = self._rule.touch(a, b)
+            if touch is not None and touch[0] not in touches:
+                touches = {**touches, touch[0]: (t, touch[1])}
+        if spans is log.spans and touches is log.touches:
+            return EventStatus.DidNothing()
+        state.get_mutable_abstract_state(self._state).set_value(ContactLog(spans, touches))
         return EventStatus.Succeeded()

@@ -112,7 +112,9 @@ def simulate(
         recording = save_recording(cell.visualizer, meshcat, record)
     outcome = measure(cell.plant, plant_ctx, cell.objects, heights, scene.goals)
     contacts = cell.monitor.log(cell.monitor.GetMyContextFromRoot(root))
-    return _result(cell, root, chunked, contacts.collisions(MIN_CONTACT), recording, outcome)
+    run = _result(cell, root, chunked, contacts.collisions(MIN_CONTACT), recording, outcome)
+    run.touches = dict(contacts.touches)
+    return run
 
 
 def _result(cell: RefineStation, root, chunked, collisions, recording, outcome) -> Run:

@@ -91,6 +91,7 @@ class RefineStation:
     scenery: frozenset[int] = frozenset()  # bodies of the scene's fixed objects (the table)
 
     monitor: ContactMonitor | None = None
+    movable: frozenset[int] = frozenset()  # bodies of the scene's free objects
 
     def collision(self, a: int, b: int) -> tuple[str, str] | None:
         """The contact of bodies ``a`` and ``b`` as a collision ``(robot body, other)``, or
@@ -98,7 +99,9 @@ class RefineStation:
         return self.rule().classify(a, b)
 
     def rule(self) -> CollisionRule:
-        return CollisionRule(self.robot_of, frozenset(self.chassis), self.scenery, self.names)
+        return CollisionRule(
+            self.robot_of, frozenset(self.chassis), self.scenery, self.names, self.movable
+        )
 
 
 def watched_sensors(program: Program, robot: str) -> tuple[str, ...]:
@@ -223,7 +226,10 @@ def build_station(
         builder.Connect(channel.actuation_port, plant.get_desired_state_input_port(m))
         machines[r.name], channels[r.name] = machine, channel
 
-    rule = CollisionRule(robot_of, frozenset(chassis), scenery, names)
+    movable = frozenset(
+        int(i) for m in objects.values() if m not in fixed for i in plant.GetBodyIndices(m)
+    )
+    rule = CollisionRule(robot_of, frozenset(chassis), scenery, names, movable)
     geometry_body = {
         g.get_value(): int(index)
         for index in range(plant.num_bodies())
@@ -285,6 +291,7 @@ def build_station(
         robot_of,
         scenery,
         monitor,
+        movable,
     )
 
 
