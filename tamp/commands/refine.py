@@ -140,9 +140,11 @@ def _print_text(result, args: argparse.Namespace) -> None:
         verdict = "accepted" if a.rejected is None else f"NOT accepted: {a.rejected}"
         what = "; ".join(a.tried) or "as given"
         print(f"  {a.phase:<15} {what}: {t}, {verdict}")
+    for p in result.relaxed:
+        print(f"  relaxed across the robots: {p.describe()}")
     for p, report in result.refused:
         print(f"  refused by the ordering property: {p.describe()}")
-        print("    " + report.splitlines()[0])
+        print("    " + report.splitlines()[0][:200])
     for p, why, _ in result.reverted:
         print(f"  reverted: {p.describe()} ({why})")
     if result.speed_undone:

@@ -12,12 +12,13 @@ did not have (`accept`). Phases:
 2. **parallelized** (Step 1 + Step 2, §3.2, Fig. 4): Step 1 finds where each robot's
    manipulation starts in the original run (`steps.manipulation_starts`: its first
    gripper/object contact; a robot without one and without a marked behavior is refused);
-   `steps.parallelize` on the original run's measured durations. Each parallelization
-   first passes the ordering gate on its own (one the task's LTL property refuses is
-   dropped with the counterexample, ``refused``); the program with the rest is executed
-   once, and while it is not accepted the latest parallelization is reverted
-   (``reverted``, with the reason) and the program runs again. With nothing left the
-   phase is the original program and run.
+   `steps.parallelize` on the original run's measured durations, and across the robots
+   (§3.2(b)) `steps.slack_waits`: a cross-robot wait the original run shows held nothing
+   back is relaxed. Each parallelization or relaxation first passes the ordering gate on
+   its own (one the task's LTL property refuses is dropped with the counterexample,
+   ``refused``); the program with the rest is executed once, and while it is not
+   accepted the latest change is reverted (``reverted``, with the reason) and the
+   program runs again. With nothing left the phase is the original program and run.
 3. **speed-adjusted** (Fig. 6(c)): `adjust_base_speed` on the parallelized run's
    durations; a run that is not accepted undoes the change (the phase keeps the
    parallelized program and run, ``speed_undone`` says why).
@@ -54,6 +55,7 @@ from tamp.refine.program import Program
 from tamp.refine.steps import (
     Boundary,
     Parallelization,
+    Relaxation,
     SpeedChange,
     adjust_base_speed,
     apply_rate,
@@ -61,7 +63,10 @@ from tamp.refine.steps import (
     join,
     manipulation_starts,
     parallelize,
+    relax,
+    restore,
     revert,
+    slack_waits,
 )
 
 
@@ -160,10 +165,13 @@ class Refinement:
     attempts: list[Attempt] = field(default_factory=list)
     boundaries: dict[str, Boundary] = field(default_factory=dict)  # Step 1, per robot
     parallelized: list[Parallelization] = field(default_factory=list)
-    # each parallelization the ordering gate refused, with the gate's report
-    refused: list[tuple[Parallelization, str]] = field(default_factory=list)
-    # each reverted parallelization with the reason and the new collisions of its run
-    reverted: list[tuple[Parallelization, str, list[Collision]]] = field(default_factory=list)
+    relaxed: list[Relaxation] = field(default_factory=list)  # cross-robot waits dropped
+    # each parallelization or relaxation the ordering gate refused, with the gate's report
+    refused: list[tuple[Parallelization | Relaxation, str]] = field(default_factory=list)
+    # each reverted one with the reason and the new collisions of its run
+    reverted: list[tuple[Parallelization | Relaxation, str, list[Collision]]] = field(
+        default_factory=list
+    )
     speed_changes: list[SpeedChange] = field(default_factory=list)
     speed_undone: str | None = None
     tuning: Run | None = None
@@ -241,6 +249,7 @@ class Refinement:
             "reduction": round(self.reduction, 4),
             "manipulation_starts": [b.to_json() for b in self.boundaries.values()],
             "parallelized": [p.describe() for p in self.parallelized],
+            "relaxed": [x.describe() for x in self.relaxed],
             "refused": [{"parallelization": p.describe(), "report": r} for p, r in self.refused],
             "reverted": [
                 {
@@ -328,10 +337,11 @@ def refine(
         program, original.touches, spans, has_goal=bool(original.outcome.goals)
     )
     starts = {name: b.index for name, b in out.boundaries.items()}
-    _, candidates = parallelize(program, original.timeline.durations(), starts)
+    _, found = parallelize(program, original.timeline.durations(), starts)
+    candidates: list[Parallelization | Relaxation] = [*found, *slack_waits(program, spans)]
     p1, kept = program, []
     for c in candidates:
-        trial = join(p1, c)
+        trial = join(p1, c) if isinstance(c, Parallelization) else relax(p1, c)
         if gate is not None:
             try:
                 gate(trial, subject=f"parallelized program {trial.name} ({c.describe()})")
@@ -346,11 +356,12 @@ def refine(
         if why is None:
             r1 = r
             break
-        bad = kept.pop()  # the latest parallelization first
+        bad = kept.pop()  # the latest first
         out.reverted.append((bad, why, new_collisions(r, original)))
         progress(f"  reverting '{bad.describe()}'")
-        p1 = revert(p1, bad)
-    out.parallelized = kept
+        p1 = revert(p1, bad) if isinstance(bad, Parallelization) else restore(p1, bad)
+    out.parallelized = [c for c in kept if isinstance(c, Parallelization)]
+    out.relaxed = [c for c in kept if isinstance(c, Relaxation)]
     out.phases.append(phase("parallelized", p1, r1, [c.describe() for c in kept]))
 
     # 3. speed-adjusted (Fig. 6(c)); undone when its run is not accepted

@@ -9,6 +9,8 @@ Refining the trajectory (§3.2, Fig. 4):
   is not already in a group with n's section). n is absorbed: its event becomes a
   completion marker (Fig. 13). The runner executes the result once and `revert`s a
   parallelization that collides.
+- `slack_waits` (Step 2 across robots, §3.2(b)): a cross-robot wait that the measured run
+  shows held nothing back is a candidate to `relax` (run once, `restore`d if it fails).
 - `adjust_base_speed` (Fig. 6(c)): in a group whose base motion outlasts the other
   behaviors, the base speed grows so that it ends with them.
 
@@ -212,6 +214,63 @@ def revert(program: Program, p: Parallelization) -> Program:
     r = program.robot(p.robot)
     i = r.index(p.host)
     return program.with_behavior(p.robot, i, replace(r.behaviors[i], parallel_with=None))
+
+
+@dataclass(frozen=True)
+class Relaxation:
+    """Behavior ``behavior`` of ``robot`` no longer waits for the other robot's ``event``
+    (Step 2 across robots, §3.2(b))."""
+
+    robot: str
+    behavior: str
+    event: str
+
+    def describe(self) -> str:
+        return f"{self.robot}: {self.behavior} no longer waits for {self.event}"
+
+
+def slack_waits(
+    program: Program, spans: Mapping[str, tuple[float | None, float | None]]
+) -> list[Relaxation]:
+    """Step 2 across robots (§3.2(b), the motions of two robots): the cross-robot waits
+    that the measured run shows are not needed: the awaited event had fired by the time
+    the behavior's own robot let it start (its own predecessors' events), so the wait held
+    nothing back. ``spans``: event id -> (start, end) in that run. Whether the program
+    still works without it is for the ordering gate and one run to say."""
+    from tamp.refine.order import start_predecessors
+
+    out = []
+    for r in program.robots:
+        for i, b in enumerate(r.behaviors):
+            if not b.waits_for:
+                continue
+            own = start_predecessors(r, i) - set(b.waits_for)
+            ends = [spans.get(e, (None, None))[1] for e in own]
+            if any(t is None for t in ends):
+                continue
+            ready = max((t for t in ends if t is not None), default=0.0)
+            for e in b.waits_for:
+                t = spans.get(e, (None, None))[1]
+                if t is not None and t <= ready + 1e-9:
+                    out.append(Relaxation(r.name, b.name, e))
+    return out
+
+
+def relax(program: Program, x: Relaxation) -> Program:
+    """Drop one cross-robot wait."""
+    r = program.robot(x.robot)
+    i = r.index(x.behavior)
+    b = r.behaviors[i]
+    waits = tuple(e for e in b.waits_for if e != x.event)
+    return program.with_behavior(x.robot, i, replace(b, waits_for=waits))
+
+
+def restore(program: Program, x: Relaxation) -> Program:
+    """Undo `relax`: the behavior waits for the event again."""
+    r = program.robot(x.robot)
+    i = r.index(x.behavior)
+    b = r.behaviors[i]
+    return program.with_behavior(x.robot, i, replace(b, waits_for=(*b.waits_for, x.event)))
 
 
 @dataclass(frozen=True)

@@ -161,7 +161,12 @@ def test_the_four_phases_shorten_the_task_as_each_step_intends():
     assert [p.describe() for p in out.parallelized] == [
         "R1: lower_arm runs in parallel with approach"
     ]
-    assert out.reverted == [] and out.refused == []
+    # across the robots: R1's pull-out waited for R2's grip (66.1 s) though its own
+    # approach ended later (126.7 s): a slack wait, but the task's property refuses it
+    assert out.reverted == [] and out.relaxed == []
+    ((refused, report),) = out.refused
+    assert refused.describe() == "R1: pull_out no longer waits for R2.grip"
+    assert "verification failed" in report
     approach = out.phases[1].program.robot("R1").behavior("approach")
     assert approach.parallel_with == "lower_arm"
     # speed phase: the approach's base speed grew by 66.7 / 60
@@ -222,6 +227,7 @@ def test_each_rate_run_is_recorded_and_each_phase_is_gated(tmp_path):
     assert gate.subjects == [
         "original program task4",
         "parallelized program task4 (R1: lower_arm runs in parallel with approach)",
+        "parallelized program task4 (R1: pull_out no longer waits for R2.grip)",
         "parallelized program task4",
         "speed-adjusted program task4",
         "rate-refined program task4",
@@ -366,11 +372,14 @@ def test_a_parallelization_that_breaks_the_ordering_is_refused_with_its_countere
     """A property on the absorbed event (the fork is down before the approach ends): the
     parallelization lets the approach end first, so the gate refuses it before any run and
     the refinement goes on without it."""
-    p = replace(task(4), ordering="G(R1.approach -> R1.lower_arm)")
+    p = replace(task(4), ordering="G(R1.approach -> R1.lower_arm) & G(R1.pull_out -> R2.grip)")
     model = Model()
     out = refine(p, model)
-    ((refused, report),) = out.refused
-    assert refused.describe() == "R1: lower_arm runs in parallel with approach"
+    assert [c.describe() for c, _ in out.refused] == [
+        "R1: lower_arm runs in parallel with approach",
+        "R1: pull_out no longer waits for R2.grip",
+    ]
+    report = out.refused[0][1]
     assert "parallelized program task4" in report and "R1.approach" in report
     assert out.parallelized == [] and out.phases[1].program == p
     assert all(not b.parallel_with for _, _, b in out.program.behaviors())
@@ -472,9 +481,37 @@ def test_the_packaged_property_refuses_a_wrong_parallelization_and_keeps_the_pap
     model = Model(touches={"R1": (120.0, "latch"), "R2": (150.0, "frame_a")})
     out = refine(unmarked(task(4)), model)
     assert out.boundaries["R2"].behavior == "release"
-    assert [c.describe() for c, _ in out.refused] == ["R2: approach runs in parallel with grip"]
+    assert [c.describe() for c, _ in out.refused] == [
+        "R2: approach runs in parallel with grip",
+        "R1: pull_out no longer waits for R2.grip",
+    ]
     assert "R2.grip" in out.refused[0][1]
     assert [c.describe() for c in out.parallelized] == [
         "R1: lower_arm runs in parallel with approach"
     ]
     assert out.goal_met
+
+
+def test_a_slack_cross_robot_wait_is_relaxed_and_restored_when_its_run_fails():
+    """Without the property on it, R1's slack wait for R2's grip is relaxed (§3.2(b)); run
+    once, a collision the original did not have restores it (the parallelization within
+    R1 is kept)."""
+    p = replace(task(4), ordering="G(R2.release -> R1.pull_out)")
+    kept = refine(p, Model())
+    assert [x.describe() for x in kept.relaxed] == ["R1: pull_out no longer waits for R2.grip"]
+    assert kept.program.robot("R1").behavior("pull_out").waits_for == ()
+    assert kept.to_json()["relaxed"] == ["R1: pull_out no longer waits for R2.grip"]
+
+    class Bump(Model):
+        def __call__(self, program, architecture, **kw):
+            run = super().__call__(program, architecture, **kw)
+            if not program.robot("R1").behavior("pull_out").waits_for:
+                run.collisions = {("R1.base_link", "R2.base_link"): 70.0}
+            return run
+
+    out = refine(p, Bump())
+    ((bad, why, _),) = out.reverted
+    assert bad.describe() == "R1: pull_out no longer waits for R2.grip"
+    assert why == "new collision R1.base_link with R2.base_link at 70.0 s"
+    assert out.relaxed == [] and len(out.parallelized) == 1
+    assert out.program.robot("R1").behavior("pull_out").waits_for == ("R2.grip",)
