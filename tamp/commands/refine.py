@@ -2,7 +2,7 @@
 
     tamp refine TASK.yaml [--category I|II|III] [--scale base|all] [--json]
                           [--gantt out.svg] [--record out.html] [--out refined.yaml]
-                          [--no-verify] [--seed N]
+                          [--no-verify] [--seed N] [--from-log RUN.json|RUN.csv]
 
 Simulates the original program, then the program after each refinement phase
 (parallelized, speed-adjusted, rate-refined; `tamp.refine.refinement`, every run measured
@@ -11,11 +11,14 @@ its run finishes, meets the task's goal on the plant and adds no collision the o
 run did not have; otherwise its change is reverted, undone or (the rate) backed off. Prints
 what each phase tried, measured and kept, the reduction and the refined program (the last
 accepted one; ``--out`` writes it). Every program passes the LTL ordering gate before it is
-simulated; a parallelization the property refuses is dropped. ``--scale`` (Step 3): the
-rate scales the base's speed (the paper's, default) or every section's. ``--seed N`` draws
-the program file's ``perturbation`` section (robot start poses). Exit 0 when the refined
-program meets the goal, 1 when no accepted program does (the original misses it) or the
-original cannot finish (with the reason), 2 on a bad file or option.
+simulated; a parallelization the property refuses is dropped. ``--from-log RUN`` refines
+from a measured run's log instead (`tamp.refine.predict`: the same steps, every phase a
+prediction from the logged durations; the JSON of ``tamp refine --json`` is such a log).
+``--scale`` (Step 3): the rate scales the base's speed (the paper's, default) or every
+section's. ``--seed N`` draws the program file's ``perturbation`` section (robot start
+poses). Exit 0 when the refined program meets the goal, 1 when no accepted program does
+(the original misses it) or the original cannot finish (with the reason), 2 on a bad file
+or option.
 """
 
 from __future__ import annotations
@@ -46,6 +49,12 @@ def register(subparsers) -> None:
     p.add_argument("--out", metavar="YAML", help="write the refined program")
     add_no_verify(p)
     add_seed(p)
+    p.add_argument(
+        "--from-log",
+        metavar="RUN",
+        help="refine from a measured run's log (JSON or CSV; tamp refine --json writes one) "
+        "without simulating: the phases are predictions",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=run)
 
@@ -69,6 +78,10 @@ def run(args: argparse.Namespace) -> int:
     from tamp.sim.refine.simulate import WORKCELL
 
     check_seed(args.seed)
+    if args.from_log and args.record:
+        from tamp.errors import InputError
+
+        raise InputError("--record needs a simulation; --from-log predicts without one")
     scenario, applied = WORKCELL.perturbed(WORKCELL.load(args.task), args.seed)
     program, arch, scene = scenario.program, scenario.architecture, scenario.scene
     if args.no_verify:
@@ -81,10 +94,15 @@ def run(args: argparse.Namespace) -> int:
     from verification.gate import gate_program
     from verification.refine import check_run
 
+    measure = partial(simulate, scene=scene)
+    if args.from_log:
+        from tamp.refine.predict import load_log, predicting
+
+        measure = predicting(program, load_log(args.from_log, program))
     result = refine(
         program,
         arch,
-        partial(simulate, scene=scene),
+        measure,
         gate=None if args.no_verify else gate_program,
         check_run=check_run,
         category=args.category,
@@ -111,6 +129,7 @@ def run(args: argparse.Namespace) -> int:
         payload["gantt"] = args.gantt
         payload["recording"] = result.phases[-1].run.recording
         payload["seed"] = applied.seed
+        payload["predicted_from"] = args.from_log
         payload["perturbation"] = applied.to_json()
         print_json(payload)
     else:
@@ -128,7 +147,8 @@ def _print_text(result, args: argparse.Namespace) -> None:
 
     program = result.phases[0].program
     cat = result.program.communication.category
-    print(f"program {program.name} (Category {cat}):")
+    predicted = f", predicted from {args.from_log}" if args.from_log else ""
+    print(f"program {program.name} (Category {cat}{predicted}):")
     first = result.phases[0].task_time
     for p in result.phases:
         change = "" if p is result.phases[0] else f"  ({p.task_time / first - 1:+.1%})"

@@ -298,12 +298,12 @@ def refine(
         return p
 
     def run(p: Program, phase: str, **kw) -> Run:
-        progress(f"simulating the {phase} program ...")
+        progress(f"measuring the {phase} program ...")
         r = measure(p, architecture, **kw)
         if r.finished:
-            progress(
-                f"  {phase}: {r.task_time:.1f} s, {r.outcome.summary()} (wall {r.wall_time:.1f} s)"
-            )
+            outcome = r.outcome.summary()
+            outcome = f", {outcome}" if outcome else ""
+            progress(f"  {phase}: {r.task_time:.1f} s{outcome} (wall {r.wall_time:.1f} s)")
         return r
 
     def phase(name: str, p: Program, r: Run, kept: list[str]) -> Phase:
