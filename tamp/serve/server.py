@@ -622,10 +622,24 @@ class RosbridgeServer:
         return self.port
 
     async def stop(self) -> None:
-        if self._server is not None:
-            self._server.close()
-            await self._server.wait_closed()
-            self._server = None
+        """Close every connection (1001; a peer that does not answer within a second is
+        cut) and stop listening."""
+        if self._server is None:
+            return
+        self._server.close(close_connections=False)
+        await asyncio.gather(*(self._close(c) for c in list(self.clients.values())))
+        try:
+            await asyncio.wait_for(self._server.wait_closed(), 5.0)
+        except TimeoutError:
+            log.warning("some connections did not close")
+        self._server = None
+
+    @staticmethod
+    async def _close(client: Client) -> None:
+        try:
+            await asyncio.wait_for(client.ws.close(1001, "server stopping"), 1.0)
+        except Exception:  # noqa: BLE001 - a vanished peer: cut the connection
+            client.ws.transport.abort()
 
 
 async def _done(value: Any) -> Any:

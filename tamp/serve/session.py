@@ -164,8 +164,9 @@ class DemoSession:
 
     def _check_begin(self) -> None:
         """The loader's checks up to the steps (frame, radius, robot, objects)."""
+        head = {k: v for k, v in self.data.items() if k != "appear"}
         try:
-            demonstration_from_dict(self.data, self.source)
+            demonstration_from_dict(head, self.source)
         except InputError as exc:
             if exc.field == "steps":  # everything before the steps is valid
                 return
@@ -192,6 +193,7 @@ class DemoSession:
         to = to_file(p, frame)
         candidate = copy.deepcopy(data)
         candidate["steps"].append({"object": obj, "to": to})
+        candidate.pop("appear", None)  # may name goals of later steps: checked when planning
         demonstration_from_dict(candidate, self.source)
         data["steps"].append({"object": obj, "to": to})
         self.mr_steps.append(to_mr(to))

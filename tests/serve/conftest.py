@@ -98,3 +98,21 @@ def case_begin(data: dict) -> tuple[dict, list[dict]]:
 
 def data_of(msg: dict) -> dict:
     return json.loads(msg["data"])
+
+
+def close_ros(ros, served: Served) -> None:
+    """Close a roslibpy client cleanly: its close frame, the server's answer, then stop its
+    loop (``terminate`` alone stops the loop with the socket still open, and the server
+    waits for the close handshake before cutting it)."""
+    before = served.thread.call(lambda: len(served.server.clients))
+    if ros.is_connected:
+        ros.close()
+        try:
+            wait_for(
+                lambda: served.thread.call(lambda: len(served.server.clients)) < before,
+                timeout=2.0,
+                what="close",
+            )
+        except AssertionError:
+            pass  # the server cuts it when it stops
+    ros.terminate()
