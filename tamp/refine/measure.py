@@ -126,10 +126,11 @@ class Run:
     outcome: Outcome = field(default_factory=Outcome)  # what the objects did (the plant's)
     # robot -> (first time its gripper touched a task object, the object's body)
     touches: dict[str, tuple[float, str]] = field(default_factory=dict)
+    diverged: str | None = None  # why the simulation stopped early (the solver failed)
 
     @property
     def finished(self) -> bool:
-        return self.timeline.finished
+        return self.diverged is None and self.timeline.finished
 
     @property
     def task_time(self) -> float:

@@ -104,6 +104,8 @@ def new_collisions(run: Run, reference: Run) -> list[Collision]:
 def accept(run: Run, reference: Run) -> str | None:
     """Why ``run`` is not accepted (None: it is): it did not finish, it missed the goal on
     the plant, or it has a collision the ``reference`` (original) run did not."""
+    if run.diverged is not None:
+        return f"did not finish: {run.diverged}"
     if not run.finished:
         stuck = [r.event for r in run.timeline.records if r.end is None]
         return f"did not finish within {run.sim_time:.0f} s: {', '.join(stuck)} never fired"

@@ -123,6 +123,19 @@ def test_apply_rate_can_scale_every_section_keeping_the_step_per_command():
         apply_rate(task(4), "R1", 23.0, scale="arm")
 
 
+def test_apply_rate_keeps_a_base_that_runs_with_another_section_at_its_speed():
+    p, _ = parallelize(task(4), T4)  # R1's approach runs with its lowering
+    q = apply_rate(p, "R1", 23.0)
+    assert (
+        q.robot("R1").behavior("approach").motion.speed
+        == p.robot("R1").behavior("approach").motion.speed
+    )
+    assert q.robot("R1").behavior("pull_out").motion.speed == pytest.approx(1.05e-2 * 2.3)
+    assert apply_rate(p, "R1", 23.0, scale="all").robot("R1").behavior(
+        "approach"
+    ).motion.speed == pytest.approx(1.05e-2 * 2.3)
+
+
 def test_apply_rate_per_behavior():
     p = apply_rate(task(4), "R1", {"approach": 20.0, "pull_out": 15.0})
     r0, r1 = task(4).robot("R1"), p.robot("R1")

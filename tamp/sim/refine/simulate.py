@@ -75,7 +75,7 @@ def simulate(
 ) -> Run:
     """Build the station of ``program`` in its scene (``scene``: already loaded, else
     `load_scene` of ``program.scene``) and run it to the end (module docstring)."""
-    from tamp.sim.core.runner import make_simulator, run_in_chunks
+    from tamp.sim.core.runner import ChunkedRun, make_simulator, run_in_chunks
     from tamp.sim.refine.outcome import measure, start_heights
     from tamp.sim.refine.station import build_station
 
@@ -104,7 +104,13 @@ def simulate(
 
         start_recording(cell.visualizer)
     limit = max_sim_time if max_sim_time is not None else time_limit(program, architecture, tune)
-    chunked = run_in_chunks(simulator, chunk=CHUNK, limit=limit, between=between)
+    diverged = None
+    try:
+        chunked = run_in_chunks(simulator, chunk=CHUNK, limit=limit, between=between)
+    except RuntimeError as e:  # the solver met NaN: the physics of this program diverged
+        t = root.get_time()
+        diverged = f"the simulation diverged at {t:.2f} s ({str(e).split('.')[0]})"
+        chunked = ChunkedRun(t, 0.0, 0.0, stopped=True)
     recording = None
     if record is not None:
         from tamp.sim.core.recording import save_recording
@@ -114,6 +120,7 @@ def simulate(
     contacts = cell.monitor.log(cell.monitor.GetMyContextFromRoot(root))
     run = _result(cell, root, chunked, contacts.collisions(MIN_CONTACT), recording, outcome)
     run.touches = dict(contacts.touches)
+    run.diverged = diverged
     return run
 
 
@@ -203,10 +210,13 @@ def judge(
     measured event order breaks the ordering property (``order_violated``), when the
     scene's goal is not met on the plant (``goal_missed``) or when the run has a collision
     the ``reference`` run (the program as given, unperturbed; None: none to compare) did not
-    have (``new_collision``); else SUCCESS."""
+    have (``new_collision``); when the simulation diverged, FAILURE (``sim_diverged``); else
+    SUCCESS."""
     from tamp.refine.refinement import new_collisions
     from tamp.sim.core.outcome import run_cause
 
+    if run.diverged is not None:
+        return "FAILURE", run_cause("FAILURE", ["sim_diverged"], False), run.diverged, None
     if not run.finished:
         stuck = ", ".join(r.event for r in run.timeline.records if r.end is None)
         return "TIMEOUT", run_cause("TIMEOUT", [], False), f"{stuck} never fired", None
