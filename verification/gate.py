@@ -22,7 +22,6 @@ each returns the `Report` (what ``--json`` front ends print) or raises `Verifica
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from functools import singledispatch
 from typing import TYPE_CHECKING
 
 from verification.verdict import Report, VerificationError
@@ -131,32 +130,30 @@ def gate_program(program: Program, *, subject: str | None = None) -> Report:
     return _passed(Report([check_program(program, subject=subject)]))
 
 
-@singledispatch
+def _tree(plan: PaBtExecutor, *, state: WorldState | None = None, **kw) -> Report:
+    if state is None:
+        raise ValueError("gate(executor) needs state=<the initial WorldState>")
+    return gate_tree(plan, state, **kw)
+
+
+#: The entry point per plan type, keyed by the type's import path: dispatching by name keeps
+#: the layers unimported until a plan of theirs arrives (`tamp lots` never loads the RG planner
+#: and its scipy).
+_ENTRIES = {
+    "tamp.rg.plan.PlanResult": gate_order,
+    "tamp.refine.program.Program": gate_program,
+    "tamp.lots.controller.LotsController": gate_table,
+    "tamp.bt.executor.PaBtExecutor": _tree,
+}
+
+
 def gate(plan: object, **options) -> Report:
     """Verify ``plan`` with the entry point for its type (see the module docstring)."""
+    for cls in type(plan).__mro__:
+        entry = _ENTRIES.get(f"{cls.__module__}.{cls.__qualname__}")
+        if entry is not None:
+            return entry(plan, **options)
     raise TypeError(
         f"gate() does not know how to verify a {type(plan).__name__} "
         "(expected an RG PlanResult, a PaBtExecutor, a LotsController or a refinement Program)"
     )
-
-
-def _register() -> None:
-    """Bind the dispatcher to the layers' types (imported here: they import no Drake)."""
-    from tamp.bt.executor import PaBtExecutor
-    from tamp.lots.controller import LotsController
-    from tamp.refine.program import Program
-    from tamp.rg.plan import PlanResult
-
-    gate.register(PlanResult, lambda plan, **kw: gate_order(plan, **kw))
-    gate.register(Program, lambda plan, **kw: gate_program(plan, **kw))
-    gate.register(LotsController, lambda plan, **kw: gate_table(plan, **kw))
-
-    def _tree(plan, *, state=None, **kw):
-        if state is None:
-            raise ValueError("gate(executor) needs state=<the initial WorldState>")
-        return gate_tree(plan, state, **kw)
-
-    gate.register(PaBtExecutor, _tree)
-
-
-_register()

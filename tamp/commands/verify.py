@@ -121,6 +121,10 @@ def _cmd_bt(args) -> int:
     demo = load_demonstration(args.demo)
     if args.max_failures < 0:
         raise InputError(f"must be >= 0, got {args.max_failures}", field="--max-failures")
+    if args.max_states is None:
+        from verification.bt import DEFAULT_MAX_STATES
+
+        args.max_states = DEFAULT_MAX_STATES
     if args.max_states < 1:
         raise InputError(f"must be >= 1, got {args.max_states}", field="--max-states")
     order = None
@@ -158,7 +162,14 @@ def _add_bt(sub) -> None:
     p.add_argument(
         "--max-failures", type=int, default=1, help="skill failures per execution (default 1)"
     )
-    p.add_argument("--max-states", type=int, default=50_000, help="exploration bound")
+    p.add_argument(
+        "--max-states",
+        type=int,
+        default=None,
+        metavar="N",
+        help="states to explore before the verdict is unknown (default 200000, "
+        "the budget of the gate in tamp plan --execute and tamp simulate smp-mro)",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_bt)
 

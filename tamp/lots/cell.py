@@ -49,29 +49,27 @@ def skill(name: str, *args: str) -> Action:
 def initial_state(initial: dict[str, dict[str, int]]) -> WorldState:
     """The workcell with ``initial[side][cls]`` objects per workspace; the hand is empty.
 
-    Objects are named ``<class>_<n>`` (n = 1, 2, … per class) and lie at their area's centre.
+    The objects of a class in a workspace are one pile (`tamp.world.state.ObjectState.count`)
+    named ``<class>_<n>`` at the area's centre: counts stay integers however large.
     """
     areas = {a.name: a for a in AREAS}
     state = WorldState(HOME, None, {}, areas)
     for side in SIDES:
         for cls, n in initial.get(side, {}).items():
-            for _ in range(n):
-                state = add_object(state, cls, side)
+            if n > 0:
+                state = add_object(state, cls, side, n)
     return state
 
 
 def new_uid(state: WorldState, cls: str) -> str:
     """The next free ``<class>_<n>`` name."""
-    n = 1
-    while f"{cls}_{n}" in state.objects:
-        n += 1
-    return f"{cls}_{n}"
+    return state.fresh_uid(cls)
 
 
-def add_object(state: WorldState, cls: str, area: str) -> WorldState:
-    """``state`` with one more object of class ``cls`` at ``area``'s centre."""
+def add_object(state: WorldState, cls: str, area: str, count: int = 1) -> WorldState:
+    """``state`` with a new pile of ``count`` objects of class ``cls`` at ``area``'s centre."""
     c = state.area(area).pos
-    return state.with_object_at(new_uid(state, cls), Pose(Point(c.x, c.y, 0.0)), cls)
+    return state.with_object_at(new_uid(state, cls), Pose(Point(c.x, c.y, 0.0)), cls, count)
 
 
 def camera_side(state: WorldState) -> str | None:
@@ -93,7 +91,7 @@ def visible_counts(state: WorldState, side: str) -> dict[str, int] | None:
 
 
 def objects_of(state: WorldState, cls: str, area: str) -> list[str]:
-    """The (unheld) objects of class ``cls`` in ``area``, by uid."""
+    """The (unheld) objects, or piles of them, of class ``cls`` in ``area``, by uid."""
     return sorted(u for u in state.objects_in(state.area(area)) if state.objects[u].kind == cls)
 
 
@@ -118,9 +116,7 @@ def view_state(side: str | None, counts: dict[str, int], in_hand: str | None = N
     areas = {a.name: a for a in AREAS}
     here = HOME if side is None else Pose(Point(areas[side].pos.x, areas[side].pos.y, 0.0))
     objects = {
-        f"{cls}_{i}": ObjectState(f"{cls}_{i}", here, cls)
-        for cls, n in sorted(counts.items())
-        for i in range(1, n + 1)
+        f"{cls}_1": ObjectState(f"{cls}_1", here, cls, n) for cls, n in sorted(counts.items()) if n
     }
     held = None
     if in_hand is not None:

@@ -117,16 +117,24 @@ class ScriptedPerson:
     def apply(self, world: SymbolicWorld, e: Event, n: int = 0, phase: str = "idle") -> bool:
         """Apply one human action now; an impossible one is an `InputError` (or skipped)."""
         state = world.state
-        if e.kind == "add":
-            for _ in range(e.count):
-                world.happen(Appear(new_uid(world.state, e.cls), e.side, kind=e.cls))
+        if e.kind == "add":  # one pile, however many: counts stay integers
+            world.happen(Appear(new_uid(state, e.cls), e.side, kind=e.cls, count=e.count))
         else:
             side = e.src if e.kind == "move" else e.side
-            uids = objects_of(state, e.cls, side)
-            if len(uids) < e.count:
-                return self._impossible(e, f"only {len(uids)} {e.cls} in W^{side}")
-            for uid in uids[: e.count]:
-                world.happen(Appear(uid, e.dst) if e.kind == "move" else Remove(uid))
+            piles = [(uid, state.objects[uid].count) for uid in objects_of(state, e.cls, side)]
+            have = sum(k for _, k in piles)
+            if have < e.count:
+                return self._impossible(e, f"only {have} {e.cls} in W^{side}")
+            left = e.count
+            for uid, k in piles:
+                take = min(left, k)
+                if e.kind == "move":
+                    world.happen(Appear(uid, e.dst, count=take))
+                else:
+                    world.happen(Remove(uid, count=take))
+                left -= take
+                if not left:
+                    break
         self.log.append((n, phase, e))
         return True
 

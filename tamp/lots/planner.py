@@ -180,13 +180,24 @@ def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]
 
     Search: ``(q, b, q_F, redelivered?)`` (``q_F`` = -1 in the prefix), by levels of ``Σ b``
     (W^B only grows along a round); a state above a known end of its ``q_F`` (of every ``q_F``
-    in the prefix) is not expanded. At most ``4·|Q|·(|Q_F| + 1)·∏(n_i + 1)`` states.
+    in the prefix) is not expanded. At most ``4·|Q|·(|Q_F| + 1)·∏(m_i + 1)`` states, with
+    ``m_i = min(n_i, K + 1)`` and ``K = 2·|Q|·(|Q_F| + 1)`` the number of control states
+    ``(q, q_F, redelivered?)``: a kept end delivers no class more than K times, so counts
+    beyond that (a person pouring 10^7 objects into W^A) cost nothing. Why: on a path that
+    delivers class ``i`` more than K times, two of those deliveries start from the same control
+    state; cutting the segment between them leaves a path to the same ``q_F`` whose W^B is
+    smaller (a return it then cannot make, its class no longer all in W^B, becomes ∅ and a
+    delivery, still below the cut path's W^B), so the longer path's end is above a kept one.
+    A class capped this way has more objects than any kept end delivers, so its return
+    action (all of the class in W^B) never applies.
     """
     classes = task.classes
     idx = {c: i for i, c in enumerate(classes)}
     props = [(frozenset({p.name}), idx[p.cls]) for p in task.propositions]
     avail = tuple(task.initial_a.get(c, 0) + task.initial_b.get(c, 0) for c in classes)
     live = aut.live_accepting
+    control = 2 * aut.num_states * (len(live) + 1)
+    cap = tuple(min(n, control + 1) for n in avail)  # deliveries a kept end can need
     # per q_F: the minimal ends of plain rounds, and of all rounds (plain and redelivering)
     plain: dict[int, list[Counts]] = {qf: [] for qf in live}
     every: dict[int, list[Counts]] = {qf: [] for qf in live}
@@ -208,11 +219,12 @@ def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]
         for nq in aut.successors(q, EMPTY):
             yield nq, b, sat
         for letter, i in props:
-            if b[i] < avail[i]:
+            if b[i] < cap[i]:
                 nb = b[:i] + (b[i] + 1,) + b[i + 1 :]
                 for nq in aut.successors(q, letter):
                     yield nq, nb, sat
-            elif avail[i] and task.returns:  # all of the class in W^B: one back to W^A, again
+            elif b[i] == avail[i] and avail[i] and task.returns:  # all of the class in W^B:
+                # one back to W^A, delivered again
                 for mid in aut.successors(q, EMPTY):
                     for nq in aut.successors(mid, letter):
                         yield nq, b, True

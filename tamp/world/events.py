@@ -101,12 +101,15 @@ class Appear:
     Used for objects that are not in the demonstration (Case 3's O_a) and, with a known
     object, for a person moving it (it is dropped from the hand if held). ``kind``: the class
     of a new object (LOTS tasks name objects by class); a known object keeps its own.
+    ``count``: how many interchangeable objects of ``kind`` a new pile holds, or how many a
+    person takes off a known pile (`tamp.world.state.WorldState.split`).
     """
 
     obj: str
     place: str | Point
     when: When = None
     kind: str = ""
+    count: int = 1
 
     def __str__(self) -> str:
         where = self.place if isinstance(self.place, str) else _point_text(self.place)
@@ -115,12 +118,14 @@ class Appear:
 
 @dataclass(frozen=True)
 class Remove:
-    """Object ``obj`` leaves the workcell now (a person takes it away: LOTS dis_2)."""
+    """Object ``obj`` leaves the workcell now (a person takes it away: LOTS dis_2);
+    ``count`` of a pile takes that many of its objects (None: all of them)."""
 
     obj: str
+    count: int | None = None
 
     def __str__(self) -> str:
-        return f"remove {self.obj}"
+        return f"remove {self.obj}" + (f" x{self.count}" if self.count is not None else "")
 
 
 @dataclass(frozen=True)

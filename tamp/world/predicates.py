@@ -244,7 +244,8 @@ class IsGraspedKind(Predicate):
         ]
         if not candidates:
             raise ValueError(f"{self}: no object of kind {self.kind!r} to grasp")
-        return state.with_held(min(candidates)[1])
+        state, uid = state.split(min(candidates)[1])  # one object off a pile
+        return state.with_held(uid)
 
     def contradicts(self, other: Predicate) -> bool:
         if isinstance(other, IsGraspedKind):

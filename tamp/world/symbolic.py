@@ -201,7 +201,11 @@ class SymbolicWorld:
         if isinstance(ev, Remove):
             if ev.obj not in self.state.objects:
                 raise ValueError(f"{ev}: unknown object {ev.obj!r}")
-            self.state = self.state.without_object(ev.obj)
+            have = self.state.objects[ev.obj].count
+            left = 0 if ev.count is None else have - ev.count
+            if left < 0:
+                raise ValueError(f"{ev}: only {have} in {ev.obj!r}")
+            self.state = self.state.with_count(ev.obj, left)
             self._record("remove", ev.obj)
             return
         if isinstance(ev.place, str) and ev.place not in self.state.areas:
@@ -336,12 +340,17 @@ class SymbolicWorld:
         p = self._point(ev)
         old = self.state.objects.get(ev.obj)
         orientation = old.pose.orientation if old else Pose.at(0, 0).orientation
-        state = self.state
-        if state.held == ev.obj:
+        state, obj = self.state, ev.obj
+        if old is not None:  # a person moves `count` objects of a pile (all of a single one)
+            state, obj = state.split(obj, min(ev.count, old.count))
+        if state.held == obj:
             state = state.with_held(None)
         pose = Pose(Point(p.x, p.y, p.z), orientation)
-        self.state = state.with_object_at(ev.obj, pose, None if old else ev.kind)
-        self._record("move" if old else "appear", ev.obj, f"({p.x:g}, {p.y:g})")
+        if old is None:
+            self.state = state.with_object_at(obj, pose, ev.kind, ev.count)
+        else:
+            self.state = state.with_object_at(obj, pose)
+        self._record("move" if old else "appear", obj, f"({p.x:g}, {p.y:g})")
 
 
 def state_key(s: WorldState) -> tuple:
@@ -350,7 +359,10 @@ def state_key(s: WorldState) -> tuple:
         (round(s.robot.pos.x, 6), round(s.robot.pos.y, 6), round(s.robot.orientation.yaw(), 6)),
         s.held,
         tuple(
-            sorted((k, tuple(round(v, 6) for v in o.pos.as_tuple())) for k, o in s.objects.items())
+            sorted(
+                (k, tuple(round(v, 6) for v in o.pos.as_tuple()), o.count)
+                for k, o in s.objects.items()
+            )
         ),
         tuple(sorted(s.areas)),
     )

@@ -274,3 +274,49 @@ def test_a_block_that_started_in_wb_is_no_delivery(capsys, tmp_path):
     assert data["final"]["B"] == {"block": 3, "cap": 1}
     assert data["final_w_b"] == {"block": 3, "cap": 1}  # the plan in use, after the replan
     assert data["replans"] >= 1
+
+
+POUR = """version: 1
+events:
+  - {after: 1, kind: add, class: body, side: B, count: 10000000}
+  - {after: 2, kind: move, class: body, from: B, to: A, count: 9999999}
+  - {after: 3, kind: remove, class: body, side: A, count: 5000000}
+"""
+
+
+def test_counts_stay_counts_when_a_person_pours_ten_million_bodies(capsys, tmp_path):
+    """A person pours 10^7 tower bodies into W^B, moves all but one back to W^A and takes
+    half of those away: objects of a class are a pile with a count, never 10^7 objects (this
+    run took minutes when every body was one), and the final counts are exact integers."""
+    ev = write(tmp_path, "pour.yaml", POUR)
+    code, data = run_json(capsys, "tower", "--interference", ev)
+    assert code == 0 and data["satisfied"] and data["word_accepted"]
+    # the robot discarded the body it carried (W^B had bodies enough), W^B ends as the tower
+    assert data["final"]["B"] == {"body": 1, "bottom": 1, "peak": 1}
+    assert data["final"]["A"] == {"body": 1 + 9_999_999 - 5_000_000}
+    assert data["final"]["waste"] == {"body": 1}
+
+
+def test_ten_million_objects_in_the_task_file_plan_like_two(capsys, tmp_path):
+    """W^A starting with 10^7 bodies: the ways of the task (its round ends) are searched up
+    to the number of deliveries a way can need, so the run is the packaged tower's."""
+    text = scenario("tower.yaml").read_text().replace("body: 2", "body: 10000000")
+    task = write(tmp_path, "t.yaml", text)
+    code, data = run_json(capsys, task)
+    _, small = run_json(capsys, "tower")
+    assert code == 0 and data["satisfied"]
+    assert [a["prop"] for a in data["actions"]] == [a["prop"] for a in small["actions"]]
+    assert data["final"]["A"] == {"body": 10_000_000 - 1}
+
+
+@pytest.mark.parametrize(
+    ("line", "why"),
+    [
+        ("{after: 0, kind: remove, class: body, side: A, count: 3}", "only 2 body in W^A"),
+        ("{after: 0, kind: move, class: peak, from: A, to: B, count: 2}", "only 1 peak in W^A"),
+    ],
+)
+def test_taking_more_than_a_pile_holds_is_bad_input(capsys, tmp_path, line, why):
+    ev = write(tmp_path, "ev.yaml", f"version: 1\nevents:\n  - {line}\n")
+    assert main(["lots", "tower", "--interference", ev]) == 2
+    assert why in capsys.readouterr().err

@@ -272,6 +272,29 @@ def test_the_planner_plans_from_exactly_the_pairs_the_oracle_accepts(task):
                     assert c.lots.is_goal(planned.end[1])
 
 
+@settings(max_examples=int(os.environ.get("TAMP_WAYS_EXAMPLES", "40")) // 2, deadline=None)
+@given(task=random_task(), extra=st.integers(1, 3))
+def test_more_objects_than_a_way_can_deliver_give_the_oracles_ways(task, extra):
+    """Counts stay counts: with more objects of a class than a kept round end can deliver
+    (``2·|Q|·(|Q_F|+1)``, the planner's search bound), the planner's ways are still exactly
+    the oracle's, which searches every count without a bound."""
+    from dataclasses import replace
+
+    from tamp.lots.automaton import Automaton
+
+    aut = Automaton(task.formula, task.props)
+    bound = 2 * aut.num_states * (len(aut.live_accepting) + 1)
+    cls = task.classes[0]
+    task = replace(task, initial_a={**task.initial_a, cls: bound + 1 + extra})
+    try:
+        c = LotsController(task)
+    except InfeasibleError:
+        assert not oracle_round_ends(task, aut)
+        return
+    ends = oracle_round_ends(task, c.aut)
+    assert ends <= set(c.lots.goals) <= oracle_round_ends(task, c.aut, minimal=False)
+
+
 takeaway = st.tuples(st.sampled_from(("A", "B")), st.integers(0, 2), st.integers(1, 2))
 
 

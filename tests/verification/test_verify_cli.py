@@ -175,3 +175,24 @@ def test_bounded_exploration_is_unknown_not_holds(capsys):
     assert "bounded at 20 states" in doc["notes"][0]
     # a real violation found within the bound is still a violation (exit 1)
     assert main(["bt", "case3.yaml", "--max-states", "60", "--property", "G !holding"]) == 1
+
+
+def test_every_tree_state_budget_has_the_gates_default(capsys):
+    """`tamp-verify bt --max-states`, `tamp plan --execute --verify-budget` and `tamp simulate
+    smp-mro --verify-budget` bound one exploration: their help names its one default."""
+    from tamp.commands.main import main as tamp
+    from verification.bt import DEFAULT_MAX_STATES
+
+    helps = []
+    for entry, argv in (
+        (main, ["bt", "-h"]),
+        (tamp, ["plan", "-h"]),
+        (tamp, ["simulate", "smp-mro", "-h"]),
+    ):
+        try:
+            entry(argv)
+        except SystemExit:
+            pass
+        helps.append(" ".join(capsys.readouterr().out.split()))
+    for text in helps:
+        assert f"(default {DEFAULT_MAX_STATES}" in text

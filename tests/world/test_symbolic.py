@@ -13,7 +13,7 @@ from tamp.world.actions import Domain
 from tamp.world.events import AfterAction, Appear, AtTick, AtTime, Fail, Remove, parse_call
 from tamp.world.interface import Status
 from tamp.world.outcomes import BranchingOutcomes, ScriptedOutcomes
-from tamp.world.symbolic import SymbolicWorld
+from tamp.world.symbolic import SymbolicWorld, state_key
 
 S, F, R = Status.SUCCESS, Status.FAILURE, Status.RUNNING
 D = default_domain()
@@ -168,3 +168,51 @@ def test_happen_applies_a_person_s_appear_or_remove_now() -> None:
     for bad in (Remove("nope"), Appear("cube", "L9")):
         with pytest.raises(ValueError):
             w.happen(bad)
+
+
+# -- piles: objects known by class stay counts -----------------------------------------------
+
+
+def _pile_world(n: int) -> SymbolicWorld:
+    from tamp.lots.cell import initial_state
+
+    return SymbolicWorld(initial_state({"A": {"body": n}, "B": {}}))
+
+
+def test_a_pile_is_one_entry_whatever_its_count():
+    world = _pile_world(10_000_000)
+    assert len(world.state.objects) == 1
+    assert world.state.kinds_in(world.state.area("A")) == {"body": 10_000_000}
+    assert world.state.summary()["counts"] == {"body_1": 10_000_000}
+
+
+def test_picking_from_a_pile_splits_one_object_off():
+    from tamp.lots.cell import held_kind, lots_domain, side_counts
+
+    world = _pile_world(5)
+    assert _run(world, "Pick(body,A)", domain=lots_domain()) == [Status.SUCCESS]
+    assert held_kind(world.state) == "body"
+    assert side_counts(world.state)["A"] == {"body": 4}
+    assert _run(world, "Place(B)", domain=lots_domain()) == [Status.SUCCESS]
+    assert side_counts(world.state)["B"] == {"body": 1}
+    assert len(world.state.objects) == 2
+
+
+def test_a_person_moves_and_removes_part_of_a_pile():
+    from tamp.lots.cell import side_counts
+
+    world = _pile_world(7)
+    world.happen(Appear("body_1", "B", count=3))
+    assert side_counts(world.state)["A"] == {"body": 4}
+    assert side_counts(world.state)["B"] == {"body": 3}
+    moved = next(u for u in world.state.objects if u != "body_1")
+    world.happen(Remove(moved, count=2))
+    assert side_counts(world.state)["B"] == {"body": 1}
+    world.happen(Remove("body_1"))  # the whole pile
+    assert side_counts(world.state)["A"] == {}
+    with pytest.raises(ValueError, match="only 1"):
+        world.happen(Remove(moved, count=2))
+
+
+def test_piles_of_different_counts_are_different_states():
+    assert state_key(_pile_world(2).state) != state_key(_pile_world(3).state)

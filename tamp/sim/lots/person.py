@@ -52,6 +52,7 @@ from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 
+from tamp.errors import InputError
 from tamp.lots.person import ACTION_SKILLS, ScriptedPerson
 from tamp.lots.task import Event
 from tamp.sim.core.messages import SkillCommand, SkillStatus
@@ -185,10 +186,20 @@ def staged_objects(
     """The objects the script's ``add`` events bring in, waiting on the staging shelf (of
     the classes of ``scenario``: the packaged ones and its own)."""
     out: list[CellObject] = []
+    room = int(PERSON.shelf_size[1] / SHELF_PITCH)
     for e in events:
         if e.kind != "add":
             continue
         c = scenario.object_class(e.cls)
+        if len(out) + e.count > room:  # each one is a free body the person carries in
+            file, _, path = e.where.partition(": ")
+            raise InputError(
+                f"the person's staging shelf holds {room} objects in the Drake workcell; "
+                f"this script adds {len(out) + e.count} (`tamp lots` runs any count "
+                "symbolically)",
+                file=file or None,
+                field=f"{path}.count" if path else "count",
+            )
         for _ in range(e.count):
             k = len(out)
             rgb = c.palette[k % len(c.palette)]

@@ -59,8 +59,12 @@ def verification_events(scenario: SimScenario) -> list:
     ]
 
 
-def prepare(scenario: SimScenario, *, verify: bool = True) -> Prepared:
-    """Plan, build the tree, and pass the verification gate (the hook before simulation)."""
+def prepare(
+    scenario: SimScenario, *, verify: bool = True, verify_budget: int | None = None
+) -> Prepared:
+    """Plan, build the tree, and pass the verification gate (the hook before simulation);
+    ``verify_budget``: the states the tree gate may explore before its verdict is unknown
+    (refused, exit 1; default `verification.bt.DEFAULT_MAX_STATES`)."""
     from tamp.rg import plan as rg_plan
 
     result = rg_plan(scenario.demo, scenario.planner.cost)
@@ -73,7 +77,10 @@ def prepare(scenario: SimScenario, *, verify: bool = True) -> Prepared:
         prepared.reports["order"] = gate(result)
         probe = make_tree(scenario, result)  # the gate ticks a copy, never the real tree
         prepared.reports["tree"] = gate(
-            probe, state=scenario.demo.initial_world(), events=verification_events(scenario)
+            probe,
+            state=scenario.demo.initial_world(),
+            events=verification_events(scenario),
+            budget=verify_budget,
         )
         prepared.verify_time = time.perf_counter() - t0
     return prepared
@@ -86,6 +93,7 @@ def simulate(
     record: str | Path | None = None,
     max_sim_time: float | None = None,
     verify: bool = True,
+    verify_budget: int | None = None,
     meshcat: Any = None,
     realtime_rate: float = 0.0,
 ) -> SimResult:
@@ -103,7 +111,7 @@ def simulate(
     from tamp.sim.smp.runner import SimRunner
     from tamp.sim.smp.station import build_station
 
-    prepared = prepare(scenario, verify=verify)
+    prepared = prepare(scenario, verify=verify, verify_budget=verify_budget)
     run_scenario, applied = perturb(scenario, seed)
     if record is not None and meshcat is None:
         meshcat = new_meshcat()
@@ -155,6 +163,14 @@ class SmpMroWorkcell:
             "scripted skill failure: the first TIMES attempts fail, e.g. Pick(O1) or Pick(O1)x2",
             action="append",
             metavar="ACTION[(ARGS)][xTIMES]",
+        ),
+        Option(
+            "verify_budget",
+            "states the tree gate may explore before its verdict is unknown (exit 1) "
+            "(default 200000)",
+            stage="run",
+            type=int,
+            metavar="N",
         ),
         Option("meshcat", "live view in a local Meshcat", stage="run", action="store_true"),
         Option(
@@ -219,11 +235,14 @@ class SmpMroWorkcell:
         verify: bool = True,
         meshcat: bool = False,
         rate: float | None = None,
+        verify_budget: int | None = None,
     ) -> SimResult:
         """`simulate`; ``meshcat``: a live local Meshcat (its URL logged), ``rate``: the
         real-time rate (>= 0; default 1.0 with ``meshcat``, else as fast as possible)."""
         if rate is not None and not (math.isfinite(rate) and rate >= 0):
             raise InputError(f"must be >= 0 (0: as fast as possible), got {rate}", field="--rate")
+        if verify_budget is not None and verify_budget < 1:
+            raise InputError(f"must be >= 1, got {verify_budget}", field="--verify-budget")
         viewer = None
         if meshcat:
             from tamp.sim.core.recording import new_meshcat
@@ -236,6 +255,7 @@ class SmpMroWorkcell:
             record=record,
             max_sim_time=max_sim_time,
             verify=verify,
+            verify_budget=verify_budget,
             meshcat=viewer,
             realtime_rate=rate if rate is not None else (1.0 if meshcat else 0.0),
         )

@@ -70,6 +70,20 @@ def test_cli_refuses_bad_interference_and_mismatched_scenes_with_exit_2(capsys):
     assert "--max-sim-time" in refused("--task", "tower", "--max-sim-time", "-1")
 
 
+def test_a_person_adding_more_than_the_shelf_holds_is_refused_naming_the_count(capsys, tmp_path):
+    """Counts stay counts symbolically; in Drake each object the person adds is a free body
+    on the staging shelf, so a script adding ten million is bad input (exit 2), not a hang."""
+    from tamp.commands.main import main
+
+    ev = tmp_path / "pour.yaml"
+    ev.write_text(
+        "version: 1\nevents:\n  - {after: 1, kind: add, class: body, side: A, count: 10000000}\n"
+    )
+    assert main(["simulate", "lots", "--task", "tower", "--interference", str(ev)]) == 2
+    err = capsys.readouterr().err
+    assert "pour.yaml: events[0].count" in err and "holds 10 objects" in err
+
+
 @pytest.mark.slow
 def test_tower_in_drake_through_the_cli(tmp_path):
     r = cli("--task", "tower", "--json", "--max-sim-time", "300", timeout=3000)
