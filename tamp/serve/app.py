@@ -407,7 +407,15 @@ class TampApp:
             self.server.publish_threadsafe(
                 "/tf", {"transforms": [_transform("mr", "base_link", p, yaw)]}
             )
-        self.server.publish_threadsafe("/tamp/execution", _text({"run": run, **doc}))
+        frame = self.session.mr_frame()
+        final_mr = {
+            uid: robot_to_mr(frame, tuple(pos))
+            for uid, pos in (final.get("objects") or {}).items()
+            if isinstance(pos, list | tuple) and len(pos) == 3
+        }
+        self.server.publish_threadsafe(
+            "/tamp/execution", _text({"run": run, **doc, "final_mr": final_mr})
+        )
 
     def _cancel(self, _client: Client | None, _args: dict[str, Any]) -> dict[str, Any]:
         with self.lock:

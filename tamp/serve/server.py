@@ -17,11 +17,12 @@ the ``/rosapi`` introspection calls), robust by default:
   a client that never reads delays nobody else;
 - each service call is its own task with a timeout, handlers that compute (planning,
   simulation) run in worker threads (`RosbridgeServer.service(..., blocking=True)`);
-- the HTTP side checks an optional token (``?token=``: browsers cannot set headers on a
-  WebSocket), the Origin header against an allowlist (no Origin, as sent by ROS#, roslibpy
-  and other non-browser clients, is accepted; a browser page is accepted from this server's
-  own address and the listed origins), the client count (503), and serves the demonstration
-  page's static files.
+- the WebSocket handshake checks an optional token (``?token=``: browsers cannot set
+  headers on a WebSocket; the page's static files need none), the Origin header against an
+  allowlist (no Origin, as sent by ROS#, roslibpy and other non-browser clients, is
+  accepted; a browser page is accepted from this server's own address and the listed
+  origins) and the client count (503); plain HTTP requests get the demonstration page's
+  static files.
 """
 
 from __future__ import annotations
@@ -546,6 +547,9 @@ class RosbridgeServer:
         """Token, Origin, client count; plain HTTP GETs get the page's static files."""
         url = urlsplit(request.path)
         headers = request.headers
+        upgrade = headers.get("Upgrade", "").lower() == "websocket"
+        if not upgrade:  # the page's own files: public, no data, no token needed
+            return self._static(connection, url.path)
         if self.token is not None:
             given = parse_qs(url.query).get("token", [None])[0]
             auth = headers.get("Authorization", "")
@@ -556,8 +560,6 @@ class RosbridgeServer:
         if origin is not None and not self._origin_ok(origin, headers.get("Host", "")):
             self.counters["refused_origin"] += 1
             return connection.respond(403, f"origin {origin[:80]} is not allowed\n")
-        if headers.get("Upgrade", "").lower() != "websocket":
-            return self._static(connection, url.path)
         if len(self.clients) >= self.limits.max_clients:
             self.counters["refused_full"] += 1
             return connection.respond(503, f"at most {self.limits.max_clients} clients\n")

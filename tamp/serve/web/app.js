@@ -53,11 +53,11 @@
   const scene = new THREE.Scene();
   const camera = new THREE.PerspectiveCamera(45, 1, 0.05, 100);
   camera.up.set(0, 0, 1);
-  scene.add(new THREE.AmbientLight(0x666666));
+  scene.add(new THREE.AmbientLight(0xffffff, 0.5));
   const sun = new THREE.DirectionalLight(0xffffff, 0.8);
   sun.position.set(2, -3, 6);
   scene.add(sun);
-  const grid = new THREE.GridHelper(4, 0.5);
+  const grid = new THREE.GridHelper(8, 16);
   grid.rotation.x = Math.PI / 2;
   scene.add(grid);
   const floor = new THREE.Plane(new THREE.Vector3(0, 0, 1), 0);
@@ -115,7 +115,7 @@
     const cx = (Math.min(...xs) + Math.max(...xs)) / 2, cy = (Math.min(...ys) + Math.max(...ys)) / 2;
     const span = Math.max(Math.max(...xs) - Math.min(...xs), Math.max(...ys) - Math.min(...ys), 2);
     grid.position.set(cx, cy, 0);
-    camera.position.set(cx - 0.2 * span, cy - 1.1 * span, 1.3 * span);
+    camera.position.set(cx - 0.3 * span, cy - 1.4 * span, 1.6 * span);
     camera.lookAt(new THREE.Vector3(cx, cy, 0));
   }
 
@@ -151,7 +151,14 @@
   }));
   topic('/tamp/events', 'std_msgs/String', json((e) => {
     state.events.push(e);
-    log('event ' + JSON.stringify(e));
+    log(e.kind + (e.what ? ' ' + e.what : '') + (e.condition ? ' ' + e.condition : '') + (e.why ? ': ' + e.why : '') + (e.tick !== undefined ? '  [tick ' + e.tick + ']' : ''));
+  }));
+  topic('/tamp/execution', 'std_msgs/String', json((x) => {
+    state.execution = { run: x.run, reached: x.reached, executed: x.executed };
+    Object.keys(x.final_mr || {}).forEach((id) => {
+      const m = objects[id], p = x.final_mr[id];
+      if (m) m.position.set(p[0], p[1], 0.1);
+    });
   }));
   topic('/tamp/robot/pose', 'geometry_msgs/PoseStamped', (m) => {
     const p = m.pose.position, q = m.pose.orientation;
@@ -167,35 +174,28 @@
               orientation: { x: 0, y: 0, z: 0, w: 1 } } }));
   }
 
-  // ---- drag: a ray from the pointer onto the floor plane -------------------------------
+  // ---- drag: three.js DragControls; the object follows the pointer's ray onto the floor -
   const raycaster = new THREE.Raycaster();
   let dragging = null;
-  function pointer(ev) {
+  let lastPointer = null;
+  function floorPoint(ev) {
     const r = renderer.domElement.getBoundingClientRect();
     const v = new THREE.Vector2(((ev.clientX - r.left) / r.width) * 2 - 1,
                                 -((ev.clientY - r.top) / r.height) * 2 + 1);
     raycaster.setFromCamera(v, camera);
-  }
-  function onFloor() {
-    return raycaster.ray.intersectPlane(floor);
+    return raycaster.ray.intersectPlane(floor, new THREE.Vector3());
   }
   if (renderer) {
-    const el = renderer.domElement;
-    el.addEventListener('mousedown', (ev) => {
-      pointer(ev);
-      const hit = raycaster.intersectObjects(groups.objects.children)[0];
-      if (hit) { dragging = hit.object; ev.preventDefault(); }
+    renderer.domElement.addEventListener('pointermove', (ev) => { lastPointer = ev; });
+    const controls = new THREE.DragControls(groups.objects.children, camera, renderer.domElement);
+    controls.addEventListener('dragstart', (e) => { dragging = e.object; });
+    controls.addEventListener('drag', (e) => {
+      const p = lastPointer && floorPoint(lastPointer);
+      if (p) e.object.position.set(p.x, p.y, 0.1); else e.object.position.z = 0.1;
     });
-    el.addEventListener('mousemove', (ev) => {
-      if (!dragging) return;
-      pointer(ev);
-      const p = onFloor();
-      if (p) dragging.position.set(p.x, p.y, 0.1);
-    });
-    el.addEventListener('mouseup', () => {
-      if (!dragging) return;
-      const m = dragging;
+    controls.addEventListener('dragend', (e) => {
       dragging = null;
+      const m = e.object;
       const p = [Math.round(m.position.x * 1000) / 1000, Math.round(m.position.y * 1000) / 1000, 0];
       sendStep(m.userData.id, p);
     });
