@@ -10,7 +10,7 @@ services (request → answer; std_srvs/Trigger answers ``success``, ``message``)
   ``/tamp/demo/begin`` (tamp_msgs/BeginDemo), ``/tamp/demo/open`` (tamp_msgs/OpenDemo: a
   packaged demonstration's scene, without its steps), ``/tamp/demo/undo``, ``/reset``,
   ``/export`` (the ``version: 1`` YAML in ``message``), ``/tamp/plan`` (tamp_msgs/Plan),
-  ``/tamp/execute``, ``/tamp/cancel``;
+  ``/tamp/execute``, ``/tamp/cancel``, ``/tamp/server/stats`` (the server's counters);
 topics in
   ``/tamp/demo/step`` (tamp_msgs/DemoStep: one per released grab);
 topics out (std_msgs/String holding JSON unless named; latched ones are re-sent to every
@@ -130,6 +130,7 @@ class TampApp:
         )
         s.service("/tamp/execute", TRIGGER, self._execute)
         s.service("/tamp/cancel", TRIGGER, self._cancel)
+        s.service("/tamp/server/stats", TRIGGER, self._stats)
         self._set_phase("idle")
 
     # ---- state ----------------------------------------------------------------------------
@@ -416,6 +417,11 @@ class TampApp:
         self.server.publish_threadsafe(
             "/tamp/execution", _text({"run": run, **doc, "final_mr": final_mr})
         )
+
+    def _stats(self, _client: Client | None, _args: dict[str, Any]) -> dict[str, Any]:
+        """The server's counters (messages in and out, drops, refusals) as JSON."""
+        doc = {**self.server.counters, "clients": len(self.server.clients)}
+        return {"success": True, "message": json.dumps(doc, sort_keys=True)}
 
     def _cancel(self, _client: Client | None, _args: dict[str, Any]) -> dict[str, Any]:
         with self.lock:

@@ -257,7 +257,10 @@ class RosbridgeServer:
 
     def _put(self, client: Client, text: str, slot: str | None) -> None:
         before = client.outbox.stats.dropped
+        replaced = client.outbox.stats.replaced
         client.outbox.put(text, slot)
+        if client.outbox.stats.replaced > replaced:
+            self.counters["coalesced"] += 1  # a newer message of a latest-wins slot
         if client.outbox.stats.dropped > before:
             self.counters["dropped"] += client.outbox.stats.dropped - before
             if not client.warned_drop:
