@@ -38,7 +38,7 @@ RANK = {
     "tamp.sim.refine": 5.5,
     "tamp.sim": 5.5,  # the package's own __init__
     "tamp.campaign": 6,
-    "tamp.serve": 6.5,  # the live link: planning, execution and a workcell, given to it
+    "tamp.serve": 6,  # the live link: planning, execution and a workcell, given to it
     "tamp.commands": 7,
     "tamp": 0,  # the package's own __init__
 }

@@ -129,8 +129,9 @@ def execute_sim(
             "workspace": DEFAULT_WORKSPACE,
         }
         extra = sorted({a.obj for a in demo.appear} - set(demo.objects))
-        if extra:
+        if extra:  # the cell stages appearances from its own list (robot frame)
             scenario["objects"] = [{"id": o, "model": "obstacle"} for o in extra]
+            scenario["appear"] = [str(a) for a in demo.appear if a.obj in extra]
         Path(tmp, "scenario.yaml").write_text(yaml.safe_dump(scenario, sort_keys=False))
         run = WORKCELL.run(WORKCELL.load(str(Path(tmp, "scenario.yaml"))))
     doc = run.to_json()
