@@ -5,13 +5,18 @@ via their own buffer area (2n goals); action cost = travel distance. Both planne
 same metric: distances rounded *up* to whole millimetres (integers, as Fast Downward needs;
 rounding up keeps the triangle inequality). Fast Downward gets the same task as PDDL:
 objects may only go to their buffer, then (once buffered) to their target; a place holds
-one object; the robot drives between places (cost = distance), picks and places.
+one object; the robot drives between places (cost = distance), picks and places. Once it
+runs past its limit, it is not run on the larger sizes.
 
-    python benchmarks/rg_vs_planner.py                 # n = 3 5 8 10 12 16, FD limit 300 s
+    python benchmarks/rg_vs_planner.py                 # n = 3 ... 24, FD limit 300 s
     python benchmarks/rg_vs_planner.py --sizes 3 5 8 --fd-timeout 120
-    python benchmarks/rg_vs_planner.py --no-fd --layout ring
+    python benchmarks/rg_vs_planner.py --no-fd --layout ring --sizes 8 12 16
+    python benchmarks/rg_vs_planner.py --baseline /tmp/old   # beside an older tamp checkout
 
-Prints a table and one JSON line (``{"benchmark": "rg_vs_planner", "rows": [...]}``).
+``--baseline DIR``: also time the search of the ``tamp`` package found in DIR (e.g. made by
+``git archive REV tamp | tar -x -C DIR``), each size in a fresh process, in the same run.
+Prints a table and one JSON line (``{"benchmark": "rg_vs_planner", "rows": [...]}``);
+``--out FILE`` also writes the JSON there. Times: ``time_s`` wall, ``cpu_s`` process CPU.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ import argparse
 import json
 import math
 import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -37,12 +43,20 @@ def mm(a: Point, b: Point) -> float:
 
 def ours(n: int, layout: str) -> dict:
     demo = cyclic_swap(n, layout=layout)
-    t0 = time.perf_counter()
+    c0, t0 = time.process_time(), time.perf_counter()
     problem = OrderProblem(demo, CostModel("distance", 1.0, 0.0, mm))
     result = astar(problem)
-    dt = time.perf_counter() - t0
+    dt, cpu = time.perf_counter() - t0, time.process_time() - c0
     assert result is not None
-    return {"cost": result.cost, "time_s": dt, "expanded": result.expanded}
+    return {"cost": result.cost, "time_s": dt, "cpu_s": cpu, "expanded": result.expanded}
+
+
+def baseline(n: int, layout: str, src: str) -> dict:
+    """`ours` with the ``tamp`` package of ``src``, in a fresh process (warm-up included)."""
+    env = {**os.environ, "PYTHONPATH": os.path.abspath(src)}
+    argv = [sys.executable, __file__, "--sizes", str(n), "--layout", layout, "--no-fd"]
+    out = subprocess.run([*argv, "--quiet"], env=env, capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.splitlines()[-1])["rows"][0]["ours"]
 
 
 def fast_downward(n: int, layout: str, timeout: float) -> dict:
@@ -158,27 +172,43 @@ def fast_downward(n: int, layout: str, timeout: float) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[3, 5, 8, 10, 12, 16])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[3, 5, 8, 10, 12, 16, 20, 24])
     ap.add_argument("--fd-timeout", type=float, default=300.0)
     ap.add_argument("--no-fd", action="store_true", help="skip the Fast Downward peer")
     ap.add_argument("--layout", default="shelf", choices=("shelf", "staging", "ring"))
+    ap.add_argument("--baseline", metavar="DIR", help="also time the tamp package in DIR")
+    ap.add_argument("--out", metavar="FILE", help="also write the JSON document to FILE")
+    ap.add_argument("--quiet", action="store_true", help="print the JSON line only")
     args = ap.parse_args(argv)
+
+    def say(text: str) -> None:
+        if not args.quiet:
+            print(text, flush=True)
 
     ours(3, args.layout)  # warm-up: imports and first-call costs stay out of the table
     rows = []
     header = (
-        f"{'n':>3} {'goals':>5} {'ours cost':>11} {'ours s':>8} {'FD cost':>11} "
-        f"{'FD s':>9} {'speed-up':>9}"
+        f"{'n':>3} {'goals':>5} {'ours cost':>11} {'ours cpu s':>10}"
+        + (f" {'base cpu s':>10}" if args.baseline else "")
+        + f" {'FD cost':>11} {'FD s':>9} {'speed-up':>9}"
     )
-    print(f"layout={args.layout}; costs in mm (rounded up)")
-    print(header)
-    print("-" * len(header))
+    say(f"layout={args.layout}; costs in mm (rounded up); cpu s = process CPU seconds")
+    say(header)
+    say("-" * len(header))
+    fd_over = None  # the size at which Fast Downward first ran past its limit
     for n in args.sizes:
         row = {"n": n, "goals": 2 * n, "layout": args.layout, "ours": ours(n, args.layout)}
+        if args.baseline:
+            row["baseline"] = baseline(n, args.layout, args.baseline)
+            row["same_cost_as_baseline"] = abs(row["baseline"]["cost"] - row["ours"]["cost"]) < 0.5
         fd = None
-        if not args.no_fd:
+        if not args.no_fd and fd_over is None:
             fd = fast_downward(n, args.layout, args.fd_timeout)
             row["fd"] = fd
+            if fd["cost"] is None:
+                fd_over = n
+        elif not args.no_fd:
+            row["fd"] = {"cost": None, "status": f"not run: past its limit at n = {fd_over}"}
         o = row["ours"]
         fd_cost = f"{fd['cost']:.0f}" if fd and fd["cost"] is not None else "-"
         fd_time = (
@@ -187,14 +217,24 @@ def main(argv: list[str] | None = None) -> int:
         speed = f"{fd['time_s'] / o['time_s']:.0f}x" if fd and fd["cost"] is not None else "-"
         if fd and fd["cost"] is not None:
             row["same_cost"] = abs(fd["cost"] - o["cost"]) < 0.5
-        print(
-            f"{n:>3} {2 * n:>5} {o['cost']:>11.0f} {o['time_s']:>8.3f} {fd_cost:>11} "
-            f"{fd_time:>9} {speed:>9}",
-            flush=True,
+        base = f" {row['baseline']['cpu_s']:>10.3f}" if args.baseline else ""
+        say(
+            f"{n:>3} {2 * n:>5} {o['cost']:>11.0f} {o['cpu_s']:>10.3f}{base} {fd_cost:>11} "
+            f"{fd_time:>9} {speed:>9}"
         )
         rows.append(row)
-    print(json.dumps({"benchmark": "rg_vs_planner", "rows": rows}))
-    return 0 if all(r.get("same_cost", True) for r in rows) else 1
+    doc = {
+        "benchmark": "rg_vs_planner",
+        "machine": {"cpus": os.cpu_count(), "load_1min": os.getloadavg()[0]},
+        "rows": rows,
+    }
+    print(json.dumps(doc))
+    if args.out:
+        with open(args.out, "w") as fh:
+            json.dump(doc, fh, indent=1)
+            fh.write("\n")
+    ok = all(r.get("same_cost", True) and r.get("same_cost_as_baseline", True) for r in rows)
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":

@@ -9,19 +9,23 @@ heuristic (re-opening states when a cheaper path appears) returns an optimal ord
 ``carry(g)`` is fixed by the per-object goal chain. ``E`` bounds the remaining empty drives
 from below. Every remaining goal g is approached from exactly one point: the robot's
 position or the drop point of another remaining goal that may precede it (not one of its
-successors in C). Two bounds are available:
+successors in C). The robot's first drive goes to an *enabled* goal (all its predecessors
+achieved), and the goal reached last — the one drop point that approaches nothing — has
+no successors in C. Two bounds are available:
 
 * ``"min"`` — each goal's cheapest such approach, independently;
 * ``"assignment"`` — the assignment-problem relaxation: the approach points must be
-  distinct (the relaxation that lower-bounds asymmetric TSP tours). It is never weaker
-  and prunes far more on hard layouts, at a higher cost per evaluation.
+  distinct (the relaxation that lower-bounds asymmetric TSP tours; a dummy column takes
+  the last goal's row, only for goals without successors). It is never weaker and prunes
+  far more on hard layouts, at a higher cost per evaluation. Sending the robot to enabled
+  goals only expands about 40 % fewer states on the cyclic swaps than the bare relaxation.
 
 The true remaining route is one such assignment, so both never overestimate. Above
 `BOUND_LIMIT` remaining goals neither is computed and ``E = 0`` (still admissible; the
 search stays exact, it only prunes less).
 
-What keeps the search cheap (no geometry is stored per pair of goals; memory is O(goals)
-plus the states visited):
+What keeps the search cheap (no geometry is stored per pair of goals above `DENSE_LIMIT`;
+below it one (goals+1)² table makes a state's assignment matrix a single gather):
 
 * **Lazy bounds.** A child is queued with ``h(parent) − step`` (admissible, since h(parent)
   is) and its own bound is computed only when it is popped; if that raises f, it is queued
@@ -31,14 +35,17 @@ plus the states visited):
 * **The relaxation's own choice.** When the assignment sends the robot to goal g* next,
   the rest of that assignment is an optimal assignment of the child (S ∪ {g*}, g*) — its
   rows are the parent's minus the robot's, its columns minus g*, and the child's robot row
-  is g*'s drop row — so the child's bound is ``h − step(r, g*)`` exactly and its own
-  assignment is known: following the relaxation's chain costs no solve at all.
+  is g*'s drop row — so, when g*'s row goes to a goal enabled in the child, the child's
+  bound is ``h − step(r, g*)`` exactly and its own assignment is known: following the
+  relaxation's chain costs no solve at all.
 * **Partial expansion.** A state with a known choice queues only that child (same f) and
   one deferred entry at its own f for the others (each of their f is at least that); on
   equal f, exact bounds pop before lazy ones. The deferred entry is expanded only if the
-  chain stops paying (a subtour of the relaxation must be broken): then the siblings are
-  queued with the lazy bound, and the first one popped against a competitor solves the
-  parent once with every child's exact bound (one Bellman-Ford pass, `_forced_robot_row`).
+  chain stops paying (a subtour of the relaxation must be broken): then, with a competitor
+  queued, the state is solved once for a lower bound of every child (one Bellman-Ford pass,
+  `_forced_robot_row`: the child's matrix without the rule that its robot row goes to an
+  enabled goal) and the siblings are queued with it; a child popped against a competitor
+  solves its own assignment, and is queued again if that raises its f.
   f is compared to 1e-6 (`_key`): the same costs summed in another order must tie, or
   float drift sends the search through every state of a plateau of equal f (the cliff of
   wide tasks: 1,000 independent goals in a row took 9 minutes, now 2 s).
@@ -46,6 +53,11 @@ plus the states visited):
   g_b is no better than (S, a) reached at g_a when ``g_a + per_metre·d(a, b) ≤ g_b``: any
   completion from b can be driven from a through b's position for at most that much more.
   Such states are not queued.
+* **Symmetry.** States that an automorphism of the task (a permutation of the goals that
+  keeps every cost and constraint, `tamp.rg.symmetry`) maps onto each other have the same
+  cost from the start and to the goal; each is replaced by one representative of its class
+  (the least permuted goal mask) and the order is mapped back at the end. A ring of n
+  objects around the robot expands about n times fewer states.
 
 Ties on f (to 1e-6) go to exact bounds, then to deeper states.
 """
@@ -54,7 +66,9 @@ from __future__ import annotations
 
 import heapq
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -62,6 +76,7 @@ from scipy.optimize import linear_sum_assignment
 from tamp.demo.model import Demonstration
 from tamp.rg.costs import CostModel, planar
 from tamp.rg.graph import GoalIndex
+from tamp.rg.symmetry import Symmetry, find_symmetry
 
 INF = float("inf")
 _BIG = 1e12  # a forbidden approach; never chosen, because a finite assignment exists
@@ -88,7 +103,8 @@ class SearchResult:
 
 @dataclass(frozen=True)
 class Bound:
-    """A state's bound ``h``, and ``child[i]``: the bound of the child achieving ``goals[i]``."""
+    """A state's bound ``h``, and ``child[i]``: a lower bound of the bound of the child
+    achieving ``goals[i]`` (its matrix without the enabled-goal rule on the robot's row)."""
 
     h: float
     goals: np.ndarray | None = None
@@ -97,26 +113,33 @@ class Bound:
     #: the goal it approaches; rows absent are unassigned (None: not an assignment bound)
     assign: dict[int, int] | None = None
 
-    def restricted(self, g: int, step: float) -> Bound | None:
+    def restricted(self, g: int, step: float, enabled: Callable[[int], bool]) -> Bound | None:
         """The bound of the child achieving ``g`` when ``g`` is the relaxation's own choice.
 
         The rest of an optimal assignment is an optimal assignment of the child (its matrix
         is the parent's without the robot's row and g's column; g's drop row becomes the
-        robot's), so the child's bound is ``h − step`` and its assignment is known: no solve.
+        robot's, restricted to the goals ``enabled`` in the child), so when g's row goes to
+        such a goal the child's bound is ``h − step`` and its assignment is known: no solve.
         """
         if self.assign is None or self.assign.get(-1) != g:
             return None
         child = dict(self.assign)
         del child[-1]
-        if g in child:
-            child[-1] = child.pop(g)
+        nxt = child.pop(g, None)
+        if nxt is None:  # g was the relaxation's last goal: only right if it is the last
+            return Bound(self.h - step, assign=child) if not child else None
+        if not enabled(nxt):  # the child's robot must drive to a goal enabled in the child
+            return None
+        child[-1] = nxt
         return Bound(self.h - step, assign=child)
 
-    def of_child(self, g: int) -> float | None:
-        """The (exact) bound of the child that achieves goal ``g``; None when unknown."""
-        if self.goals is None or self.child is None:
-            return None
-        return float(self.child[np.searchsorted(self.goals, g)])
+    def mapped(self, perm: tuple[int, ...]) -> Bound:
+        """The same bound in the frame of an automorphism ``perm`` (`tamp.rg.symmetry`)."""
+        if self.assign is None:
+            return Bound(self.h)
+        return Bound(
+            self.h, assign={(r if r < 0 else perm[r]): perm[c] for r, c in self.assign.items()}
+        )
 
 
 def _bit_positions(mask: int, nbytes: int, k: int) -> np.ndarray:
@@ -127,41 +150,40 @@ def _bit_positions(mask: int, nbytes: int, k: int) -> np.ndarray:
     return np.flatnonzero(bits[:k])
 
 
-def _forced_robot_row(cost: np.ndarray, rows: np.ndarray, cols: np.ndarray, opt: float):
+def _forced_robot_row(square: np.ndarray, rows: np.ndarray, cols: np.ndarray, opt: float):
     """Optimal assignment value once the robot's row (row 0) is forced onto each column.
 
-    ``rows → cols`` is an optimal assignment of the (n+1)×n matrix ``cost`` (squared with a
-    zero-cost dummy column that takes the unassigned row). Forcing row 0 onto column g
-    frees its column σ(0) and displaces g's row ρ(g), which takes another column, whose row
-    moves on, until some row takes σ(0): the cheapest such alternating path is a shortest
-    path from g to σ(0) over arcs j → j' of weight c(ρ(j), j') − c(ρ(j), j), without
-    negative cycles because the assignment is optimal (Bellman-Ford, vectorised). Returns,
-    per real column g, the optimum without row 0 and column g:
-    ``opt − c(0, σ(0)) + dist(g → σ(0))`` — exactly the child's assignment value, since
-    the child's matrix is the parent's without the robot's row and g's column.
+    ``rows → cols`` is an optimal assignment of the square matrix ``square`` (its last
+    column: the dummy that takes the unassigned row). Forcing row 0 onto column g frees its
+    column σ(0) and displaces g's row ρ(g), which takes another column, whose row moves on,
+    until some row takes σ(0): the cheapest such alternating path is a shortest path from g
+    to σ(0) over arcs j → j' of weight c(ρ(j), j') − c(ρ(j), j), without negative cycles
+    because the assignment is optimal (Bellman-Ford, vectorised). Returns, per real column
+    g, the optimum without row 0 and column g: ``opt − c(0, σ(0)) + dist(g → σ(0))``.
     """
-    m, n = cost.shape
-    square = np.hstack((cost, np.zeros((m, 1))))
-    sigma = np.full(m, n, dtype=np.intp)
+    m = square.shape[0]
+    sigma = np.empty(m, dtype=np.intp)
     sigma[rows] = cols
     rho = np.empty(m, dtype=np.intp)
     rho[sigma] = np.arange(m)
-    by_col = square[rho]  # row j: the costs of the row now holding column j
     # wt[j', j]: weight of the arc j -> j' (transposed so a round gathers rows)
-    wt = np.ascontiguousarray((by_col - by_col[np.arange(m), np.arange(m)][:, None]).T)
+    held = np.empty(m)  # c(ρ(j), j): what column j costs now
+    held[cols] = square[rows, cols]
+    wt = square[rho].T - held
     target = sigma[0]
     dist = np.full(m, np.inf)
     dist[target] = 0.0
     changed = np.array([target])
     for _ in range(m):  # a round relaxes only through the columns the last one improved
-        cand = (wt[changed] + dist[changed][:, None]).min(axis=0)
-        better = cand < dist - 1e-12
-        better[target] = False
-        if not better.any():
+        if not changed.size:
             break
-        dist = np.where(better, cand, dist)
-        changed = np.flatnonzero(better)
-    return opt - square[0, target] + dist[:n]
+        sub = wt[changed]
+        sub += dist[changed][:, None]
+        cand = sub.min(axis=0)
+        cand[target] = 0.0
+        changed = (cand < dist - 1e-12).nonzero()[0]
+        dist[changed] = cand[changed]
+    return opt - square[0, target] + dist[: m - 1]
 
 
 class OrderProblem:
@@ -191,6 +213,16 @@ class OrderProblem:
         self._here_xy = np.array([(p.x, p.y) for p in self._here], dtype=float).reshape(k + 1, 2)
         self._dense: np.ndarray | None = None  # (k+1)×k approach costs (≤ DENSE_LIMIT)
         self._blocked: np.ndarray | None = None  # k×k successor relation (≤ DENSE_LIMIT)
+        # `_dense` with forbidden approaches `_BIG`, and the dummy column (≤ DENSE_LIMIT)
+        self._square: np.ndarray | None = None
+        self._step_rows: dict[int, list[float]] = {}
+        self._drive_rows: dict[int, list[float]] = {}
+        self._remaining: dict[int, np.ndarray] = {}
+        self._symmetry: Symmetry | None | bool = False  # False: not looked for yet
+        # per goal: the bit mask of its direct predecessors (enabled once they are achieved)
+        self._pred_masks = [sum(1 << p for p in ps) for ps in self.index.preds]
+        # the dummy column's cost per goal: only a goal without successors can be the last
+        self._dummy = np.array([_BIG if s else 0.0 for s in self.index.succs])
         self._prepared = False
         self._closure: dict[int, int] = {}  # goal -> bitmask of its transitive successors
         self._nbytes = (k + 7) // 8
@@ -210,10 +242,18 @@ class OrderProblem:
 
     # -- the bound ---------------------------------------------------------------------------
     def remaining(self, mask: int) -> np.ndarray:
-        """Indices of the goals not achieved in ``mask``, ascending."""
-        if self.k == 0:
-            return np.empty(0, dtype=np.intp)
-        return _bit_positions(~mask & ((1 << self.k) - 1), self._nbytes, self.k)
+        """Indices of the goals not achieved in ``mask``, ascending (the last few kept: a
+        state is bounded twice, its own assignment and then its children's)."""
+        idx = self._remaining.get(mask)
+        if idx is None:
+            if len(self._remaining) > 256:
+                self._remaining.clear()
+            if self.k == 0:
+                idx = np.empty(0, dtype=np.intp)
+            else:
+                idx = _bit_positions(~mask & ((1 << self.k) - 1), self._nbytes, self.k)
+            self._remaining[mask] = idx
+        return idx
 
     def _approach(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """Empty-drive metres from the drops ``rows`` (k: the start) to the picks ``cols``."""
@@ -250,7 +290,9 @@ class OrderProblem:
         return self._closure[g]
 
     def _prepare(self) -> None:
-        """Up to `DENSE_LIMIT` goals, tabulate approach costs and the successor relation once."""
+        """Up to `DENSE_LIMIT` goals, tabulate approach costs and the successor relation once,
+        and the approach costs with the forbidden pairs already `_BIG` (`_square`): a state's
+        assignment matrix is then one gather."""
         if self._prepared:
             return
         self._prepared = True
@@ -264,6 +306,56 @@ class OrderProblem:
             if after:
                 blocked[_bit_positions(after, self._nbytes, self.k), b] = True
         self._dense, self._blocked = dense, blocked
+        square = np.empty((self.k + 1, self.k + 1))  # column k: the dummy (see `bound`)
+        square[:, : self.k] = dense
+        sub = square[: self.k, : self.k]
+        sub[blocked] = _BIG
+        np.fill_diagonal(sub, _BIG)
+        square[: self.k, self.k] = self._dummy
+        square[self.k, self.k] = _BIG
+        self._square = square
+
+    def step_row(self, last: int) -> list[float] | None:
+        """`step_cost` (last, g) for every goal g, tabulated once per ``last`` (None above
+        `DENSE_LIMIT`: then each step is computed on its own)."""
+        row = self._step_rows.get(last)
+        if row is None:
+            self._prepare()
+            if self._dense is None:
+                return None
+            costs = self.per_metre * (self._dense[last] + self.carry) + self.per_goal
+            row = self._step_rows[last] = costs.tolist()
+        return row
+
+    def drive_row(self, a: int) -> list[float]:
+        """`drive` (a, b) for every goal b (and the start, at −1), tabulated once per ``a``."""
+        row = self._drive_rows.get(a)
+        if row is None:
+            if self._planar:
+                d = self._here_xy - self._here_xy[a]
+                row = (self.per_metre * np.hypot(d[:, 0], d[:, 1])).tolist()
+            else:
+                m, here = self.model.metric, self._here[a]
+                row = [self.per_metre * m(here, p) for p in self._here]
+            self._drive_rows[a] = row
+        return row
+
+    def symmetry(self) -> Symmetry | None:
+        """The task's automorphisms (`tamp.rg.symmetry`), found once; None when none."""
+        if self._symmetry is False:
+            self._prepare()
+            found = None
+            if self._dense is not None:
+                found = find_symmetry(
+                    np.array([p.as_tuple() for p in self.pick], dtype=float).reshape(self.k, 3),
+                    np.array([p.as_tuple() for p in self.drop], dtype=float).reshape(self.k, 3),
+                    np.array(self.start.as_tuple(), dtype=float),
+                    self._dense,
+                    self.carry,
+                    {(a, b) for b, ps in enumerate(self.index.preds) for a in ps},
+                )
+            self._symmetry = found
+        return self._symmetry
 
     def _predecessor_costs(self, idx: np.ndarray) -> np.ndarray:
         """Approach costs among the remaining goals ``idx``; forbidden pairs are `_BIG`.
@@ -291,7 +383,7 @@ class OrderProblem:
         self, mask: int, last: int, children: bool = True, assign: dict[int, int] | None = None
     ) -> Bound:
         """The admissible bound of state (mask, last), with its optimal assignment and (when
-        ``children``) the exact bounds of all its children (`_forced_robot_row`).
+        ``children``) a lower bound of each child's bound (`_forced_robot_row`).
 
         ``assign``: the state's optimal assignment when already known (`Bound.restricted`):
         only the children's bounds are computed then, no assignment is solved.
@@ -304,29 +396,49 @@ class OrderProblem:
         if n > BOUND_LIMIT:
             return Bound(self.per_metre * carry + self.per_goal * n)
         self._prepare()
-        row = self._approach(np.array([self.k if last < 0 else last]), idx)[0]
+        here = self.k if last < 0 else last
+        # the robot drives to an enabled goal first, and the goal left unassigned (the last
+        # one) has no successors: the dummy column n takes only such rows, never the robot's
+        if self._square is not None:  # one gather: the robot's row, then the remaining drops
+            at = np.empty(n + 1, dtype=np.intp)
+            at[0] = here
+            at[1:] = idx
+            cols = np.empty(n + 1, dtype=np.intp)
+            cols[:n] = idx
+            cols[n] = self.k  # the dummy column
+            cost = self._square[at[:, None], cols]
+        else:
+            cost = np.empty((n + 1, n + 1))
+            cost[0, :n] = self._approach(np.array([here]), idx)[0]
+            cost[1:, :n] = self._predecessor_costs(idx)
+            cost[0, n] = _BIG
+            cost[1:, n] = self._dummy[idx]
+        rem = ~mask & self.index.full
+        pm = self._pred_masks
+        cost[0, :n][[pm[b] & rem != 0 for b in idx.tolist()]] = _BIG
         if n == 1:
-            return Bound(self.per_metre * (carry + float(row[0])) + self.per_goal)
+            return Bound(self.per_metre * (carry + float(cost[0, 0])) + self.per_goal)
         self.bounds_solved += 1
-        sub = self._predecessor_costs(idx)
         if self.bound_kind == "min":
-            empty = float(np.minimum(row, sub.min(axis=0)).sum())
+            empty = float(cost[:, :n].min(axis=0).sum())
             return Bound(self.per_metre * (carry + empty) + self.per_goal * n)
-        cost = np.vstack((row, sub))
         if assign is not None and len(assign) == n:
             rows_of = np.fromiter(assign.keys(), dtype=np.intp, count=n)
             cols_of = np.fromiter(assign.values(), dtype=np.intp, count=n)
-            r = np.where(rows_of < 0, 0, np.searchsorted(idx, rows_of) + 1)
-            c = np.searchsorted(idx, cols_of)
-            order = np.argsort(r)
-            r, c = r[order], c[order]
+            r = np.arange(n + 1)
+            c = np.full(n + 1, n, dtype=np.intp)  # the row absent from the dict: the dummy
+            c[np.where(rows_of < 0, 0, np.searchsorted(idx, rows_of) + 1)] = np.searchsorted(
+                idx, cols_of
+            )
         else:
             r, c = linear_sum_assignment(cost)
+            real = c < n  # the row on the dummy column is unassigned
+            row_goal = np.empty(n + 1, dtype=np.intp)
+            row_goal[0] = -1
+            row_goal[1:] = idx
+            assign = dict(zip(row_goal[r[real]].tolist(), idx[c[real]].tolist(), strict=True))
         empty = float(cost[r, c].sum())
         h = self.per_metre * (carry + empty) + self.per_goal * n
-        goal_of = [-1, *idx.tolist()]
-        cols = idx[c].tolist()
-        assign = {goal_of[i]: j for i, j in zip(r.tolist(), cols, strict=True)}
         if not children:
             return Bound(h, assign=assign)
         child_empty = _forced_robot_row(cost, r, c, empty)
@@ -348,107 +460,178 @@ class OrderProblem:
         return total
 
 
-def astar(problem: OrderProblem) -> SearchResult | None:
+def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
     """Cheapest constraint-respecting order of all goals, or None when none exists.
 
     Bounds are solved only where they can change what is expanded, and children are
     generated only when they can be next (module notes): a state whose optimal assignment
     is known (the relaxation's own choice from its parent) queues that one child with its
     exact bound, and the rest of its children as one deferred entry at the state's own f
-    (a lower bound of each of theirs: partial expansion). The deferred entry, popped, queues
-    the siblings with the lazy bound; the first sibling popped against a competitor solves
-    the parent once with every child's exact bound (`_forced_robot_row`).
+    (a lower bound of each of theirs: partial expansion). The deferred entry, popped against
+    a competitor, solves the state once for a lower bound of every child
+    (`_forced_robot_row`) and queues the siblings with it; a child popped against a
+    competitor solves its own assignment and is queued again when that raises its f.
+
+    ``symmetry``: merge states that an automorphism of the task maps onto each other
+    (`tamp.rg.symmetry`); every state is then kept as its class representative, and the
+    order is mapped back to the real goals at the end.
     """
     index = problem.index
     if not index.acyclic():
         return None
+    sym = problem.symmetry() if symmetry else None
+    perms = sym.perms if sym is not None else None
     full = index.full
     start = (0, -1)
     best_g = {start: 0.0}
     b0 = problem.bound(0, -1, children=False)
-    exact_h: dict[tuple[int, int], float] = {start: b0.h}
+    # a solved bound per state (not a lazy one): its own assignment, or its parent's family
+    solved_h: dict[tuple[int, int], float] = {start: b0.h}
     own: dict[tuple[int, int], Bound] = {start: b0}  # a state's assignment, when known
-    family: dict[tuple[int, int], Bound] = {}  # solved with the exact bounds of all children
-    parent: dict[tuple[int, int], tuple[int, int]] = {}
+    family: dict[tuple[int, int], dict[int, float]] = {}  # a bound of every child, by goal
+    # state -> (parent, goal achieved in the parent's frame, automorphism to the child's)
+    parent: dict[tuple[int, int], tuple[tuple[int, int], int, int]] = {}
     enabled: dict[int, tuple[int, ...]] = {0: index.initial()}
     lasts: dict[int, list[int]] = {0: [-1]}  # states (mask, last) queued, for dominance
+    step_row, drive_row, step_cost = problem.step_row, problem.drive_row, problem.step_cost
+    push, pop = heapq.heappush, heapq.heappop
+
+    def children_of(p: tuple[int, int]) -> dict[int, float]:
+        """A lower bound of every child of ``p``, by goal (one solve per state, kept)."""
+        fam = family.get(p)
+        if fam is None:
+            pb = own.get(p)
+            fb = problem.bound(*p, assign=pb.assign if pb else None)
+            fam = family[p] = (
+                dict(zip(fb.goals.tolist(), fb.child.tolist(), strict=True))
+                if fb.goals is not None and fb.child is not None
+                else {}
+            )
+        return fam
+
     tie = itertools.count()
-    # (f to 1e-9, lazy?, -g, tie, mask, last, queued h, deferred?): on equal f, exact
+    # (f to 1e-6, lazy?, -g, tie, mask, last, queued h, deferred?): on equal f, exact
     # bounds first — a lazy sibling ties with its parent's f and must not be solved first
     heap = [(_key(b0.h), False, 0.0, next(tie), 0, -1, b0.h, False)]
     expanded = generated = 0
     while heap:
-        f, _, neg_g, _, mask, last, lazy, deferred = heapq.heappop(heap)
+        f, _, neg_g, _, mask, last, lazy, deferred = pop(heap)
         g_cost = -neg_g
         state = (mask, last)
         if g_cost > best_g.get(state, INF) + 1e-12:
             continue  # stale entry
-        if not deferred and state not in exact_h and heap:  # lazy bound against a competitor
-            p = parent[state]
-            fam = family.get(p)
-            if fam is None:
-                pb = own.get(p)
-                fam = family[p] = problem.bound(*p, assign=pb.assign if pb else None)
-            exact = fam.of_child(last)
-            hc = exact_h[state] = lazy if exact is None else max(0.0, exact)
-            if _key(g_cost + hc) > f:
-                heapq.heappush(
-                    heap, (_key(g_cost + hc), False, neg_g, next(tie), mask, last, hc, False)
-                )
+        if not deferred and state not in solved_h and heap:  # lazy bound against a competitor
+            p, pg, _ = parent[state]
+            exact = children_of(p).get(pg)
+            hc = solved_h[state] = lazy if exact is None else max(0.0, exact)
+            fc = _key(g_cost + hc)
+            if fc > f:
+                push(heap, (fc, False, neg_g, next(tie), mask, last, hc, False))
                 continue
-        h = exact_h.get(state, lazy)
+        h = solved_h.get(state, lazy)
         if mask == full:
-            order = []
-            while state != start:
-                order.append(index.ids[state[1]])
-                state = parent[state]
-            return SearchResult(order[::-1], g_cost, expanded, generated, problem.bounds_solved)
+            return _result(problem, state, parent, perms, g_cost, expanded, generated)
         b = own.get(state)
         if not deferred:
-            expanded += 1
-            if b is None and heap and state in exact_h:  # its assignment, for its own choice
+            if b is None and heap and state in solved_h:  # its assignment, for its own choice
                 b = own[state] = problem.bound(mask, last, children=False)
+                if b.h > h:  # its parent gave a lower bound only (module notes): re-queue
+                    h = solved_h[state] = b.h
+                    fs = _key(g_cost + h)
+                    if fs > f:
+                        push(heap, (fs, False, neg_g, next(tie), mask, last, h, False))
+                        continue
+            expanded += 1
         here = enabled.get(mask)
         if here is None:  # derived from the parent's set (only last's successors join)
-            prev = parent[state][0]
-            here = enabled[mask] = index.enabled_after(enabled[prev], prev, last)
+            (pmask, _), pg, which = parent[state]
+            here = index.enabled_after(enabled[pmask], pmask, pg)
+            if which:
+                perm = perms[which]
+                here = tuple(sorted(perm[j] for j in here))
+            enabled[mask] = here
         choice = b.assign.get(-1) if b is not None and b.assign is not None else None
         # the relaxation ignores the ordering constraints, so its choice may not be enabled yet
         if not deferred and choice is not None and len(here) > 1 and choice in here:
             here = (choice,)  # partial expansion: the rest waits in one deferred entry
-            heapq.heappush(heap, (f, True, neg_g, next(tie), mask, last, h, True))
+            push(heap, (f, True, neg_g, next(tie), mask, last, h, True))
+        # siblings of the relaxation's choice, with a competitor queued: solve this state once
+        # for a bound of every child now, rather than queue them lazily and re-queue each
+        fam = children_of(state) if heap and deferred else None
+        steps = step_row(last)
+        images = sym.images(mask) if sym is not None else None
         for g in here:
-            child_mask = mask | 1 << g
-            child = (child_mask, g)
-            step = problem.step_cost(last, g)
+            if images is None:
+                child_mask, child_last, which = mask | 1 << g, g, 0
+            else:
+                child_mask, child_last, which = sym.canonical(images, g)
+            child = (child_mask, child_last)
+            step = steps[g] if steps is not None else step_cost(last, g)
             cost = g_cost + step
             if cost + 1e-12 >= best_g.get(child, INF):
                 continue
-            if _dominated(problem, best_g, lasts.get(child_mask, ()), child_mask, g, cost):
+            queued = lasts.get(child_mask)
+            if queued is None:
+                queued = lasts[child_mask] = []
+            elif _dominated(drive_row, best_g, queued, child_mask, child_last, cost):
                 continue
             best_g[child] = cost
-            parent[child] = state
-            queued = lasts.setdefault(child_mask, [])
-            if g not in queued:
-                queued.append(g)
+            parent[child] = (state, g, which)
+            if child_last not in queued:
+                queued.append(child_last)
             generated += 1
-            hc = exact_h.get(child)
+            hc = solved_h.get(child)
             key = None
             if hc is None:
-                cb = b.restricted(g, step) if b is not None else None
+                cb = None
+                if g == choice:
+                    child_real = mask | 1 << g  # the child in this state's frame
+                    cb = b.restricted(g, step, partial(index.ready, child_real))
                 if cb is not None:
-                    hc = exact_h[child] = max(0.0, cb.h)
+                    if which:
+                        cb = cb.mapped(perms[which])
+                    hc = solved_h[child] = max(0.0, cb.h)
                     own[child] = cb
+                elif fam is not None and g in fam:
+                    hc = solved_h[child] = max(0.0, fam[g])
                 else:
                     hc = max(0.0, h - step)
-                if h >= step:  # f(child) = f(state) exactly: keep the key (no float drift)
-                    key = f
+                if h >= step and (cb is not None or child not in solved_h):
+                    key = f  # f(child) = f(state) exactly: keep the key (no float drift)
             if key is None:
                 key = _key(cost + hc)
-            heapq.heappush(
-                heap, (key, child not in exact_h, -cost, next(tie), child_mask, g, hc, False)
+            push(
+                heap,
+                (key, child not in solved_h, -cost, next(tie), child_mask, child_last, hc, False),
             )
     return None
+
+
+def _result(problem, state, parent, perms, cost, expanded, generated) -> SearchResult:
+    """The order that reached ``state``, in real goals: each step was taken in its parent's
+    frame, and the automorphisms met on the way compose back to the start's (identity)."""
+    steps = []
+    while state in parent:
+        state, g, which = parent[state]
+        steps.append((g, which))
+    ids = problem.index.ids
+    if perms is None:
+        return SearchResult(
+            [ids[g] for g, _ in reversed(steps)], cost, expanded, generated, problem.bounds_solved
+        )
+    to_real = list(range(problem.k))  # the current frame's goal -> the real goal
+    order = []
+    for g, which in reversed(steps):
+        order.append(ids[to_real[g]])
+        if which:  # the child's frame is perms[which] of the parent's: invert it
+            perm = perms[which]
+            nxt = [0] * problem.k
+            for j, pj in enumerate(perm):
+                nxt[pj] = to_real[j]
+            to_real = nxt
+    return SearchResult(
+        order, problem.order_cost(order), expanded, generated, problem.bounds_solved
+    )
 
 
 def _key(f: float) -> float:
@@ -456,9 +639,10 @@ def _key(f: float) -> float:
     return round(f, 6)
 
 
-def _dominated(problem, best_g, lasts, mask: int, g: int, cost: float) -> bool:
+def _dominated(drive_row, best_g, lasts, mask: int, g: int, cost: float) -> bool:
     """(mask, g) at ``cost`` is no better than a queued (mask, a): see the module notes."""
+    bar = cost - 1e-9
     for a in lasts:
-        if a != g and best_g[(mask, a)] + problem.drive(a, g) <= cost - 1e-9:
+        if a != g and best_g[(mask, a)] + drive_row(a)[g] <= bar:
             return True
     return False
