@@ -100,7 +100,8 @@ class DemoSession:
     def begin(self, args: dict[str, Any]) -> str:
         """Start a new session from a ``tamp_msgs/BeginDemo`` request; returns the message."""
         frame = frame_of(args)
-        robot = args.get("robot") or {}
+        robot = args.get("robot")
+        robot = {} if robot is None else robot  # a ROS default: the MR origin, no rotation
         if not isinstance(robot, dict):
             raise MessageError("robot", "expected a geometry_msgs/Pose")
         data: dict[str, Any] = {"version": 1}
