@@ -274,3 +274,132 @@ def describe(cls: type, prefix: str = "") -> list[dict[str, Any]]:
             }
         )
     return rows
+
+
+#: The JSON Schema dialect `json_schema` writes.
+JSON_SCHEMA_DIALECT = "https://json-schema.org/draft/2020-12/schema"
+
+
+def json_schema(
+    cls: type,
+    *,
+    title: str | None = None,
+    extra: Mapping[str, Mapping[str, Any]] | None = None,
+    required_extra: typing.Iterable[str] = (),
+) -> dict[str, Any]:
+    """A JSON Schema (draft 2020-12) of the files `load_dataclass` reads into ``cls``, so that
+    an editor can check a file while it is written.
+
+    Derived from the same `spec` fields the loader reads: types, required keys, defaults,
+    bounds (``strict_min`` as ``exclusiveMinimum``), choices, list lengths, units and help (as
+    ``description``), unknown keys refused. ``extra``: schemas of the keys the caller reads
+    itself (``extra_keys`` of `load_dataclass`, e.g. ``version``); ``required_extra`` names
+    those that are required. A field read by a ``parse`` function of its own (a grammar no
+    type rule covers) is described but accepts any value: the loader remains the judge, and
+    relations between fields (a dataclass's ``check``) are not expressed.
+    """
+    doc: dict[str, Any] = {"$schema": JSON_SCHEMA_DIALECT}
+    if title:
+        doc["title"] = title
+    doc.update(_object_schema(cls))
+    for key, sub in (extra or {}).items():
+        doc["properties"][key] = dict(sub)
+    required = [*doc.get("required", []), *required_extra]
+    if required:
+        doc["required"] = required
+    return doc
+
+
+def _object_schema(cls: type) -> dict[str, Any]:
+    """The schema of a mapping read into dataclass ``cls``."""
+    props: dict[str, Any] = {}
+    required = []
+    for fld, s, tp in schema_fields(cls):
+        key = s.key or fld.name
+        sub = {} if s.parse else _type_schema(tp, s)
+        words = " ".join(w for w in (s.help, f"[{s.unit}]" if s.unit else "") if w)
+        if s.parse and words:
+            words += " (a grammar of its own: see the loader)"
+        if words:
+            sub["description"] = words
+        if s.required:
+            required.append(key)
+        else:
+            default = _json_default(fld)
+            if default is not None:
+                sub["default"] = default
+        props[key] = sub
+    doc: dict[str, Any] = {"type": "object", "properties": props, "additionalProperties": False}
+    if cls.__doc__:
+        doc["description"] = " ".join(cls.__doc__.split())
+    if required:
+        doc["required"] = required
+    return doc
+
+
+def _json_default(fld: dataclasses.Field) -> Any:
+    """The field's default as JSON (None when it has none or it is not plain data)."""
+    import json
+
+    if fld.default is not MISSING:
+        value = fld.default
+    elif fld.default_factory is not MISSING:
+        value = fld.default_factory()
+    else:
+        return None
+    if dataclasses.is_dataclass(value) or value is None:
+        return None
+    try:
+        return json.loads(json.dumps(value))
+    except (TypeError, ValueError):
+        return None
+
+
+def _type_schema(tp: Any, s: Spec) -> dict[str, Any]:
+    """The schema of one value of type ``tp`` read under spec ``s`` (mirrors `_read`)."""
+    origin = typing.get_origin(tp)
+    args = typing.get_args(tp)
+    if origin in (typing.Union, types.UnionType):
+        inner = [a for a in args if a is not type(None)]
+        return _type_schema(inner[0], s) if len(inner) == 1 else {}
+    if origin is typing.Literal:
+        return {"enum": list(args)}
+    if dataclasses.is_dataclass(tp):
+        return _object_schema(tp)
+    if tp is bool:
+        return {"type": "boolean"}
+    if tp is int or tp is float:
+        out: dict[str, Any] = {"type": "integer" if tp is int else "number"}
+        if s.min is not None:
+            out["exclusiveMinimum" if s.strict_min and tp is float else "minimum"] = s.min
+        if s.max is not None:
+            out["maximum"] = s.max
+        return out
+    if tp is str:
+        out = {"type": "string", "minLength": 1}
+        if s.choices is not None:
+            out["enum"] = list(s.choices)
+        return out
+    if origin is tuple:
+        fixed = not (len(args) == 2 and args[1] is Ellipsis)
+        if fixed:
+            items = [_type_schema(a, s) for a in args]
+            return {
+                "type": "array",
+                "prefixItems": items,
+                "minItems": len(args),
+                "maxItems": len(args),
+            }
+        out = {"type": "array", "items": _type_schema(args[0], s)}
+        if s.min_items:
+            out["minItems"] = s.min_items
+        return out
+    if origin in (dict, Mapping) or tp is dict:
+        value_tp = args[1] if args else Any
+        out = {"type": "object"}
+        if value_tp is not Any:
+            out["additionalProperties"] = _type_schema(value_tp, Spec())
+        if s.choices is not None:
+            out["propertyNames"] = {"enum": list(s.choices)}
+        return out
+    return {}

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from tamp.errors import InputError
 from tamp.fileio import Fields
-from tamp.schema import describe, keys_of, load_dataclass, spec
+from tamp.schema import describe, json_schema, keys_of, load_dataclass, spec
 
 
 @dataclass(frozen=True)
@@ -121,3 +121,40 @@ def test_a_number_loads_exactly_when_it_is_within_bounds(x):
         assert load(data).time_step == x
     else:
         assert "cell.yaml: time_step" in error_of(data)
+
+
+def test_json_schema_states_what_the_loader_checks():
+    """`json_schema` derives types, bounds, choices, lengths and defaults from the specs;
+    a file the loader accepts validates, one it refuses for a key or bound does not."""
+    jsonschema = pytest.importorskip("jsonschema")
+    doc = json_schema(Cell, extra={"version": {"const": 1}}, required_extra=["version"])
+    jsonschema.Draft202012Validator.check_schema(doc)
+    props = doc["properties"]
+    assert doc["required"] == ["name", "version"] and doc["additionalProperties"] is False
+    assert props["period"] == {
+        "type": "number",
+        "exclusiveMinimum": 0.0,
+        "description": "[s]",
+        "default": 0.01,
+    }
+    assert props["camera"]["properties"]["width"]["maximum"] == 1280
+    assert props["heights"]["minItems"] == 1 and props["heights"]["default"] == [0.34, 0.2]
+    item = props["items"]["items"]
+    assert item["properties"]["class"]["enum"] == ["saw", "cap"]
+    assert item["properties"]["xy"]["minItems"] == item["properties"]["xy"]["maxItems"] == 2
+    assert "source" not in props and "notes" not in props
+    ok = {"version": 1, "name": "a", "camera": {"width": 640}, "items": [{"class": "saw"}]}
+    load({k: v for k, v in ok.items() if k != "version"})
+    check = jsonschema.Draft202012Validator(doc)
+    assert check.is_valid(ok)
+    for bad in (
+        {**ok, "camera": {"width": 16}},
+        {**ok, "period": 0.0},
+        {**ok, "items": [{"class": "hammer"}]},
+        {**ok, "heights": []},
+        {**ok, "extra": 1},
+        {"version": 1},
+    ):
+        assert not check.is_valid(bad), bad
+        with pytest.raises(InputError):
+            load({k: v for k, v in bad.items() if k != "version"})

@@ -25,7 +25,7 @@ from tamp.errors import EXIT_BAD_INPUT, TampError
 EXIT_INTERNAL = 3
 
 #: Subcommand modules under tamp.commands, in the order `tamp --help` lists them.
-COMMANDS = ("plan", "lots", "simulate", "refine", "grasp", "campaign", "serve")
+COMMANDS = ("plan", "lots", "simulate", "refine", "grasp", "campaign", "serve", "schema")
 
 
 def package_version() -> str:
