@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 export DRAKE_ALLOW_NETWORK := meshcat
 export MPLBACKEND := Agg
 
-.PHONY: demo test test-fast bench lint fmt clean system-deps
+.PHONY: demo test test-fast test-core bench lint fmt clean system-deps
 
 $(BIN)/python:
 	@command -v $(PY) >/dev/null 2>&1 || { echo "need $(PY)"; exit 2; }
@@ -15,16 +15,19 @@ $(BIN)/python:
 # pyproject.toml declares ranges; constraints.txt pins the versions the project is tested with.
 $(STAMP): pyproject.toml constraints.txt | $(BIN)/python system-deps
 	$(BIN)/pip install -q --upgrade pip
-	$(BIN)/pip install -q -c constraints.txt -e '.[dev,campaign]'
+	$(BIN)/pip install -q -c constraints.txt -e '.[dev]'
 	touch $(STAMP)
 
-# Graphviz (for rendering DOT exports) and EGL (headless Drake cameras) come from Debian.
+# Graphviz (for rendering DOT exports), EGL (headless Drake cameras) and Chromium with its
+# WebDriver (the browser test of the demonstration page) come from Debian.
+DEBS := graphviz libegl1 chromium chromium-driver
 system-deps:
-	@if ! command -v dot >/dev/null 2>&1 || ! ldconfig -p | grep -q libEGL.so.1; then \
+	@if ! command -v dot >/dev/null 2>&1 || ! ldconfig -p | grep -q libEGL.so.1 \
+	    || ! command -v chromedriver >/dev/null 2>&1; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq graphviz libegl1 >/dev/null) \
-	      || echo "warning: could not install graphviz/libegl1"; \
-	  else echo "warning: install graphviz and libegl1 (apt-get install -y graphviz libegl1)"; fi; \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(DEBS) >/dev/null) \
+	      || echo "warning: could not install $(DEBS)"; \
+	  else echo "warning: install $(DEBS) (apt-get install -y $(DEBS))"; fi; \
 	fi
 
 # The flagship: SMP-MRO Case 3 in Drake (plan -> verify -> BT grown at run time -> youBot
@@ -46,6 +49,31 @@ test: $(STAMP)
 # The quick loop while editing: every test not marked slow (under a minute on 2 cores).
 test-fast: $(STAMP)
 	$(BIN)/pytest -q -m "not slow" -n $(PYTEST_WORKERS) --dist loadfile
+
+# The light core (no Drake, no torch: pip install tamp-hrc) on every other supported Python:
+# a fresh venv per version with only the core and the test runner, then the fast tests of
+# the symbolic layers. A version whose interpreter is missing is skipped with a warning
+# (an error under CI, where the machines have them).
+CORE_PYTHONS ?= 3.12 3.13
+CORE_TESTS := tests/world tests/ltl tests/demo tests/rg tests/bt tests/lots tests/refine \
+	tests/verification tests/commands tests/test_schema.py tests/test_fileio.py \
+	tests/test_perturbation.py tests/test_core_install.py
+test-core:
+	@for v in $(CORE_PYTHONS); do \
+	  py=""; for p in python$$v $$HOME/.pyenv/versions/$$v.*/bin/python; do \
+	    if $$p -c "" 2>/dev/null; then py=$$p; break; fi; done; \
+	  if [ -z "$$py" ]; then \
+	    if [ -n "$$CI" ]; then echo "error: no python$$v"; exit 2; fi; \
+	    echo "warning: no python$$v: its core tests are skipped"; continue; fi; \
+	  venv=build/venv-core-$$v; \
+	  if [ ! -f $$venv/.installed ]; then \
+	    rm -rf $$venv && $$py -m venv $$venv && $$venv/bin/pip install -q --upgrade pip \
+	    && $$venv/bin/pip install -q -c constraints.txt -e '.[test-core]' && touch $$venv/.installed \
+	    || exit 1; fi; \
+	  echo "core tests on $$($$venv/bin/python --version)"; \
+	  $$venv/bin/python -m pytest -q -p no:cacheprovider -m "not slow" -n $(PYTEST_WORKERS) \
+	    --dist loadfile $(CORE_TESTS) || exit 1; \
+	done
 
 # Every benchmark, each side by side with its peer (the Fast Downward comparison alone takes
 # about 20 minutes because the peer runs into its 300 s limit at n >= 10).

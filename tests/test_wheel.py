@@ -51,7 +51,7 @@ def installed(tmp_path_factory) -> tuple[Path, dict[str, str], Path]:
     env["DRAKE_ALLOW_NETWORK"] = "meshcat"
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "--no-input"]
     _run([*pip, "wheel", ".", "--no-deps", "--no-build-isolation", "-q", "-w", str(tmp)], src, env)
-    (wheel,) = tmp.glob("tamp-*.whl")
+    (wheel,) = tmp.glob("tamp_hrc-*.whl")
 
     venv = tmp / "venv"
     _run([sys.executable, "-m", "venv", "--without-pip", str(venv)], tmp, env)

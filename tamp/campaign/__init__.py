@@ -7,7 +7,7 @@ Layout: `kinds` (what can run: the registered workcells, `tamp.sim.core.workcell
 `Job` -> `RunRecord`, done where it runs), `engines` (Ray / in-process, with the per-run
 time limit), `campaign` (`run_campaign`: files, summary), `stats` (Wilson interval,
 distributions, causes), `plots`. Ray is an optional dependency (``pip install
-'tamp[campaign]'``): importing this package imports neither Ray nor Drake.
+'tamp-hrc[campaign]'``): importing this package imports neither Ray nor Drake.
 """
 
 from tamp.campaign.campaign import CampaignResult, CampaignSpec, run_campaign

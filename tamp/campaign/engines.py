@@ -24,9 +24,6 @@ from tamp.errors import InputError
 
 OnDone = Callable[[RunRecord], None]
 
-INSTALL_HINT = "Ray is not installed: pip install 'tamp[campaign]' (or: pip install 'ray>=2.40,<3')"
-
-
 class LocalEngine:
     """Runs every job in this process, in seed order (``--workers 0``)."""
 
@@ -77,11 +74,14 @@ def _alarm(seconds: float):
 
 
 def import_ray():
-    """The ``ray`` module, or `InputError` (exit 2) with the install hint."""
+    """The ``ray`` module, or `tamp.extras.MissingExtra` (exit 2) naming the campaign extra."""
     try:
         import ray
     except ImportError:
-        raise InputError(INSTALL_HINT, field="ray") from None
+        from tamp.extras import EXTRAS, MissingExtra
+
+        campaign = next(e for e in EXTRAS if e.name == "campaign")
+        raise MissingExtra(campaign, "ray", "running seeds on workers (--workers >= 1)") from None
     return ray
 
 

@@ -3,7 +3,8 @@
 Every subcommand module exposes ``register(subparsers)`` that adds its parser and sets
 ``func(args) -> int``. Heavy imports (Drake, torch, Spot) happen inside ``func`` so that
 ``tamp --help`` stays fast. Errors become one line on stderr and an exit status:
-0 success, 1 infeasible task or failed check, 2 bad input, 3 internal error. Under
+0 success, 1 infeasible task or failed check, 2 bad input (or an optional extra the command
+needs is not installed: the message names it, `tamp.extras`), 3 internal error. Under
 ``--json`` an error is also one JSON document on stdout:
 ``{"error": ..., "exit": 2, "file": ..., "field": ...}``.
 """
@@ -21,6 +22,7 @@ from collections.abc import Callable, Sequence
 from importlib.metadata import PackageNotFoundError, version
 
 from tamp.errors import EXIT_BAD_INPUT, TampError
+from tamp.extras import DISTRIBUTION, from_import_error
 
 EXIT_INTERNAL = 3
 
@@ -31,7 +33,7 @@ COMMANDS = ("plan", "lots", "simulate", "refine", "grasp", "campaign", "serve", 
 def package_version() -> str:
     """The installed distribution's version (the source tree's when not installed)."""
     try:
-        return version("tamp")
+        return version(DISTRIBUTION)
     except PackageNotFoundError:  # pragma: no cover - running from an uninstalled tree
         return "unknown"
 
@@ -114,19 +116,32 @@ def run(
         if as_json:
             _error_json(str(exc), exc.exit_code, exc)
         return exc.exit_code
+    except ModuleNotFoundError as exc:  # an optional extra that is not installed
+        missing = from_import_error(exc, f"{parser.prog} {getattr(args, 'command', '')}".strip())
+        if missing is None:
+            return _internal(parser.prog, exc, as_json)
+        print(error_line(parser.prog, missing), file=sys.stderr)
+        if as_json:
+            _error_json(str(missing), missing.exit_code, missing)
+        return missing.exit_code
     except KeyboardInterrupt:
         print(f"{parser.prog}: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0
     except Exception as exc:  # never a bare traceback
-        if os.environ.get("TAMP_DEBUG"):
-            traceback.print_exc()
-        message = f"internal error: {type(exc).__name__}: {exc}"
-        print(f"{parser.prog}: {message} (set TAMP_DEBUG=1 for the traceback)", file=sys.stderr)
-        if as_json:
-            _error_json(message, EXIT_INTERNAL, exc)
-        return EXIT_INTERNAL
+        return _internal(parser.prog, exc, as_json)
+
+
+def _internal(prog: str, exc: BaseException, as_json: bool) -> int:
+    """An unexpected error: one line (the traceback with ``TAMP_DEBUG=1``), exit 3."""
+    if os.environ.get("TAMP_DEBUG"):
+        traceback.print_exception(exc)
+    message = f"internal error: {type(exc).__name__}: {exc}"
+    print(f"{prog}: {message} (set TAMP_DEBUG=1 for the traceback)", file=sys.stderr)
+    if as_json:
+        _error_json(message, EXIT_INTERNAL, exc)
+    return EXIT_INTERNAL
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -63,7 +63,7 @@ def test_missing_ray_exits_2_with_the_install_hint(monkeypatch, capsys, tmp_path
     code = main(["campaign", "case1.yaml", "--runs", "2", "--out", str(tmp_path / "o")])
     assert code == 2
     err = capsys.readouterr().err
-    assert "Ray is not installed" in err and "pip install 'tamp[campaign]'" in err
+    assert "'ray' is not installed" in err and "pip install 'tamp-hrc[campaign]'" in err
     # the in-process engine needs no Ray: it is refused only for bad flags, not for Ray
     assert main(["campaign", "case1.yaml", "--runs", "0", "--workers", "0"]) == 2
     assert "--runs" in capsys.readouterr().err
