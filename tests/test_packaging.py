@@ -58,3 +58,20 @@ def test_pins_lie_in_the_declared_ranges():
         assert req.specifier.contains(pins[name]), f"{req.name}=={pins[name]} not in {req}"
     assert pins["drake"] == "1.51.1" and pins["torch"] == "2.13.0"
     assert project["license"] == "BSD-3-Clause" and project["license-files"] == ["LICENSE"]
+
+
+def test_the_citation_file_cites_the_software_and_the_three_papers():
+    """CITATION.cff (Citation File Format 1.2): the software at pyproject's version, and the
+    papers whose methods it implements, with the DOI where the paper gives one."""
+    import yaml
+
+    cff = yaml.safe_load((ROOT / "CITATION.cff").read_text())
+    project = _config()["project"]
+    assert cff["cff-version"] == "1.2.0" and cff["type"] == "software"
+    assert cff["version"] == project["version"] and cff["license"] == project["license"]
+    titles = {r["title"].split()[0]: r for r in cff["references"]}
+    assert set(titles) == {"Robot", "Local", "Refining"}
+    assert titles["Local"]["doi"] == "10.1109/TASE.2023.3304842"
+    assert titles["Refining"]["journal"] == "Journal of Robotics and Mechatronics"
+    for ref in cff["references"]:
+        assert ref["type"] == "article" and ref["authors"] and ref["journal"]
