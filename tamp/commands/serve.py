@@ -1,7 +1,7 @@
 """`tamp serve`: a rosbridge v2 server for live demonstrations from MR, Python and a browser.
 
 ``tamp serve [--host 127.0.0.1] [--port 9090] [--token T] [--origin URL]... [--sim]
-[--demo DEMO.yaml] [--max-clients N] [--max-message BYTES] [--plan-timeout S]``
+[--rate R] [--demo DEMO.yaml] [--max-clients N] [--max-message BYTES] [--plan-timeout S]``
 
 ROS# (the HoloLens apps of SMP-MRO), roslibpy and roslibjs connect to
 ``ws://HOST:PORT/`` (``?token=T`` when a token is set); ``http://HOST:PORT/`` serves the
@@ -14,9 +14,10 @@ of ``tamp simulate smp-mro``. Binds to localhost unless ``--host`` says otherwis
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import tempfile
-import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -45,6 +46,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--sim", action="store_true", help="execute in the Drake youBot cell (tamp simulate)"
     )
     p.add_argument(
+        "--rate",
+        type=float,
+        default=1.0,
+        metavar="R",
+        help="with --sim: the simulation's pace, R x real time (default 1: a person watches; "
+        "0: as fast as possible)",
+    )
+    p.add_argument(
         "--demo",
         metavar="DEMO.yaml",
         help="start with this demonstration's scene (objects, areas; its steps are not used)",
@@ -69,6 +78,8 @@ def check_arguments(args: argparse.Namespace) -> None:
         )
     if not (math.isfinite(args.plan_timeout) and 0 < args.plan_timeout <= 3600):
         raise InputError(f"must be 0 to 3600 s, got {args.plan_timeout}", field="--plan-timeout")
+    if not (math.isfinite(args.rate) and 0 <= args.rate <= 100):
+        raise InputError(f"must be 0 to 100, got {args.rate}", field="--rate")
     if args.token is not None and not (8 <= len(args.token) <= 256 and args.token.isprintable()):
         raise InputError("must be 8 to 256 printable characters", field="--token")
     for o in args.origin:
@@ -87,9 +98,10 @@ def plan_demo(demo: Any, cost: str) -> Any:
 
 
 def execute_symbolic(
-    demo: Any, result: Any, mapping: dict[str, Any], cancel: threading.Event
+    demo: Any, result: Any, mapping: dict[str, Any], channel: Any
 ) -> dict[str, Any]:
-    """What ``tamp plan --execute --json`` prints for this plan (its defaults, gate on)."""
+    """What ``tamp plan --execute --json`` prints for this plan (its defaults, gate on).
+    A symbolic run takes milliseconds: its events are published when it ends."""
     from tamp.commands.execute_args import execution_payload
 
     args = argparse.Namespace(
@@ -107,15 +119,53 @@ def execute_symbolic(
 
 
 def execute_sim(
-    demo: Any, result: Any, mapping: dict[str, Any], cancel: threading.Event
+    demo: Any, result: Any, mapping: dict[str, Any], channel: Any, *, rate: float = 0.0
 ) -> dict[str, Any]:
-    """The Drake youBot cell of ``tamp simulate smp-mro`` on the live demonstration: the
-    exported demonstration beside a scenario file with the packaged cases' settings."""
+    """The Drake youBot cell of ``tamp simulate smp-mro`` on the live demonstration (the
+    exported demonstration beside a scenario file with the packaged cases' settings), run at
+    ``rate`` × real time (0: as fast as possible). While it runs, the channel gets each
+    action's start and end, appearances, the running action, the robot's pose and its
+    joints; a cancelled channel stops the simulation between two chunks."""
     import yaml
 
-    from tamp.sim.smp.simulate import WORKCELL
+    from tamp.serve import RunCancelled
+    from tamp.sim.smp.robot import ROBOT
+    from tamp.sim.smp.simulate import WORKCELL, simulate
 
     live = mapping
+    seen: set[tuple[int, str | None]] = set()
+    appeared: set[str] = set()
+    last = [-1.0]
+
+    def progress(t: float, runner: Any) -> None:
+        if channel.cancelled:
+            raise RunCancelled
+        s = runner.system
+        ex = s.executor.state(s.executor.GetMyContextFromRoot(runner.root))
+        running = None
+        for rec in ex.log:
+            if rec.status is None:
+                running = rec.action
+            if (rec.id, rec.status) in seen:
+                continue
+            seen.add((rec.id, rec.status))
+            if rec.status is None:
+                channel.event("start", what=rec.action, t=round(rec.start, 3))
+            else:
+                kind = "success" if rec.status in ("SUCCESS", "HALTED") else "failure"
+                channel.event(kind, what=rec.action, t=round(rec.end or t, 3))
+        for obj in sorted(set(runner.appeared) - appeared):
+            appeared.add(obj)
+            channel.event("appear", what=obj, t=round(runner.appeared[obj], 3))
+        now = time.monotonic()
+        if now - last[0] >= 0.1:  # at most 10 updates a second of the streams
+            last[0] = now
+            x, y, yaw = runner.robot_pose()
+            channel.robot(x, y, yaw)
+            channel.bt(t=round(t, 3), running=running)
+            q = s.plant.GetPositions(runner.plant_context, s.robot)
+            channel.joints(list(ROBOT.joints)[: len(q)], list(q))
+
     with tempfile.TemporaryDirectory(prefix="tamp-serve-") as tmp:
         Path(tmp, "demo.yaml").write_text(yaml.safe_dump(live, sort_keys=False))
         scenario = {
@@ -133,17 +183,17 @@ def execute_sim(
             scenario["objects"] = [{"id": o, "model": "obstacle"} for o in extra]
             scenario["appear"] = [str(a) for a in demo.appear if a.obj in extra]
         Path(tmp, "scenario.yaml").write_text(yaml.safe_dump(scenario, sort_keys=False))
-        run = WORKCELL.run(WORKCELL.load(str(Path(tmp, "scenario.yaml"))))
+        loaded = WORKCELL.load(str(Path(tmp, "scenario.yaml")))
+    run = simulate(loaded, realtime_rate=rate, progress=progress)
     doc = run.to_json()
-    events = []
-    for a in doc.get("actions", []):
-        events.append({"clock": a["start"], "kind": "start", "what": a["action"]})
-        if a.get("end") is not None:
-            kind = "success" if a["status"] in ("SUCCESS", "HALTED") else "failure"
-            events.append({"clock": a["end"], "kind": kind, "what": a["action"]})
-    doc["world_events"] = events
     doc["executed"] = [a["action"] for a in doc.get("actions", []) if a["status"] == "SUCCESS"]
     doc["reached"] = bool(doc.get("ok"))
+    doc["live"] = True
+    if run.base_path:
+        doc["final_world"] = {
+            "robot": list(run.base_path[-1]),
+            "objects": {k: [p.x, p.y, 0.0] for k, p in sorted(run.final_poses.items())},
+        }
     return doc
 
 
@@ -160,7 +210,7 @@ def make_app(args: argparse.Namespace) -> Any:
     )
     pipeline = Pipeline(
         plan=plan_demo,
-        execute=execute_sim if args.sim else execute_symbolic,
+        execute=functools.partial(execute_sim, rate=args.rate) if args.sim else execute_symbolic,
         name="drake youBot cell" if args.sim else "symbolic",
     )
     app = TampApp(server, pipeline, plan_timeout=args.plan_timeout)

@@ -7,7 +7,15 @@ demonstration → plan → execution flow, `tamp.serve.app`) and the browser dem
 (``web/``). Message definitions for ROS# code generation are in ``msg/``.
 """
 
-from tamp.serve.app import Pipeline, TampApp
+from tamp.serve.app import Pipeline, RunCancelled, RunChannel, TampApp
 from tamp.serve.server import Limits, RosbridgeServer, ServerThread
 
-__all__ = ["Limits", "Pipeline", "RosbridgeServer", "ServerThread", "TampApp"]
+__all__ = [
+    "Limits",
+    "Pipeline",
+    "RosbridgeServer",
+    "RunCancelled",
+    "RunChannel",
+    "ServerThread",
+    "TampApp",
+]

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from tamp.errors import TampError
-from tamp.serve.mr import MessageError, pose_stamped, robot_to_mr
+from tamp.serve.mr import MessageError, pose_stamped, robot_to_mr, stamp
 from tamp.serve.server import Client, RosbridgeServer, ServiceError
 from tamp.serve.session import DemoSession, SessionError, parse_constraints
 
@@ -56,15 +56,57 @@ class Pipeline:
 
     ``plan(demo, cost_model)`` returns a `tamp.rg.PlanResult` that passed the verification
     gate (or raises a `TampError` with the reason); ``execute(demo, plan, mapping,
-    cancel)`` (``mapping``: the demonstration as a file's mapping,
-    `DemoSession.demonstration_dict`) returns the document ``tamp plan --execute --json``
-    prints (``executed``, ``growth``, ``world_events``, ``final_world``, ``status``, ...),
-    checking ``cancel`` where it can.
+    channel)`` (``mapping``: the demonstration as a file's mapping,
+    `DemoSession.demonstration_dict`; ``channel``: a `RunChannel`) returns the document
+    ``tamp plan --execute --json`` prints (``executed``, ``growth``, ``world_events``,
+    ``final_world``, ``status``, ...). An executor that reports while it runs sets
+    ``"live": true`` in it; one that can stop early raises `RunCancelled` once the channel
+    is cancelled.
     """
 
     plan: Callable[[Any, str], Any]
-    execute: Callable[[Any, Any, dict[str, Any], threading.Event], dict[str, Any]]
+    execute: Callable[[Any, Any, dict[str, Any], RunChannel], dict[str, Any]]
     name: str = "symbolic"
+
+
+class RunCancelled(Exception):
+    """Raised by an executor that stopped because its run was cancelled."""
+
+
+@dataclass
+class RunChannel:
+    """What a running executor may report to the clients while it runs (from its worker
+    thread): events, the tree's status, the robot's pose and joints."""
+
+    run: str
+    cancel: threading.Event
+    app: TampApp
+
+    @property
+    def cancelled(self) -> bool:
+        return self.cancel.is_set()
+
+    def event(self, kind: str, **fields: Any) -> None:
+        self.app._event(kind, run=self.run, **fields)
+
+    def bt(self, **fields: Any) -> None:
+        self.app.server.publish_threadsafe("/tamp/bt", _text({"run": self.run, **fields}))
+
+    def robot(self, x: float, y: float, yaw: float) -> None:
+        """The robot's base at (x, y, yaw) in the robot frame."""
+        self.app._publish_robot(x, y, yaw)
+
+    def joints(self, names: list[str], positions: list[float]) -> None:
+        self.app.server.publish_threadsafe(
+            "/joint_states",
+            {
+                "header": {"frame_id": "", "stamp": stamp()},
+                "name": list(names),
+                "position": [float(v) for v in positions],
+                "velocity": [],
+                "effort": [],
+            },
+        )
 
 
 def _text(doc: Any) -> dict[str, str]:
@@ -100,6 +142,7 @@ class TampApp:
         s.topic("/tamp/events", STRING)
         s.topic("/tamp/robot/pose", "geometry_msgs/PoseStamped", latched=True, slot=True)
         s.topic("/tf", "tf2_msgs/TFMessage", slot=True)
+        s.topic("/joint_states", "sensor_msgs/JointState", slot=True)
         s.topic("/tf_static", "tf2_msgs/TFMessage", latched=True)
         s.topic("/tamp/demo/step", "tamp_msgs/DemoStep", inbound=self._on_step)
         begin_fields = (
@@ -340,20 +383,22 @@ class TampApp:
             run = f"r{self.runs}"
             self.cancel = threading.Event()
             self._set_phase("executing")
+        channel = RunChannel(run, self.cancel, self)
         threading.Thread(
             target=self._run,
-            args=(run, demo, result, mapping, self.cancel),
+            args=(run, demo, result, mapping, channel),
             name=f"tamp-serve-{run}",
             daemon=True,
         ).start()
         return {"success": True, "message": f"run {run} started ({self.pipeline.name})"}
 
-    def _run(
-        self, run: str, demo: Any, result: Any, mapping: dict, cancel: threading.Event
-    ) -> None:
+    def _run(self, run: str, demo: Any, result: Any, mapping: dict, channel: RunChannel) -> None:
+        cancel = channel.cancel
         try:
-            doc = self.pipeline.execute(demo, result, mapping, cancel)
+            doc = self.pipeline.execute(demo, result, mapping, channel)
             error = None
+        except RunCancelled:
+            return  # the state already says so
         except TampError as exc:
             doc, error = None, str(exc)
         except Exception as exc:  # never a dead worker without a word
@@ -381,6 +426,8 @@ class TampApp:
             for e in doc.get("growth", [])
             if e["kind"] in ("recovery", "conflict", "retry", "stop")
         ]
+        if doc.get("live"):  # the executor reported its events while it ran
+            events = []
         for tick, _, e in sorted(events, key=lambda x: (x[0], x[1])):
             self._event(e.pop("kind"), run=run, tick=tick, **e)
             if "what" in e:
@@ -402,12 +449,7 @@ class TampApp:
         )
         final = doc.get("final_world") or {}
         if "robot" in final:
-            x, y, yaw = final["robot"]
-            p = robot_to_mr(self.session.mr_frame(), (x, y, 0.0))
-            self.server.publish_threadsafe("/tamp/robot/pose", pose_stamped(p, yaw))
-            self.server.publish_threadsafe(
-                "/tf", {"transforms": [_transform("mr", "base_link", p, yaw)]}
-            )
+            self._publish_robot(*final["robot"])
         frame = self.session.mr_frame()
         final_mr = {
             uid: robot_to_mr(frame, tuple(pos))
@@ -422,6 +464,14 @@ class TampApp:
         """The server's counters (messages in and out, drops, refusals) as JSON."""
         doc = {**self.server.counters, "clients": len(self.server.clients)}
         return {"success": True, "message": json.dumps(doc, sort_keys=True)}
+
+    def _publish_robot(self, x: float, y: float, yaw: float) -> None:
+        """The robot's base (robot frame) on /tamp/robot/pose and /tf, in ``mr``."""
+        p = robot_to_mr(self.session.mr_frame(), (x, y, 0.0))
+        self.server.publish_threadsafe("/tamp/robot/pose", pose_stamped(p, yaw))
+        self.server.publish_threadsafe(
+            "/tf", {"transforms": [_transform("mr", "base_link", p, yaw)]}
+        )
 
     def _cancel(self, _client: Client | None, _args: dict[str, Any]) -> dict[str, Any]:
         with self.lock:
@@ -451,4 +501,4 @@ def _transform(parent: str, child: str, p: list[float], yaw: float) -> dict[str,
     }
 
 
-__all__ = ["PHASES", "Pipeline", "ServiceError", "TampApp"]
+__all__ = ["PHASES", "Pipeline", "RunCancelled", "RunChannel", "ServiceError", "TampApp"]

@@ -117,7 +117,7 @@ def rotation_of(q: Any, frame: str, field: str) -> list[list[float]] | None:
 
 def pose_stamped(p_mr: list[float], yaw: float = 0.0, frame_id: str = "mr") -> dict[str, Any]:
     """A ``geometry_msgs/PoseStamped`` at ``p_mr`` turned by ``yaw`` about the MR z axis."""
-    now = _stamp()
+    now = stamp()
     return {
         "header": {"frame_id": frame_id, "stamp": now},
         "pose": {
@@ -127,7 +127,8 @@ def pose_stamped(p_mr: list[float], yaw: float = 0.0, frame_id: str = "mr") -> d
     }
 
 
-def _stamp() -> dict[str, int]:
+def stamp() -> dict[str, int]:
+    """Now, in both the ROS 1 (secs, nsecs) and ROS 2 (sec, nanosec) spellings."""
     import time
 
     t = time.time()

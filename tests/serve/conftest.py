@@ -20,6 +20,7 @@ def options(**overrides) -> argparse.Namespace:
         token=None,
         origin=[],
         sim=False,
+        rate=0.0,
         demo=None,
         max_clients=8,
         max_message=1 << 20,

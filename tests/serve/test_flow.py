@@ -146,9 +146,9 @@ def test_steps_during_execution_are_refused_and_cancel_stops_the_run():
     cancel ends it as cancelled, and its late result is not published."""
     release = threading.Event()
 
-    def held(demo, result, mapping, cancel):
+    def held(demo, result, mapping, channel):
         release.wait(10)
-        return execute_symbolic(demo, result, mapping, cancel)
+        return execute_symbolic(demo, result, mapping, channel)
 
     s = Served()
     s.app.pipeline = Pipeline(plan=plan_demo, execute=held, name="held")

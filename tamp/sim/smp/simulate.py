@@ -96,6 +96,7 @@ def simulate(
     verify_budget: int | None = None,
     meshcat: Any = None,
     realtime_rate: float = 0.0,
+    progress: Any = None,
 ) -> SimResult:
     """Plan, verify, perturb by ``seed``, build and run ``scenario`` (module docstring).
 
@@ -104,7 +105,9 @@ def simulate(
     The plan and its verification use the nominal scenario (what the robot was shown).
     ``record``: write a self-contained Meshcat animation (HTML) of the run there (a local
     Meshcat server is started when ``meshcat`` is None). ``realtime_rate``: 0 runs as fast
-    as possible, 1.0 paces a live Meshcat view.
+    as possible, 1.0 paces a live Meshcat view. ``progress(t, runner)``: called between
+    simulator chunks with the sim time and the `SimRunner` (robot pose, executor state), for
+    live views; an exception it raises ends the run there.
     """
     from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
     from tamp.sim.smp.perturb import perturb
@@ -119,7 +122,8 @@ def simulate(
     runner = SimRunner(system, realtime_rate=realtime_rate)
     if record is not None:
         start_recording(system.visualizer)
-    result = runner.run(max_sim_time=max_sim_time)
+    on_chunk = None if progress is None else (lambda t: progress(t, runner))
+    result = runner.run(max_sim_time=max_sim_time, on_chunk=on_chunk)
     result.seed = applied.seed
     result.perturbation = applied.to_json()
     result.order = list(prepared.plan.order)
