@@ -172,7 +172,7 @@ def main() -> int:
         rows.append(row("smp", campaign(args.smp_scenario, n, args.workers, out / "smp")))
     if "lots" in only:
         n = args.runs or args.lots_runs
-        extra: tuple[str, ...] = ("--scenario", args.lots_cell)
+        extra: tuple[str, ...] = ("--cell", args.lots_cell)
         if args.lots_interference != "none":
             extra += ("--interference", args.lots_interference)
         doc = campaign(args.lots_scenario, n, args.workers, out / "lots", *extra)

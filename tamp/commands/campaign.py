@@ -2,7 +2,7 @@
 
     tamp campaign SCENARIO [--kind smp-mro|lots|refine] --runs N [--seed S]
                   [--address ADDRESS] [--workers K] [--engine ray|local] [--time-limit S]
-                  [--max-sim-time S] [--interference EVENTS.yaml] [--scenario CELL.yaml]
+                  [--max-sim-time S] [--interference EVENTS.yaml] [--cell CELL.yaml]
                   [--out DIR] [--no-record]
                   [--min-success RATE] [--json]
 

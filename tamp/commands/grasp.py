@@ -129,7 +129,11 @@ def register(subparsers) -> None:
     p.add_argument("weights", help="weights file")
     _dataset_args(p, size=None)
     p.add_argument("--seed", type=int, default=0, help="split seed of the training run")
-    p.add_argument("--out", help="output file (default: overwrite WEIGHTS)")
+    p.add_argument(
+        "--weights-out",
+        metavar="FILE",
+        help="write the calibrated weights to FILE (default: overwrite WEIGHTS)",
+    )
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=run_calibrate)
 
@@ -397,13 +401,14 @@ def run_calibrate(args) -> int:
     spec = SplitSpec(
         args.split, args.seed, args.test_fraction, args.val_fraction, args.fold, args.folds
     )
-    meta = record_split_and_calibrate(args.weights, args.out or args.weights, dataset, spec)
+    written = args.weights_out or args.weights
+    meta = record_split_and_calibrate(args.weights, written, dataset, spec)
     if args.json:
         print_json(meta)
     else:
         c, t = meta["width_calibration"], meta["test"]
         print(
-            f"{args.out or args.weights}: split {spec.describe()} recorded; width calibration "
+            f"{written}: split {spec.describe()} recorded; width calibration "
             f"{c['scale']:.3f} (median of {c['grasps']} grasps, {c['part']} images); test "
             f"accuracy {100 * t['accuracy']:.2f}% ({t['correct']}/{t['images']}), "
             + width_text(t["width"])

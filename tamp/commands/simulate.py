@@ -1,9 +1,7 @@
 """``tamp simulate WORKCELL``: one run of a scenario in a Drake workcell.
 
-    tamp simulate smp-mro [--case 1|2|3 | --scenario FILE] [--appear ...] [--fail ...]
-                          [--meshcat] [--rate R]
-    tamp simulate lots --task TASK.yaml [--scenario CELL.yaml] [--interference EVENTS.yaml]
-                       [--grasp NETWORK]
+    tamp simulate smp-mro [SCENARIO | --case 1|2|3] [--appear ...] [--fail ...] [--rate R]
+    tamp simulate lots TASK [--cell CELL.yaml] [--interference EVENTS.yaml] [--grasp NETWORK]
     tamp simulate refine PROGRAM
     ... and, for every workcell: [--seed N] [--record out.html] [--max-sim-time S]
                                  [--no-verify] [--json]

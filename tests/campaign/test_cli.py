@@ -26,8 +26,8 @@ from tamp.commands.main import main
         (["case1.yaml", "--runs", "2", "--min-success", "1.5"], "--min-success"),
         (["no_such_scenario", "--runs", "2"], "SCENARIO"),
         (["case1.yaml", "--runs", "2", "--interference", "tower_interference"], "--interference"),
-        (["case1.yaml", "--runs", "2", "--scenario", "tower_perturbed"], "--scenario"),
-        (["tower.yaml", "--runs", "2", "--scenario", "model_building"], "objects"),
+        (["case1.yaml", "--runs", "2", "--cell", "tower_perturbed"], "--cell"),
+        (["tower.yaml", "--runs", "2", "--cell", "model_building"], "objects"),
     ],
 )
 def test_bad_input_exits_2_naming_the_field(argv, field, capsys, tmp_path):
@@ -39,16 +39,16 @@ def test_bad_input_exits_2_naming_the_field(argv, field, capsys, tmp_path):
 
 
 def test_a_lots_campaign_runs_in_the_workcell_it_names():
-    """``--scenario CELL`` reaches the check, every run and the replay command."""
+    """``--cell CELL`` reaches the check, every run and the replay command."""
     from tamp.campaign import CampaignSpec, resolve_scenario
     from tamp.scenarios import resolve
 
     kind, task = resolve_scenario("tower.yaml", None)
     cell = str(resolve("tower_perturbed", "lots_sim"))
-    kind.load(str(task), scenario=cell)  # the perturbed cell matches the task
-    spec = CampaignSpec(kind, task, 2, seed=4, options=(("scenario", cell),))
-    assert spec.replay(5) == f"tamp simulate lots --task {task} --seed 5 --scenario {cell}"
-    assert all(dict(job.options)["scenario"] == cell for job in spec.jobs())
+    kind.load(str(task), cell=cell)  # the perturbed cell matches the task
+    spec = CampaignSpec(kind, task, 2, seed=4, options=(("cell", cell),))
+    assert spec.replay(5) == f"tamp simulate lots {task} --seed 5 --cell {cell}"
+    assert all(dict(job.options)["cell"] == cell for job in spec.jobs())
 
 
 def test_out_must_be_a_folder(tmp_path, capsys):
@@ -105,10 +105,7 @@ def test_in_process_campaign_of_case1(tmp_path, capsys):
     ]
     assert sorted(p.name for p in (out / "recordings").iterdir()) == ["seed_5.html", "seed_6.html"]
     run = json.loads((out / "runs" / "seed_5.json").read_text())
-    assert (
-        run["replay"].startswith("tamp simulate smp-mro --scenario ")
-        and "--seed 5" in run["replay"]
-    )
+    assert run["replay"].startswith("tamp simulate smp-mro ") and "--seed 5" in run["replay"]
     assert run["result"]["final_poses"]  # the simulation's own JSON is kept
     # --min-success turns the measurement into a gate (exit 1), and says so
     code = main(

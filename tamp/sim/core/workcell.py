@@ -193,8 +193,8 @@ class Workcell(Protocol):
     Attributes: ``name`` (``tamp simulate NAME``, ``--kind NAME``), ``title`` (one line of
     help), ``folder`` (its packaged scenario folder, `tamp.scenarios.resolve`), ``key`` (a
     top-level YAML key that only its scenario files have: how a campaign tells the cell of a
-    user file), ``main`` (the option naming the scenario: ``--scenario``, ``--task``,
-    ``--program``), ``options`` (its other options), ``replay`` (the command that reruns one
+    user file), ``main`` (the positional argument naming the scenario: ``SCENARIO``, ``TASK``,
+    ``PROGRAM``), ``options`` (its other options), ``replay`` (the command that reruns one
     seed, with ``{scenario}`` and ``{seed}``).
     """
 

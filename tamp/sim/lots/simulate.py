@@ -453,12 +453,18 @@ class LotsWorkcell:
     folder = "lots"
     key = "formula"
     main = Option(
-        "task", "LTL task file or packaged task name", flag="--task", required=True, folder="lots"
+        "task",
+        "LTL task file or packaged task name",
+        flag="task",
+        metavar="TASK",
+        required=True,
+        folder="lots",
     )
     options = (
         Option(
-            "scenario",
-            "workcell scenario file (default: the packaged lots_sim scenario of the task's name)",
+            "cell",
+            "workcell scenario file or packaged name (default: the packaged lots_sim scenario "
+            "named like the task)",
             metavar="CELL.yaml",
             campaign=True,
             folder="lots_sim",
@@ -478,13 +484,13 @@ class LotsWorkcell:
             action="store_true",
         ),
     )
-    replay = "tamp simulate lots --task {scenario} --seed {seed}"
+    replay = "tamp simulate lots {scenario} --seed {seed}"
 
     def load(
         self,
         name_or_path: str | Path,
         *,
-        scenario: str | Path | None = None,
+        cell: str | Path | None = None,
         interference: str | Path | None = None,
         grasp: str | None = None,
         return_action: bool = False,
@@ -501,15 +507,15 @@ class LotsWorkcell:
         if return_action:
             task = dataclasses.replace(task, returns=True)
         events = load_events(interference, task) if interference else []
-        if scenario is None and not resolve(task.name, "lots_sim").is_file():
+        if cell is None and not resolve(task.name, "lots_sim").is_file():
             raise InputError(
                 f"no packaged workcell scenario for task {task.name!r}: give one",
-                field="--scenario",
+                field="--cell",
             )
-        cell = with_network(load_cell_scenario(scenario or task.name), grasp)
-        check_matches(task, cell)
-        check_person_classes(events, cell)
-        return LotsScenario(task, cell, tuple(events))
+        cell_scenario = with_network(load_cell_scenario(cell or task.name), grasp)
+        check_matches(task, cell_scenario)
+        check_person_classes(events, cell_scenario)
+        return LotsScenario(task, cell_scenario, tuple(events))
 
     def perturbed(self, scenario: LotsScenario, seed: int) -> tuple[LotsScenario, Applied]:
         return perturbed_run(scenario, seed)

@@ -144,13 +144,14 @@ class SmpMroWorkcell:
     main = Option(
         "scenario",
         "simulation scenario file or packaged name (overrides --case)",
-        flag="--scenario",
+        flag="scenario",
+        metavar="SCENARIO",
         folder="sim",
     )
     options = (
         Option(
             "case",
-            "packaged case, when no --scenario is given (default 1)",
+            "packaged case, when no SCENARIO is given (default 1)",
             type=int,
             choices=(1, 2, 3),
         ),
@@ -184,7 +185,7 @@ class SmpMroWorkcell:
             type=float,
         ),
     )
-    replay = "tamp simulate smp-mro --scenario {scenario} --seed {seed}"
+    replay = "tamp simulate smp-mro {scenario} --seed {seed}"
 
     def load(
         self,

@@ -143,7 +143,7 @@ def test_a_packaged_program_has_no_perturbation():
     "argv",
     [
         ["simulate", "smp-mro", "--case", "1", "--seed", "-1"],
-        ["simulate", "lots", "--task", "tower", "--seed", "-1"],
+        ["simulate", "lots", "tower", "--seed", "-1"],
         ["refine", "task4", "--seed", "-1"],
     ],
 )

@@ -245,7 +245,7 @@ def _cli(*args: str):
 def test_cli_refuses_a_bad_interference_file_naming_the_field(tmp_path, capsys):
     bad = tmp_path / "bad.yaml"
     bad.write_text(yaml.safe_dump({"version": 1, "events": [{"after": 1, "kind": "teleport"}]}))
-    assert _cli("--task", "tower", "--interference", str(bad)) == 2
+    assert _cli("tower", "--interference", str(bad)) == 2
     assert "events[0].kind" in capsys.readouterr().err
     alien = tmp_path / "alien.yaml"
     alien.write_text(
@@ -253,6 +253,6 @@ def test_cli_refuses_a_bad_interference_file_naming_the_field(tmp_path, capsys):
             {"version": 1, "events": [{"after": 1, "kind": "add", "class": "ufo", "side": "B"}]}
         )
     )
-    assert _cli("--task", "tower", "--interference", str(alien)) == 2
+    assert _cli("tower", "--interference", str(alien)) == 2
     err = capsys.readouterr().err
     assert "events[0].class" in err and "no 'ufo' objects" in err

@@ -63,11 +63,11 @@ def test_cli_refuses_bad_interference_and_mismatched_scenes_with_exit_2(capsys):
         return capsys.readouterr().err
 
     assert "events[0].class" in refused(
-        "--task", "tower", "--interference", "model_building_fig8"
+        "tower", "--interference", "model_building_fig8"
     )  # no scissors in the tower task to move
-    assert "objects: W^A holds" in refused("--task", "tower", "--scenario", "model_building")
-    assert "--grasp" in refused("--task", "tower", "--grasp", "yolo")
-    assert "--max-sim-time" in refused("--task", "tower", "--max-sim-time", "-1")
+    assert "objects: W^A holds" in refused("tower", "--cell", "model_building")
+    assert "--grasp" in refused("tower", "--grasp", "yolo")
+    assert "--max-sim-time" in refused("tower", "--max-sim-time", "-1")
 
 
 def test_a_person_adding_more_than_the_shelf_holds_is_refused_naming_the_count(capsys, tmp_path):
@@ -79,14 +79,14 @@ def test_a_person_adding_more_than_the_shelf_holds_is_refused_naming_the_count(c
     ev.write_text(
         "version: 1\nevents:\n  - {after: 1, kind: add, class: body, side: A, count: 10000000}\n"
     )
-    assert main(["simulate", "lots", "--task", "tower", "--interference", str(ev)]) == 2
+    assert main(["simulate", "lots", "tower", "--interference", str(ev)]) == 2
     err = capsys.readouterr().err
     assert "pour.yaml: events[0].count" in err and "holds 10 objects" in err
 
 
 @pytest.mark.slow
 def test_tower_in_drake_through_the_cli(tmp_path):
-    r = cli("--task", "tower", "--json", "--max-sim-time", "300", timeout=3000)
+    r = cli("tower", "--json", "--max-sim-time", "300", timeout=3000)
     assert r.returncode == 0, r.stderr[-2000:] + r.stdout[-2000:]
     out = json.loads(r.stdout)
     assert out["satisfied"] is True and out["status"] == "SUCCESS"

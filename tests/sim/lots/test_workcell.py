@@ -21,37 +21,35 @@ def test_the_cell_declares_the_contract():
     main = WORKCELL.main
     assert (main.dest, main.spelling, main.required, main.folder) == (
         "task",
-        "--task",
+        "task",
         True,
         "lots",
     )
     options = {o.dest: o for o in WORKCELL.options}
     assert {k: (o.stage, o.campaign, o.folder) for k, o in options.items()} == {
-        "scenario": ("load", True, "lots_sim"),
+        "cell": ("load", True, "lots_sim"),
         "interference": ("load", True, "lots"),
         "grasp": ("load", False, None),
         "return_action": ("load", False, None),  # campaigns: the task file's 'actions'
     }
     assert options["grasp"].choices == tuple(NETWORKS)
-    assert WORKCELL.replay.format(scenario="tower", seed=4) == (
-        "tamp simulate lots --task tower --seed 4"
-    )
-    load, run = split_options(WORKCELL, {"scenario": "tower", "grasp": "ggcnn"})
-    assert load == {"scenario": "tower", "grasp": "ggcnn"} and run == {}
+    assert WORKCELL.replay.format(scenario="tower", seed=4) == ("tamp simulate lots tower --seed 4")
+    load, run = split_options(WORKCELL, {"cell": "tower", "grasp": "ggcnn"})
+    assert load == {"cell": "tower", "grasp": "ggcnn"} and run == {}
 
 
 def test_load_bundles_the_task_its_cell_and_the_script():
     s = WORKCELL.load("tower")
     assert isinstance(s, LotsScenario) and s.name == "tower" and s.interference == ()
     assert s.cell.name == "tower" and s.cell.source == str(resolve("tower", "lots_sim"))
-    s = WORKCELL.load("tower", scenario="tower_perturbed", interference="tower_interference")
+    s = WORKCELL.load("tower", cell="tower_perturbed", interference="tower_interference")
     assert s.cell.name == "tower_perturbed" and len(s.interference) == 4
     assert WORKCELL.load("tower", grasp="ggcnn").cell.grasp.network == "ggcnn"
 
 
 def test_load_checks_them_together(tmp_path):
     with pytest.raises(InputError, match="W\\^A holds") as e:
-        WORKCELL.load("tower", scenario="model_building")
+        WORKCELL.load("tower", cell="model_building")
     assert e.value.field == "objects"
     with pytest.raises(InputError) as e:  # no scissors in the tower task to move
         WORKCELL.load("tower", interference="model_building_fig8")
@@ -60,12 +58,12 @@ def test_load_checks_them_together(tmp_path):
     task.write_text(resolve("tower", "lots").read_text().replace("name: tower", "name: mine"))
     with pytest.raises(InputError, match="no packaged workcell scenario") as e:
         WORKCELL.load(str(task))
-    assert e.value.field == "--scenario"
-    assert WORKCELL.load(str(task), scenario="tower").task.name == "mine"
+    assert e.value.field == "--cell"
+    assert WORKCELL.load(str(task), cell="tower").task.name == "mine"
 
 
 def test_perturbed_draws_the_cell_and_the_persons_reactions():
-    s = WORKCELL.load("tower", scenario="tower_perturbed", interference="tower_interference")
+    s = WORKCELL.load("tower", cell="tower_perturbed", interference="tower_interference")
     moved, applied = WORKCELL.perturbed(s, 3)
     assert moved.task is s.task and moved.cell.sample is not None and applied.seed == 3
     assert applied.timing and applied.friction is not None  # the person's slots, the mats

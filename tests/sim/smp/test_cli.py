@@ -15,7 +15,7 @@ from .helpers import write_one_bottle
 def test_json_output_and_recording(tmp_path, capsys):
     path = write_one_bottle(tmp_path)
     html = tmp_path / "out" / "run.html"
-    code = main(["simulate", "smp-mro", "--scenario", str(path), "--record", str(html), "--json"])
+    code = main(["simulate", "smp-mro", str(path), "--record", str(html), "--json"])
     out = capsys.readouterr().out
     assert code == 0, out
     data = json.loads(out)
@@ -41,7 +41,7 @@ def test_json_output_and_recording(tmp_path, capsys):
 @pytest.mark.slow
 def test_human_readable_output(tmp_path, capsys):
     path = write_one_bottle(tmp_path)
-    code = main(["simulate", "smp-mro", "--scenario", str(path), "--no-verify"])
+    code = main(["simulate", "smp-mro", str(path), "--no-verify"])
     out = capsys.readouterr().out
     assert code == 0
     assert "Place(O0, L0)" in out and "real-time factor" in out
@@ -61,6 +61,6 @@ def test_bad_options_exit_2_before_simulating(tmp_path, capsys):
         (["--rate", "-1"], "--rate"),
         (["--record", str(tmp_path)], "--record"),
     ):
-        code = main(["simulate", "smp-mro", "--scenario", str(path), *argv])
+        code = main(["simulate", "smp-mro", str(path), *argv])
         err = capsys.readouterr().err
         assert code == 2 and option in err and "internal error" not in err, (argv, err)

@@ -38,7 +38,7 @@ RUNS = {
     "case1": ["--case", "1"],
     "case2": ["--case", "2"],
     "case3": ["--case", "3"],
-    "case1_failed_grasp": ["--scenario", "case1_failed_grasp"],
+    "case1_failed_grasp": ["case1_failed_grasp"],
 }
 
 

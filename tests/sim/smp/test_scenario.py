@@ -106,7 +106,7 @@ def test_bad_fields_are_named(tmp_path, extra, field):
 
 def test_cli_exits_2_naming_the_field(tmp_path, capsys):
     path = write_one_bottle(tmp_path, "objects:\n  - {id: X, model: teapot, pose: [0.5, 1, 0]}\n")
-    code = main(["simulate", "smp-mro", "--scenario", str(path), "--json"])
+    code = main(["simulate", "smp-mro", str(path), "--json"])
     assert code == 2
     err = capsys.readouterr().err
     assert "objects[0].model" in err and str(path) in err
@@ -198,6 +198,6 @@ def test_an_appearance_flag_at_time_0_onto_an_occupied_place_exits_2(tmp_path, c
     with pytest.raises(InputError) as info:
         s.with_events([parse_appear("Y@1.0,0.0@0")])
     assert info.value.field == "--appear" and "occupied by O0" in info.value.reason
-    code = main(["simulate", "smp-mro", "--scenario", str(path), "--appear", "Y@1.0,0.0@0"])
+    code = main(["simulate", "smp-mro", str(path), "--appear", "Y@1.0,0.0@0"])
     err = capsys.readouterr().err
     assert code == 2 and "--appear" in err and "occupied by O0" in err

@@ -27,7 +27,7 @@ def _cli(capsys, *args) -> dict:
 
 
 def test_same_seed_same_run_bit_for_bit_different_seed_differs(capsys):
-    args = ("--scenario", "case3_perturbed", "--max-sim-time", "8")
+    args = ("case3_perturbed", "--max-sim-time", "8")
     a = _cli(capsys, *args, "--seed", "7")
     b = _cli(capsys, *args, "--seed", "7")
     c = _cli(capsys, *args, "--seed", "8")

@@ -20,17 +20,18 @@ from .helpers import write_one_bottle
 def test_the_cell_declares_the_contract():
     assert get("smp-mro") is WORKCELL and isinstance(WORKCELL, Workcell)
     assert (WORKCELL.folder, WORKCELL.key) == ("sim", "demonstration")
-    assert WORKCELL.main.spelling == "--scenario" and WORKCELL.main.folder == "sim"
+    assert WORKCELL.main.spelling == "scenario" and WORKCELL.main.folder == "sim"
     stages = {o.dest: o.stage for o in WORKCELL.options}
     assert stages == {
         "case": "load",
         "appear": "load",
         "fail": "load",
+        "verify_budget": "run",
         "meshcat": "run",
         "rate": "run",
     }
     assert WORKCELL.replay.format(scenario="case3", seed=4) == (
-        "tamp simulate smp-mro --scenario case3 --seed 4"
+        "tamp simulate smp-mro case3 --seed 4"
     )
     load, run = split_options(WORKCELL, {"case": 2, "rate": 0.5})
     assert load == {"case": 2} and run == {"rate": 0.5}
@@ -39,7 +40,7 @@ def test_the_cell_declares_the_contract():
 def test_load_takes_a_file_or_a_packaged_case():
     assert WORKCELL.load(None).name == "case1"  # the default case
     assert WORKCELL.load(None, case=3).name == "case3"
-    assert WORKCELL.load("case2", case=3).name == "case2"  # --scenario wins
+    assert WORKCELL.load("case2", case=3).name == "case2"  # SCENARIO wins over --case
 
 
 def test_load_applies_the_flags(tmp_path):
