@@ -4,6 +4,7 @@ durations, every phase a prediction; the log formats and their errors."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -117,3 +118,25 @@ def test_cli_from_log_predicts_and_bad_logs_exit_2(tmp_path, capsys):
     assert "no row for R2.release" in capsys.readouterr().err
     rec = str(tmp_path / "r.html")
     assert tamp_main(["refine", "task4", "--from-log", str(log), "--record", rec]) == 2
+
+
+RESULT = Path(__file__).resolve().parents[2] / "benchmarks/results/refine_task4.json"
+
+
+def test_the_log_of_the_simulated_task4_predicts_its_simulated_phases():
+    """``tamp refine task4 --json`` (committed in benchmarks/results/refine_task4.json) is a
+    log: refined from it without simulating, every phase lands within 2 % of the
+    simulated one (the prediction knows the durations, not the physics)."""
+    doc = json.loads(RESULT.read_text())
+    program = task(4)
+    out = refine(
+        program,
+        default_architecture(),
+        predicting(program, load_log(RESULT, program)),
+        gate=gate_program,
+        check_run=check_run,
+    )
+    simulated = {p["name"]: p["task_time"] for p in doc["phases"]}
+    for p in out.phases:
+        assert p.task_time == pytest.approx(simulated[p.name], rel=0.02), p.name
+    assert [c.describe() for c in out.parallelized] == doc["parallelized"]

@@ -130,7 +130,7 @@ def test_apply_rate_keeps_a_base_that_runs_with_another_section_at_its_speed():
         q.robot("R1").behavior("approach").motion.speed
         == p.robot("R1").behavior("approach").motion.speed
     )
-    assert q.robot("R1").behavior("pull_out").motion.speed == pytest.approx(1.05e-2 * 2.3)
+    assert q.robot("R1").behavior("pull_out").motion.speed == pytest.approx(2.15e-3 * 2.3)
     assert apply_rate(p, "R1", 23.0, scale="all").robot("R1").behavior(
         "approach"
     ).motion.speed == pytest.approx(1.05e-2 * 2.3)
