@@ -345,7 +345,7 @@ class OrderProblem:
         if self._symmetry is False:
             self._prepare()
             found = None
-            if self._dense is not None:
+            if self._dense is not None and self.index.acyclic():
                 found = find_symmetry(
                     np.array([p.as_tuple() for p in self.pick], dtype=float).reshape(self.k, 3),
                     np.array([p.as_tuple() for p in self.drop], dtype=float).reshape(self.k, 3),

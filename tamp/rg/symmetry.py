@@ -104,7 +104,7 @@ def find_symmetry(
     tol = TOLERANCE * max(1.0, float(np.abs(finite).max()) if finite.size else 1.0)
     found = [tuple(range(k))]
     seen = {found[0]}
-    for perm in _candidates(pick, drop, start):
+    for perm in _candidates(pick, drop, start, _depths(k, constraints)):
         if perm in seen:
             continue
         seen.add(perm)
@@ -116,9 +116,33 @@ def find_symmetry(
     return Symmetry.of(group, k)
 
 
-def _candidates(pick: np.ndarray, drop: np.ndarray, start: np.ndarray):
+def _depths(k: int, constraints: set[tuple[int, int]]) -> list[int]:
+    """Each goal's depth in C (the longest chain of goals before it): kept by every
+    automorphism, it tells apart goals with the same pick and drop points."""
+    preds: list[list[int]] = [[] for _ in range(k)]
+    for a, b in constraints:
+        preds[b].append(a)
+    depth = [-1] * k
+
+    def of(g: int) -> int:
+        stack = [g]
+        while stack:
+            v = stack[-1]
+            todo = [p for p in preds[v] if depth[p] < 0]
+            if todo:
+                stack.extend(todo)
+                continue
+            stack.pop()
+            depth[v] = 1 + max((depth[p] for p in preds[v]), default=-1)
+        return depth[g]
+
+    return [of(g) if depth[g] < 0 else depth[g] for g in range(k)]
+
+
+def _candidates(pick: np.ndarray, drop: np.ndarray, start: np.ndarray, depth: list[int]):
     """Goal permutations induced by plane rotations/reflections about the start that map
-    one anchor point onto a point of the same radius (each a candidate, checked later)."""
+    one anchor point onto a point of the same radius (each a candidate, checked later).
+    A goal is matched by its pick and drop points and its depth in C."""
     k = len(pick)
     rel = np.vstack((pick, drop)) - start
     radius = np.hypot(rel[:, 0], rel[:, 1])
@@ -133,10 +157,10 @@ def _candidates(pick: np.ndarray, drop: np.ndarray, start: np.ndarray):
     def key(xyz: np.ndarray) -> list[tuple[int, ...]]:
         return [tuple(v) for v in np.rint(xyz * quant).astype(np.int64).tolist()]
 
-    goal_keys = [pk + dk for pk, dk in zip(key(rel[:k]), key(rel[k:]), strict=True)]
+    goal_keys = [(*pk, *dk, d) for pk, dk, d in zip(key(rel[:k]), key(rel[k:]), depth, strict=True)]
     where: dict[tuple[int, ...], int] = {}
     for g, kk in enumerate(goal_keys):
-        if kk in where:  # two goals with the same pick and drop: no bijection by geometry
+        if kk in where:  # two goals alike in points and depth: no bijection by geometry
             return
         where[kk] = g
     same = np.flatnonzero(np.abs(radius - radius[a]) <= 1e-6 * scale)
@@ -150,7 +174,10 @@ def _candidates(pick: np.ndarray, drop: np.ndarray, start: np.ndarray):
                 m = np.array([[math.cos(t), -math.sin(t)], [math.sin(t), math.cos(t)]])
             moved = rel.copy()
             moved[:, :2] = rel[:, :2] @ m.T
-            keys = [pk + dk for pk, dk in zip(key(moved[:k]), key(moved[k:]), strict=True)]
+            keys = [
+                (*pk, *dk, d)
+                for pk, dk, d in zip(key(moved[:k]), key(moved[k:]), depth, strict=True)
+            ]
             perm = []
             for kk in keys:
                 g = where.get(kk)
