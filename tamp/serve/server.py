@@ -68,6 +68,9 @@ class Limits:
     errors_per_minute: int = 100  # bad messages before a client is closed (1008)
     service_timeout: float = 30.0  # s, unless the call asks for less
     fragment_age: float = 30.0  # s from a message's first fragment to its last
+    max_topics: int = 1024  # topics in all (clients create them by advertising)
+    topics_per_client: int = 256  # subscribed or advertised by one client
+    calls_per_client: int = 16  # service calls of one client in progress at once
     ping_interval: float | None = 20.0
 
 
@@ -128,6 +131,7 @@ class Client:
         self.errors: collections.deque[float] = collections.deque()
         self.error_count = 0
         self.warned_drop = False
+        self.calls = 0  # service calls in progress
 
     def wants_status(self, level: str) -> bool:
         order = ("info", "warning", "error")
@@ -345,6 +349,7 @@ class RosbridgeServer:
         want = f.get("type")
         if topic is not None and want and want != topic.type:
             raise WireError(f"subscribe: {name} has type {topic.type}, not {want}")
+        self._room(client, name, "subscribe")
         if topic is None:
             if not want:
                 raise WireError(f"subscribe: unknown topic {name} and no type given")
@@ -354,7 +359,10 @@ class RosbridgeServer:
         if throttle < 0 or throttle > 3_600_000 or qlen < 0 or qlen > 10_000:
             raise WireError("subscribe: throttle_rate or queue_length out of range")
         key = op.id if op.id is not None else ("anon", name)
-        client.subs.setdefault(name, {})[key] = Subscription(throttle, qlen)
+        subs = client.subs.setdefault(name, {})
+        if key not in subs and len(subs) >= 64:
+            raise WireError(f"subscribe: more than 64 subscriptions to {name}")
+        subs[key] = Subscription(throttle, qlen)
         if f.get("compression") not in (None, "none"):
             log.info(
                 "client %d asked for %s compression: sending JSON", client.id, f["compression"]
@@ -364,7 +372,17 @@ class RosbridgeServer:
             st.last = time.monotonic()
             self._put(client, topic.last, name if topic.slot else None)
 
+    def _room(self, client: Client, name: str, op: str) -> None:
+        """Bounds on what one client can make the server hold (topics, subscriptions)."""
+        if name in client.subs or name in client.adverts:
+            return
+        if len(set(client.subs) | client.adverts) >= self.limits.topics_per_client:
+            raise WireError(f"{op}: more than {self.limits.topics_per_client} topics")
+        if name not in self.topics and len(self.topics) >= self.limits.max_topics:
+            raise WireError(f"{op}: the server holds {self.limits.max_topics} topics already")
+
     def _advertise(self, client: Client, name: str, type_: str, latch: bool) -> None:
+        self._room(client, name, "advertise")
         topic = self.topics.get(name)
         if topic is None:
             topic = self.topics[name] = Topic(
@@ -412,7 +430,12 @@ class RosbridgeServer:
         if op.id is not None:
             reply["id"] = op.id
         self.counters["calls"] += 1
+        client.calls += 1
         try:
+            if client.calls > self.limits.calls_per_client:
+                raise ServiceError(
+                    f"{name}: more than {self.limits.calls_per_client} calls in progress"
+                )
             service = self.services.get(name)
             if service is None:
                 raise ServiceError(f"unknown service {name}")
@@ -448,6 +471,8 @@ class RosbridgeServer:
             reply.update(
                 values=f"{name}: internal error: {type(exc).__name__}: {exc}", result=False
             )
+        finally:
+            client.calls -= 1
         if op.id is None:
             reply.pop("id", None)
         try:

@@ -71,12 +71,20 @@ def test_page_drags_plans_and_executes_case2(browser, tmp_path):
 
         # One real mouse drag: press on O0 where it is drawn, move, release.
         canvas = browser.find_element(By.CSS_SELECTOR, "#view canvas")
-        x0, y0 = browser.execute_script("return window.demo.objectScreen('O0')")
         rect = browser.execute_script(
             "const r = arguments[0].getBoundingClientRect(); return [r.left, r.top, r.width,"
             " r.height];",
             canvas,
         )
+
+        def on_canvas():
+            p = browser.execute_script("return window.demo.objectScreen('O0')")
+            inside = (
+                p and rect[0] < p[0] < rect[0] + rect[2] and rect[1] + 80 < p[1] < rect[1] + rect[3]
+            )
+            return p if inside else None
+
+        x0, y0 = wait_for(on_canvas, what="O0 drawn on the canvas")
         cx, cy = rect[0] + rect[2] / 2, rect[1] + rect[3] / 2
         chain = ActionChains(browser)
         chain.move_to_element_with_offset(canvas, int(x0 - cx), int(y0 - cy)).click_and_hold()

@@ -372,3 +372,46 @@ def test_page_is_served_and_nothing_outside_it(served):
 def test_nonfinite_values_are_never_sent(served):
     served.thread.call(lambda: served.server.publish("/tamp/events", {"data": float("nan")}))
     assert served.counter("refused_nonfinite_out") == 1
+
+
+def test_a_client_cannot_make_the_server_hold_unbounded_state(served):
+    limit = served.server.limits.topics_per_client
+    with connect(served.url) as ws:
+        for i in range(limit + 10):
+            ws.send(
+                json.dumps({"op": "advertise", "topic": f"/spam/{i}", "type": "std_msgs/String"})
+            )
+        assert call(ws, "/rosapi/nodes")["result"] is True  # still served
+    assert served.counter("bad_messages") == 10
+    wait_for(
+        lambda: served.thread.call(
+            lambda: not any(t.startswith("/spam/") for t in served.server.topics)
+        ),
+        what="forgotten on disconnect",
+    )
+
+
+def test_calls_in_progress_per_client_are_bounded():
+    import threading
+
+    from tamp.serve import Limits, RosbridgeServer, ServerThread
+
+    gate = threading.Event()
+    server = RosbridgeServer(limits=Limits(calls_per_client=3))
+    server.service(
+        "/slow", "std_srvs/Trigger", lambda c, a: gate.wait(10) and {"success": True}, blocking=True
+    )
+    thread = ServerThread(server)
+    port = thread.start()
+    try:
+        with connect(f"ws://127.0.0.1:{port}/") as ws:
+            for i in range(5):
+                ws.send(json.dumps({"op": "call_service", "id": i, "service": "/slow"}))
+            refused = [recv_json(ws) for _ in range(2)]
+            assert all(r["result"] is False and "in progress" in r["values"] for r in refused)
+            gate.set()
+            done = [recv_json(ws) for _ in range(3)]
+            assert sorted(r["id"] for r in done) == [0, 1, 2] and all(r["result"] for r in done)
+    finally:
+        gate.set()
+        thread.stop()

@@ -228,6 +228,7 @@
     objectScreen: (id) => {  // where an object is drawn, in page pixels
       const m = objects[id];
       if (!m || !renderer) return null;
+      camera.updateMatrixWorld();  // the camera may have moved since the last frame
       const v = m.position.clone().project(camera), r = renderer.domElement.getBoundingClientRect();
       return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
     },
