@@ -42,8 +42,8 @@ demo: $(STAMP)
 # start once).
 PYTEST_WORKERS ?= auto
 test: $(STAMP)
-	$(BIN)/ruff check tamp verification tests benchmarks
-	$(BIN)/ruff format --check tamp verification tests benchmarks
+	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples
+	$(BIN)/ruff format --check tamp verification tests benchmarks notebooks examples
 	$(BIN)/pytest -q -n $(PYTEST_WORKERS) --dist loadfile
 
 # The quick loop while editing: every test not marked slow (under a minute on 2 cores).
@@ -89,11 +89,12 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/campaign.py
 
 lint: $(STAMP)
-	$(BIN)/ruff check tamp verification tests benchmarks
+	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples
+	$(BIN)/pyright
 
 fmt: $(STAMP)
-	$(BIN)/ruff format tamp verification tests benchmarks
-	$(BIN)/ruff check --fix tamp verification tests benchmarks
+	$(BIN)/ruff format tamp verification tests benchmarks notebooks examples
+	$(BIN)/ruff check --fix tamp verification tests benchmarks notebooks examples
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .hypothesis
