@@ -1,4 +1,4 @@
-"""Drawing a trace on the automaton it is checked against (Graphviz DOT, SVG via ``dot``).
+"""Drawing a trace on the automaton it is checked against (Graphviz DOT; ``tamp-verify --svg``).
 
 The picture shows what the checker does: starting in the initial state, every letter
 moves the set of reachable states along the edges whose label the letter satisfies.
@@ -9,9 +9,6 @@ A lasso is unrolled for two turns of its cycle.
 """
 
 from __future__ import annotations
-
-import shutil
-import subprocess
 
 from tamp import ltl
 from tamp.ltl.automata import edges, live_states
@@ -101,9 +98,7 @@ def trace_dot(formula: str | Formula, word: Word, *, finite: bool = False, title
 
 
 def to_svg(dot: str) -> str:
-    """Render DOT to SVG with Graphviz ``dot`` (installed by ``make``'s system-deps)."""
-    exe = shutil.which("dot")
-    if exe is None:
-        raise RuntimeError("Graphviz 'dot' is not installed (apt-get install graphviz)")
-    out = subprocess.run([exe, "-Tsvg"], input=dot, capture_output=True, text=True, check=True)
-    return out.stdout
+    """Render DOT to SVG with Graphviz ``dot`` (`tamp.pictures.render`, the one renderer)."""
+    from tamp.pictures import render
+
+    return render(dot, "svg").decode()

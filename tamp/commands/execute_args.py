@@ -65,7 +65,11 @@ def add_execute_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--bt-xml", metavar="PATH", help="write the grown tree as BehaviorTree.CPP v4 XML"
     )
-    g.add_argument("--bt-dot", metavar="PATH", help="write the grown tree as Graphviz DOT")
+    g.add_argument(
+        "--bt-dot",
+        metavar="FILE",
+        help="draw the grown tree (format by suffix: .dot, .svg, .png)",
+    )
 
 
 def default_max_ticks(goals: int, skill_ticks: int) -> int:
@@ -77,6 +81,10 @@ def default_max_ticks(goals: int, skill_ticks: int) -> int:
 def check_execute_arguments(args: argparse.Namespace) -> None:
     """Options that only make sense with ``--execute`` are refused without it (exit 2)."""
     if getattr(args, "execute", False):
+        if getattr(args, "bt_dot", None):
+            from tamp.pictures import check_picture
+
+            check_picture(args.bt_dot, "--bt-dot")
         return
     for option in ("bt_xml", "bt_dot"):
         if getattr(args, option, None):
@@ -137,9 +145,10 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any, *, 
 
         write_btcpp_xml(report.executor.root, args.bt_xml)
     if getattr(args, "bt_dot", None):
-        from tamp.bt.export import write_dot
+        from tamp.bt.export import to_dot
+        from tamp.pictures import write_graph
 
-        write_dot(report.executor.root, args.bt_dot)
+        write_graph(to_dot(report.executor.root), args.bt_dot, "--bt-dot")
     doc = {
         "source": getattr(demo, "source", None),
         "order": list(getattr(plan_result, "order", [])),

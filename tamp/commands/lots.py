@@ -35,7 +35,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--max-waits", type=int, default=3, help="consecutive waits before declaring infeasible"
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--dot", metavar="automaton.dot", help="write the Büchi automaton as DOT")
+    p.add_argument(
+        "--dot",
+        metavar="FILE",
+        help="draw the task's Büchi automaton (format by suffix: .dot, .svg, .png)",
+    )
     p.set_defaults(func=run)
 
 
@@ -66,17 +70,16 @@ def with_returns(task, args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from tamp.commands.output import output_file, print_json
     from tamp.errors import InfeasibleError, InputError
     from tamp.lots.run import run_task, run_word_json
     from tamp.lots.task import load_events, load_task
+    from tamp.pictures import check_picture, write_graph
 
     if args.max_waits < 1:
         raise InputError("must be >= 1", field="--max-waits")
     if args.dot:
-        output_file(args.dot, "--dot")
+        output_file(check_picture(args.dot, "--dot"), "--dot")
     task = with_returns(load_task(args.task), args)
     events = load_events(args.interference, task) if args.interference else []
     from verification import gate
@@ -93,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     )
     c = report.controller
     if args.dot:
-        Path(args.dot).write_text(c.aut.to_dot())
+        write_graph(c.aut.to_dot(), args.dot, "--dot")
     if args.json:
         print_json(report.to_json())
     else:

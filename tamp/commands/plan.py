@@ -11,6 +11,7 @@ import argparse
 from tamp.commands.execute_args import add_execute_arguments, check_execute_arguments
 from tamp.commands.output import add_no_verify, output_file, print_json, warn_unverified
 from tamp.errors import InputError
+from tamp.pictures import check_picture, write_graph
 
 MAX_DOT_STATES = 5000
 
@@ -28,7 +29,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--cost", choices=("distance", "time", "success"), default="distance", help="edge weights"
     )
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
-    p.add_argument("--dot", metavar="FILE", help="write the RG (chosen path highlighted) as DOT")
+    p.add_argument(
+        "--dot",
+        metavar="FILE",
+        help="draw the RG with the chosen path highlighted (format by suffix: .dot, .svg, .png)",
+    )
     add_no_verify(p)
     add_execute_arguments(p)
     p.set_defaults(func=run)
@@ -39,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     from tamp.rg import plan
 
     if args.dot:
-        output_file(args.dot, "--dot")
+        output_file(check_picture(args.dot, "--dot"), "--dot")
     check_execute_arguments(args)
     demo = load_demonstration(args.demo)
     result = plan(demo, args.cost)
@@ -70,8 +75,7 @@ def _write_dot(result, path: str) -> None:
         raise InputError(
             f"the RG has more than {MAX_DOT_STATES} states: too large to draw", field="--dot"
         )
-    out = output_file(path, "--dot")
-    rg_to_dot(result.demo, result.graph(), result.order).write_raw(str(out))
+    write_graph(rg_to_dot(result.demo, result.graph(), result.order).to_string(), path, "--dot")
 
 
 def _print_human(result) -> None:

@@ -3,8 +3,9 @@
     tamp simulate smp-mro [SCENARIO | --case 1|2|3] [--appear ...] [--fail ...] [--rate R]
     tamp simulate lots TASK [--cell CELL.yaml] [--interference EVENTS.yaml] [--grasp NETWORK]
     tamp simulate refine PROGRAM
-    ... and, for every workcell: [--seed N] [--record out.html] [--max-sim-time S]
-                                 [--no-verify] [--json]
+    ... and, for every workcell: [--seed N] [--record out.html] [--meshcat]
+                                 [--max-sim-time S] [--no-verify] [--timeline out.svg]
+                                 [--diagram out.svg] [--json]
 
 One subcommand per registered workcell (`tamp.sim.core.workcell`), built from the options
 the workcell declares; every run goes the same way: load the scenario (bad input: exit 2,
@@ -14,11 +15,20 @@ simulate, judge on the plant. The text report is the cell's; ``--json`` prints t
 `RunResult` document, whose common keys (``status``, ``ok``, ``cause``, ``task_time``,
 ``sim_time``, ``wall_time``, ``realtime_factor``, ``seed``, ``perturbation``,
 ``verified`` ...) are the same for every workcell. Exit 0 on SUCCESS, 1 otherwise.
+
+Pictures: ``--timeline`` draws the run's skills over sim time (`tamp.sim.core.timeline`),
+``--diagram`` the cell's Drake diagram (Graphviz, format by suffix: `tamp.pictures`).
+``--meshcat`` shows the run in a local Meshcat that stays open after the run until Enter
+or Ctrl-C (`tamp.sim.core.recording.hold_open`).
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
 
 from tamp.commands.output import add_no_verify, output_file, print_json, progress, warn_unverified
 
@@ -34,13 +44,39 @@ def register(subparsers) -> None:
         for option in cell.options:
             option.add_to(s)
         add_seed(s)
-        s.add_argument("--record", metavar="HTML", help="write a Meshcat animation (static HTML)")
-        s.add_argument(
-            "--max-sim-time", type=float, help="override the scenario's sim-time limit (s)"
-        )
-        add_no_verify(s)
-        s.add_argument("--json", action="store_true", help="machine-readable output")
+        add_run_arguments(s)
         s.set_defaults(func=run, workcell=cell.name)
+
+
+def add_run_arguments(parser) -> None:
+    """The flags every simulated run has, whatever its workcell."""
+    parser.add_argument(
+        "--record", metavar="HTML", help="write a Meshcat animation (static HTML, offline)"
+    )
+    parser.add_argument(
+        "--meshcat",
+        action="store_true",
+        help="watch the run in a local Meshcat (URL on stderr); it stays open after the run "
+        "until you press Enter or Ctrl-C",
+    )
+    parser.add_argument(
+        "--max-sim-time",
+        type=float,
+        metavar="S",
+        help="override the scenario's sim-time limit (s)",
+    )
+    add_no_verify(parser)
+    parser.add_argument(
+        "--timeline",
+        metavar="FILE",
+        help="draw the run's skills over sim time (.svg, .png or .pdf)",
+    )
+    parser.add_argument(
+        "--diagram",
+        metavar="FILE",
+        help="draw the workcell's Drake diagram with Graphviz (.dot, .svg or .png)",
+    )
+    parser.add_argument("--json", action="store_true", help="machine-readable output")
 
 
 def add_seed(parser) -> None:
@@ -60,6 +96,7 @@ def check_common(args: argparse.Namespace) -> None:
     import os
 
     from tamp.errors import InputError
+    from tamp.pictures import GRAPH_FORMATS, PLOT_FORMATS, check_picture
 
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
     from tamp.perturbation import check_seed
@@ -73,6 +110,10 @@ def check_common(args: argparse.Namespace) -> None:
         )
     if args.record:
         output_file(args.record, "--record", make_parents=True)
+    for flag, formats in (("--timeline", PLOT_FORMATS), ("--diagram", tuple(GRAPH_FORMATS))):
+        path = getattr(args, flag[2:])
+        if path:
+            output_file(check_picture(path, flag, formats), flag, make_parents=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -82,20 +123,74 @@ def run(args: argparse.Namespace) -> int:
     cell = get(args.workcell)
     check_common(args)
     load, run_options = split_options(cell, {o.dest: getattr(args, o.dest) for o in cell.options})
+    if args.meshcat:
+        run_options["meshcat"] = True
+        check_meshcat(cell)
     scenario = cell.load(getattr(args, cell.main.dest), **load)
+    if args.diagram:
+        write_diagram(cell, scenario, args.diagram)
     if args.no_verify:
         warn_unverified(f"tamp simulate {cell.name}", "the plan")
     progress(f"simulating in the {cell.name} workcell", quiet=args.json)
-    result = cell.run(
-        scenario,
-        seed=args.seed,
-        record=args.record,
-        max_sim_time=args.max_sim_time,
-        verify=not args.no_verify,
-        **run_options,
-    )
-    if args.json:
-        print_json(result.to_json())
-    else:
-        print("\n".join(result.report_lines()))
+    with watched(args.meshcat) as viewer:
+        result = cell.run(
+            scenario,
+            seed=args.seed,
+            record=args.record,
+            max_sim_time=args.max_sim_time,
+            verify=not args.no_verify,
+            **run_options,
+        )
+        doc = result.to_json()
+        if args.timeline:
+            from tamp.sim.core.timeline import draw_timeline
+
+            draw_timeline(doc, args.timeline)
+        if args.json:
+            print_json(doc)
+        else:
+            print("\n".join(result.report_lines()))
+        if viewer is not None:
+            wait_for_close(viewer)
     return result.exit_code
+
+
+def check_meshcat(cell) -> None:
+    """``--meshcat`` needs a cell whose ``run`` takes ``meshcat`` (a live view)."""
+    import inspect
+
+    from tamp.errors import InputError
+
+    if "meshcat" not in inspect.signature(cell.run).parameters:
+        raise InputError(
+            f"the {cell.name} workcell has no live view (record the run with --record)",
+            field="--meshcat",
+        )
+
+
+@contextmanager
+def watched(live: bool) -> Iterator[Any]:
+    """The live Meshcat every run in the block draws into (None without ``--meshcat``)."""
+    if not live:
+        yield None
+        return
+    from tamp.sim.core.recording import live_view
+
+    with live_view() as viewer:
+        logging.getLogger("tamp").info("meshcat: %s", viewer.web_url())
+        yield viewer
+
+
+def wait_for_close(viewer: Any) -> None:
+    """Keep the live view served until the user closes it (`recording.hold_open`)."""
+    from tamp.sim.core.recording import hold_open
+
+    hold_open(viewer)
+
+
+def write_diagram(cell, scenario: Any, path: str) -> None:
+    """The cell's Drake diagram (`Workcell.build`, its top level) as a Graphviz picture."""
+    from tamp.pictures import write_graph
+
+    diagram = cell.build(scenario)
+    write_graph(diagram.GetGraphvizString(max_depth=1), path, "--diagram")

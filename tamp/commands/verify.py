@@ -5,13 +5,16 @@
     tamp-verify bt DEMO.yaml [--property F …] [--order G1,G0,…] [--appear OBJ@PLACE[@WHEN] …]
                    [--fail ACTION[(ARGS)] …] [--max-failures N] [--max-states N]
     tamp-verify lots TASK.yaml [--interference EVENTS.yaml]
+    ... and, for every check: [--json] [--svg FILE]
 
 Exit status: 0 the property holds, 1 violated (the counterexample is printed; with
 ``--json`` it is in the JSON document), 2 bad input (a formula or letter that does not
 parse, a malformed file), 3 internal error, 4 unknown (``bt`` whose exploration hit
 ``--max-states`` without a counterexample: nothing established). ``--json`` prints at least
 ``{"status": "holds"|"violated"|"unknown", "holds": bool, "counterexample": …,
-"states_explored": int}``.
+"states_explored": int}``. ``--svg FILE`` draws the counterexample on the automaton of the
+property it violates (`verification.draw`; ``trace`` draws its trace whatever the verdict),
+in the format of the file's suffix (``.svg``, ``.png``, ``.dot``: `tamp.pictures`).
 
 Spot and the planning layers are imported inside each command, so ``--help`` stays fast.
 """
@@ -27,14 +30,63 @@ from tamp.commands.main import run as run_cli
 from tamp.errors import EXIT_INFEASIBLE, EXIT_OK, EXIT_UNKNOWN, InputError
 
 
-def _emit(report, args) -> int:
+def _emit(report, args, word=None) -> int:
+    """Print ``report`` (text or JSON), draw it with ``--svg``, return the exit status."""
     from tamp.commands.output import print_json
 
+    if getattr(args, "svg", None):
+        _draw(report, args.svg, word)
     if args.json:
         print_json(report.to_json())
     else:
         print(report.text())
     return {"holds": EXIT_OK, "violated": EXIT_INFEASIBLE, "unknown": EXIT_UNKNOWN}[report.status]
+
+
+def _add_output(p: argparse.ArgumentParser) -> None:
+    """``--json`` and ``--svg``, the same on every check."""
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument(
+        "--svg",
+        metavar="FILE",
+        help="draw the counterexample on the automaton of the property it violates "
+        "(format by suffix: .svg, .png or .dot)",
+    )
+
+
+def _checked(cmd):
+    """``cmd`` with ``--svg`` checked before any work (a wrong suffix: exit 2)."""
+
+    def run(args) -> int:
+        if getattr(args, "svg", None):
+            from tamp.commands.output import output_file
+            from tamp.pictures import check_picture
+
+            output_file(check_picture(args.svg, "--svg"), "--svg")
+        return cmd(args)
+
+    run.__doc__ = cmd.__doc__
+    return run
+
+
+def _draw(report, path: str, word=None) -> None:
+    """The first violated verdict's counterexample on its automaton (else ``word``, the
+    checked trace, on the first verdict's), written at ``path``."""
+    import logging
+
+    from tamp.pictures import write_graph
+    from verification.draw import trace_dot
+
+    failed = [v for v in report.failed if v.counterexample is not None]
+    if failed:
+        verdict, drawn = failed[0], failed[0].counterexample.word
+    elif word is not None and report.verdicts:
+        verdict, drawn = report.verdicts[0], word
+    else:
+        logging.getLogger("tamp").info("--svg: no counterexample to draw (%s)", report.status)
+        return
+    finite = verdict.semantics == "finite"
+    write_graph(trace_dot(verdict.formula, drawn, finite=finite), path, "--svg")
 
 
 # -- trace ----------------------------------------------------------------------------------
@@ -56,7 +108,7 @@ def _cmd_trace(args) -> int:
             field="--trace" if args.trace is not None else "--word",
         )
     verdict = check_trace(formula, word, finite=args.finite)
-    return _emit(Report([verdict]), args)
+    return _emit(Report([verdict]), args, word)
 
 
 def _add_trace(sub) -> None:
@@ -66,8 +118,8 @@ def _add_trace(sub) -> None:
     src.add_argument("--trace", metavar="FILE", help="trace file (YAML/JSON, version: 1)")
     src.add_argument("--word", help="trace in word syntax, e.g. 'p1 & !p2; p2; cycle{p1}'")
     p.add_argument("--finite", action="store_true", help="finite-trace (LTLf) semantics")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.set_defaults(func=_cmd_trace)
+    _add_output(p)
+    p.set_defaults(func=_checked(_cmd_trace))
 
 
 # -- plan -----------------------------------------------------------------------------------
@@ -105,8 +157,8 @@ def _add_plan(sub) -> None:
     p.add_argument("--order", help="goal order to check, e.g. G1,G0,G3,G2 (default: tamp plan's)")
     p.add_argument("--cost", default="distance", choices=("distance", "time", "success"))
     p.add_argument("--no-graph", action="store_true", help="skip the whole-RG model check")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.set_defaults(func=_cmd_plan)
+    _add_output(p)
+    p.set_defaults(func=_checked(_cmd_plan))
 
 
 # -- bt -------------------------------------------------------------------------------------
@@ -170,8 +222,8 @@ def _add_bt(sub) -> None:
         help="states to explore before the verdict is unknown (default 200000, "
         "the budget of the gate in tamp plan --execute and tamp simulate smp-mro)",
     )
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.set_defaults(func=_cmd_bt)
+    _add_output(p)
+    p.set_defaults(func=_checked(_cmd_bt))
 
 
 # -- lots -------------------------------------------------------------------------------------
@@ -192,8 +244,8 @@ def _add_lots(sub) -> None:
     )
     p.add_argument("task", metavar="TASK.yaml", help="LTL task file")
     add_interference_argument(p)
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.set_defaults(func=_cmd_lots)
+    _add_output(p)
+    p.set_defaults(func=_checked(_cmd_lots))
 
 
 def make_parser() -> argparse.ArgumentParser:

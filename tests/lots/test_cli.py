@@ -155,6 +155,16 @@ def test_unwritable_dot_exits_2(capsys, tmp_path):
         assert "--dot" in err and "internal error" not in err
 
 
+def test_dot_draws_the_automaton_in_the_format_of_its_suffix(capsys, tmp_path):
+    svg = tmp_path / "aut.svg"
+    assert main(["lots", "tower.yaml", "--dot", str(svg)]) == 0
+    assert "<svg" in svg.read_text()
+    capsys.readouterr()
+    assert main(["lots", "tower.yaml", "--dot", str(tmp_path / "aut.gif")]) == 2
+    err = capsys.readouterr().err
+    assert "--dot" in err and "suffix" in err
+
+
 GF40_TASK = (
     "version: 1\nname: gf40\nformula: "
     + '"'

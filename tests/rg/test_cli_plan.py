@@ -181,3 +181,19 @@ def test_a_tree_beyond_the_verify_budget_is_unknown_exit_1(capsys) -> None:
     assert code == 1 and out == ""
     assert "verification unknown" in err and "budget of 5 states" in err
     assert "raise it with --verify-budget N" in err and err.count("verification unknown") == 1
+
+
+def test_dot_format_follows_the_suffix(capsys, tmp_path):
+    """``--dot rg.svg`` is an SVG picture (rendered by Graphviz), ``rg.dot`` the DOT text,
+    any other suffix bad input naming the flag, refused before planning."""
+    svg, png, dot = tmp_path / "rg.svg", tmp_path / "rg.png", tmp_path / "rg.dot"
+    for path in (svg, png, dot):
+        code, _, _ = _run(capsys, "plan", "case2.yaml", "--dot", str(path))
+        assert code == 0
+    assert "<svg" in svg.read_text()
+    assert png.read_bytes().startswith(b"\x89PNG")
+    assert dot.read_text().lstrip().startswith(("digraph", "strict digraph"))
+    code, _, err = _run(capsys, "plan", "case2.yaml", "--dot", str(tmp_path / "rg.jpg"))
+    assert code == 2 and "--dot" in err and ".jpg" in err
+    code, _, err = _run(capsys, "plan", "case2.yaml", "--execute", "--bt-dot", "bt.txt")
+    assert code == 2 and "--bt-dot" in err

@@ -196,3 +196,25 @@ def test_every_tree_state_budget_has_the_gates_default(capsys):
         helps.append(" ".join(capsys.readouterr().out.split()))
     for text in helps:
         assert f"(default {DEFAULT_MAX_STATES}" in text
+
+
+def test_svg_draws_the_counterexample_on_its_automaton(capsys, tmp_path) -> None:
+    """``--svg``: the trace's walk over the automaton, the step that kills every accepting
+    continuation in red; the format follows the suffix."""
+    svg, dot = tmp_path / "cex.svg", tmp_path / "cex.dot"
+    argv = ("trace", "--formula", "G !bad", "--word", "a; bad; a", "--finite")
+    rc, _, _ = run(capsys, *argv, "--svg", str(svg))
+    assert rc == 1
+    text = svg.read_text()
+    assert "<svg" in text and "#d62728" in text and "no accepting" in text
+    rc, _, _ = run(capsys, *argv, "--svg", str(dot))
+    assert rc == 1 and dot.read_text().startswith("digraph trace")
+
+
+def test_svg_of_a_violated_plan_and_a_wrong_suffix(capsys, tmp_path) -> None:
+    out = tmp_path / "order.svg"
+    rc, _, _ = run(capsys, "plan", "case2.yaml", "--order", "G2,G3,G0,G1", "--svg", str(out))
+    assert rc == 1 and "<svg" in out.read_text()
+    rc, _, err = run(capsys, "plan", "case2.yaml", "--svg", str(tmp_path / "order.txt"))
+    assert rc == 2 and "--svg" in err and "suffix" in err
+    assert not (tmp_path / "order.txt").exists()

@@ -3,28 +3,144 @@
 Every workcell adds the same `MeshcatVisualizer` (illustration geometry, 30 frames per
 second) and records the same way: the visualizer keeps the frames while the simulator
 runs, then `save_recording` replays them into the Meshcat scene and writes Meshcat's
-static HTML (the animation embedded, openable offline). This is the only module that
-imports `Meshcat`.
+static HTML (the animation embedded, openable offline). Both open framed on the workcell:
+`add_visualizer` points Meshcat's camera at the bounds of the cell's geometry in its
+default configuration (`cell_bounds`, `camera_for`), so the robot is not a speck at
+Meshcat's default view. A live view asked for on the command line (`live_view`) is the
+one Meshcat every run in its block draws into, and `hold_open` keeps it served after the
+run until the user closes it. This is the only module that imports `Meshcat`.
 """
 
 from __future__ import annotations
 
+import math
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
 
 FRAME_RATE = 30.0
+#: Geometry larger than this (m, half extent) is the ground or a wall, not the cell.
+MAX_FRAMED_EXTENT = 5.0
+#: Meshcat's default vertical field of view (degrees).
+FIELD_OF_VIEW = 75.0
+#: Direction from the cell's centre to the camera: a three-quarter view from above.
+VIEW_DIRECTION = (1.0, -1.2, 0.9)
+
+_LIVE: list[Meshcat] = []
 
 
 def new_meshcat() -> Meshcat:
-    """A local Meshcat server on a free port (its URL: ``web_url()``)."""
-    return Meshcat(0)
+    """A local Meshcat server on a free port (its URL: ``web_url()``); inside `live_view`,
+    that view's Meshcat (so a run that records while it is watched uses one server)."""
+    return _LIVE[-1] if _LIVE else Meshcat(0)
+
+
+@contextmanager
+def live_view() -> Iterator[Meshcat]:
+    """A local Meshcat that every run inside the block draws into (`new_meshcat`)."""
+    meshcat = Meshcat(0)
+    _LIVE.append(meshcat)
+    try:
+        yield meshcat
+    finally:
+        _LIVE.remove(meshcat)
+
+
+def hold_open(meshcat: Meshcat, wait: Callable[[str], object] = input) -> None:
+    """Keep ``meshcat`` served after the run until the user presses Enter (or Ctrl-C, or
+    closes standard input), so a live view does not vanish when the simulation ends."""
+    print(
+        f"meshcat: {meshcat.web_url()} stays open; press Enter (or Ctrl-C) to close",
+        file=sys.stderr,
+        flush=True,
+    )  # on stderr: stdout stays the run's report (or its JSON document)
+    try:
+        wait("")
+    except (EOFError, KeyboardInterrupt):
+        print(file=sys.stderr)
 
 
 def add_visualizer(builder, scene_graph, meshcat: Meshcat) -> MeshcatVisualizer:
-    """A visualizer of ``scene_graph``'s illustration geometry, published at `FRAME_RATE`."""
+    """A visualizer of ``scene_graph``'s illustration geometry, published at `FRAME_RATE`,
+    with Meshcat's camera framing the cell (when the builder holds a finalized plant)."""
     params = MeshcatVisualizerParams(publish_period=1.0 / FRAME_RATE, role=Role.kIllustration)
-    return MeshcatVisualizer.AddToBuilder(builder, scene_graph, meshcat, params)
+    visualizer = MeshcatVisualizer.AddToBuilder(builder, scene_graph, meshcat, params)
+    bounds = cell_bounds(builder, scene_graph)
+    if bounds is not None:
+        position, target = camera_for(*bounds)
+        meshcat.SetCameraPose(position, target)
+    return visualizer
+
+
+def cell_bounds(builder, scene_graph) -> tuple[np.ndarray, np.ndarray] | None:
+    """Lower and upper corners of the illustration geometry of the builder's finalized
+    `MultibodyPlant` in its default configuration, plus the world-anchored geometry; each
+    shape counts as the sphere around it, shapes larger than `MAX_FRAMED_EXTENT` (ground,
+    walls) are left out. None without a finalized plant or any framed shape."""
+    from pydrake.math import RigidTransform
+    from pydrake.multibody.plant import MultibodyPlant
+    from pydrake.multibody.tree import BodyIndex
+
+    plants = [s for s in builder.GetSystems() if isinstance(s, MultibodyPlant)]
+    if not plants or not plants[0].is_finalized():
+        return None
+    plant = plants[0]
+    inspector = scene_graph.model_inspector()
+    context = plant.CreateDefaultContext()
+    points: list[np.ndarray] = []
+
+    def add(X_WG: RigidTransform, radius: float | None) -> None:
+        if radius is None or radius > MAX_FRAMED_EXTENT:
+            return
+        centre = X_WG.translation()
+        points.extend((centre - radius, centre + radius))
+
+    for i in range(plant.num_bodies()):
+        body = plant.get_body(BodyIndex(i))
+        X_WB = plant.EvalBodyPoseInWorld(context, body)
+        for gid in plant.GetVisualGeometriesForBody(body):
+            add(X_WB @ inspector.GetPoseInFrame(gid), shape_radius(inspector.GetShape(gid)))
+    for gid in inspector.GetGeometries(inspector.world_frame_id(), Role.kIllustration):
+        add(inspector.GetPoseInFrame(gid), shape_radius(inspector.GetShape(gid)))
+    if not points:
+        return None
+    stacked = np.array(points)
+    return stacked.min(axis=0), stacked.max(axis=0)
+
+
+def shape_radius(shape) -> float | None:
+    """Radius of a sphere around ``shape`` (None: unbounded or unknown, e.g. a half space)."""
+    from pydrake.geometry import Box, Capsule, Cylinder, Ellipsoid, Sphere
+
+    if isinstance(shape, Box):
+        return 0.5 * math.hypot(shape.width(), shape.depth(), shape.height())
+    if isinstance(shape, Sphere):
+        return shape.radius()
+    if isinstance(shape, Cylinder):
+        return math.hypot(shape.radius(), 0.5 * shape.length())
+    if isinstance(shape, Capsule):
+        return shape.radius() + 0.5 * shape.length()
+    if isinstance(shape, Ellipsoid):
+        return max(shape.a(), shape.b(), shape.c())
+    return 0.1  # a mesh: its frame with a small margin (the cell's boxes carry the bounds)
+
+
+def camera_for(
+    lower: Sequence[float], upper: Sequence[float], *, fov_deg: float = FIELD_OF_VIEW
+) -> tuple[np.ndarray, np.ndarray]:
+    """Camera position and target (world frame) that show the box ``lower``..``upper``
+    whole: the target is its centre, the camera along `VIEW_DIRECTION` at the distance
+    where the box's bounding sphere fills the field of view ``fov_deg``."""
+    lo, hi = np.asarray(lower, float), np.asarray(upper, float)
+    target = 0.5 * (lo + hi)
+    radius = max(0.5 * float(np.linalg.norm(hi - lo)), 0.25)
+    distance = radius / math.sin(math.radians(fov_deg) / 2)
+    direction = np.asarray(VIEW_DIRECTION) / np.linalg.norm(VIEW_DIRECTION)
+    return target + distance * direction, target
 
 
 def start_recording(visualizer: MeshcatVisualizer) -> None:
@@ -33,7 +149,8 @@ def start_recording(visualizer: MeshcatVisualizer) -> None:
 
 
 def save_recording(visualizer: MeshcatVisualizer, meshcat: Meshcat, path: str | Path) -> str:
-    """Stop recording and write the animation as one self-contained HTML file at ``path``."""
+    """Stop recording and write the animation as one self-contained HTML file at ``path``
+    (it opens on the camera `add_visualizer` set)."""
     visualizer.StopRecording()
     visualizer.PublishRecording()
     out = Path(path)

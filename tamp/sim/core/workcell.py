@@ -228,7 +228,8 @@ class Workcell(Protocol):
         verify: bool = True,
         **options: Any,
     ) -> RunResult:
-        """Verify, perturb by ``seed``, build, simulate and judge on the plant."""
+        """Verify, perturb by ``seed``, build, simulate and judge on the plant. A cell with
+        a live view also takes ``meshcat: bool`` (``tamp simulate CELL --meshcat``)."""
         ...
 
 

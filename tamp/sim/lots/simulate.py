@@ -538,10 +538,22 @@ class LotsWorkcell:
         record: str | Path | None = None,
         max_sim_time: float | None = None,
         verify: bool = True,
+        meshcat: bool = False,
     ) -> LotsSimResult:
-        """`simulate_lots`."""
+        """`simulate_lots`; ``meshcat``: draw the run in a local Meshcat (the command
+        line's live view, `tamp.sim.core.recording.new_meshcat`)."""
+        viewer = None
+        if meshcat:
+            from tamp.sim.core.recording import new_meshcat
+
+            viewer = new_meshcat()
         return simulate_lots(
-            scenario, seed=seed, record=record, max_sim_time=max_sim_time, verify=verify
+            scenario,
+            seed=seed,
+            record=record,
+            meshcat=viewer,
+            max_sim_time=max_sim_time,
+            verify=verify,
         )
 
 

@@ -177,7 +177,6 @@ class SmpMroWorkcell:
             type=int,
             metavar="N",
         ),
-        Option("meshcat", "live view in a local Meshcat", stage="run", action="store_true"),
         Option(
             "rate",
             "target real-time rate (default: as fast as possible; 1.0 with --meshcat)",

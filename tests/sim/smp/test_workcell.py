@@ -27,7 +27,6 @@ def test_the_cell_declares_the_contract():
         "appear": "load",
         "fail": "load",
         "verify_budget": "run",
-        "meshcat": "run",
         "rate": "run",
     }
     assert WORKCELL.replay.format(scenario="case3", seed=4) == (
