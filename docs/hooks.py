@@ -121,16 +121,84 @@ def formats_markdown() -> str:
     from tamp.commands.schema import FORMATS
 
     lines = [
-        "| format (`tamp schema NAME`) | what | read by | packaged examples | schema |",
+        "| format (`tamp schema NAME`) | what | read by | packaged files | schema |",
         "|---|---|---|---|---|",
     ]
     for name, fmt in FORMATS.items():
-        examples = ", ".join(f"`{p}`" for p in fmt.example_paths()) or "—"
+        folders: dict[str, list[str]] = {}
+        for path in fmt.example_paths():
+            folder, _, file_name = path.rpartition("/")
+            folders.setdefault(folder, []).append(file_name)
+        examples = "; ".join(
+            f"`{folder}/`: " + ", ".join(names) for folder, names in folders.items()
+        )
         lines.append(
             f"| `{name}` | {fmt.title} | `{fmt.loader}` | {examples} | "
             f"[{name}.json](../schemas/{name}.json) |"
         )
     return "\n".join(lines)
+
+
+def _type_words(node: dict) -> str:
+    """A schema node's type in a few words (``number > 0``, ``list of 3 numbers``)."""
+    if "enum" in node:
+        return "one of " + ", ".join(f"`{v}`" for v in node["enum"])
+    if "const" in node:
+        return f"`{node['const']}`"
+    kind = node.get("type", "any")
+    if kind == "array":
+        n = node.get("minItems")
+        items = node.get("items") or (node.get("prefixItems") or [{}])[0]
+        size = f"{n} " if n is not None and n == node.get("maxItems") else ""
+        words = _type_words(items)
+        for kind in ("number", "string", "integer", "boolean"):  # plural: "3 numbers"
+            if words.startswith(kind):
+                words = kind + "s" + words[len(kind) :]
+        return f"list of {size}{words}"
+    if kind == "object" and "properties" not in node:
+        value = node.get("additionalProperties")
+        return f"mapping to {_type_words(value)}" if isinstance(value, dict) else "mapping"
+    bounds = []
+    if "minimum" in node:
+        bounds.append(f">= {node['minimum']:g}")
+    if "exclusiveMinimum" in node:
+        bounds.append(f"> {node['exclusiveMinimum']:g}")
+    if "maximum" in node:
+        bounds.append(f"<= {node['maximum']:g}")
+    return " ".join([kind, *bounds]) if kind != "any" else "any (its own grammar)"
+
+
+def _schema_rows(node: dict, prefix: str = "") -> list[str]:
+    """One table row per key of a JSON Schema object, nested sections as dotted keys."""
+    rows = []
+    required = set(node.get("required", ()))
+    for key, sub in node.get("properties", {}).items():
+        name = f"{prefix}{key}"
+        if sub.get("type") == "object" and "properties" in sub:
+            rows += _schema_rows(sub, name + ".")
+            continue
+        if sub.get("type") == "array" and "properties" in sub.get("items", {}):
+            rows += _schema_rows(sub["items"], name + "[].")
+            continue
+        default = "required" if key in required else ""
+        if "default" in sub:
+            default = f"`{json.dumps(sub['default'])}`"
+        words = _escape(sub.get("description", ""))
+        rows.append(f"| `{name}` | {_escape(_type_words(sub))} | {default} | {words} |")
+    return rows
+
+
+def format_fields_markdown() -> str:
+    """Every format's keys (from its JSON Schema), one collapsed table per format."""
+    from tamp.commands.schema import FORMATS
+
+    out = []
+    for name, fmt in FORMATS.items():
+        out += [f'??? info "`{name}`: {fmt.title}"', ""]
+        table = ["| key | type | default | meaning |", "|---|---|---|---|"]
+        table += _schema_rows(fmt.schema())
+        out += [f"    {line}" for line in table] + [""]
+    return "\n".join(out)
 
 
 def schema_files() -> dict[str, str]:
@@ -143,7 +211,11 @@ def schema_files() -> dict[str, str]:
     }
 
 
-GENERATED = {"cli": cli_markdown, "formats": formats_markdown}
+GENERATED = {
+    "cli": cli_markdown,
+    "formats": formats_markdown,
+    "format-fields": format_fields_markdown,
+}
 
 
 # --- MkDocs events ---------------------------------------------------------------------------

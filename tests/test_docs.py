@@ -447,6 +447,20 @@ def test_cli_reference_covers_every_command():
     assert "| `--cost {distance,time,success}` | edge weights | `distance` |" in text
 
 
+def test_formats_page_lists_every_format_and_its_keys():
+    """The formats page names every `tamp schema` format, links its schema and tabulates
+    its keys (read from the schema: the derived ones show the dataclasses' defaults)."""
+    from tamp.commands.schema import FORMATS
+
+    hooks = _hooks()
+    table, fields = hooks.formats_markdown(), hooks.format_fields_markdown()
+    for name in FORMATS:
+        assert f"| `{name}` |" in table and f"[{name}.json](../schemas/{name}.json)" in table
+        assert f'??? info "`{name}`:' in fields
+    assert "| `executor.max_sim_time` | number &gt; 0 | `300.0` |" in fields
+    assert set(hooks.schema_files()) == {f"schemas/{name}.json" for name in FORMATS}
+
+
 @pytest.mark.slow
 def test_site_builds_strictly(tmp_path):
     """`mkdocs build --strict` (what `make docs` runs) passes: no broken link, anchor or API
