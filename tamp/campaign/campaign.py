@@ -38,6 +38,7 @@ class CampaignSpec:
     max_sim_time: float | None = None
     record: bool = True
     options: tuple[tuple[str, str], ...] = ()
+    verify: bool = True  # False: every run skips the verification gate (--no-verify)
 
     def __post_init__(self) -> None:
         from tamp.sim.core.workcell import campaign_options
@@ -81,6 +82,7 @@ class CampaignSpec:
                 self.max_sim_time,
                 self.record,
                 self.options,
+                self.verify,
             )
             for s in self.seeds
         ]
@@ -89,6 +91,8 @@ class CampaignSpec:
         """The command that reruns one seed of this campaign."""
         spelling = {o.dest: o.spelling for o in self.kind.options}
         extra = "".join(f" {spelling[name]} {value}" for name, value in self.options)
+        if not self.verify:
+            extra += " --no-verify"
         return self.kind.replay.format(scenario=self.scenario, seed=seed) + extra
 
 
@@ -148,6 +152,7 @@ class CampaignResult:
             "by_perturbation": [b.to_json() for b in success_by_size(sizes)],
             "runs": [r.summary_json() for r in self.records],
             "options": dict(self.spec.options),
+            "verified": self.spec.verify,
             "time_limit": self.spec.time_limit,
             "wall_time": round(self.wall_time, 3),
             "init_time": round(self.init_time, 3),

@@ -35,6 +35,7 @@ class Job:
     max_sim_time: float | None = None
     record: bool = True  # keep the recording when the run does not succeed
     options: tuple[tuple[str, str], ...] = ()  # the workcell's campaign options
+    verify: bool = True  # pass the verification gate before the run
 
 
 @dataclass
@@ -129,6 +130,7 @@ def execute(job: Job) -> RunRecord:
                 job.seed,
                 record=record,
                 max_sim_time=job.max_sim_time,
+                verify=job.verify,
                 **dict(job.options),
             )
             rec = from_runner(job.seed, out, time.perf_counter() - t0)

@@ -3,7 +3,7 @@
     tamp campaign SCENARIO [--kind smp-mro|lots|refine] --runs N [--seed S]
                   [--address ADDRESS] [--workers K] [--engine ray|local] [--time-limit S]
                   [--max-sim-time S] [--interference EVENTS.yaml] [--cell CELL.yaml]
-                  [--out DIR] [--no-record]
+                  [--out DIR] [--no-record] [--no-verify]
                   [--min-success RATE] [--json]
 
 SCENARIO is a file or a packaged name (``case3.yaml``, ``tower.yaml``, ``task4``); the kind is
@@ -24,7 +24,7 @@ import argparse
 import math
 from pathlib import Path
 
-from tamp.commands.output import print_json, progress
+from tamp.commands.output import add_no_verify, print_json, progress, warn_unverified
 
 
 def register(subparsers) -> None:
@@ -45,11 +45,14 @@ def register(subparsers) -> None:
     p.add_argument(
         "--time-limit", type=float, default=600.0, help="wall s per run before it is killed"
     )
-    p.add_argument("--max-sim-time", type=float, help="override the scenario's sim-time limit")
+    p.add_argument(
+        "--max-sim-time", type=float, metavar="S", help="override the scenario's sim-time limit (s)"
+    )
     for option in campaign_flags():
         option.add_to(p)
     p.add_argument("--out", metavar="DIR", help="output folder (default build/campaign/NAME)")
     p.add_argument("--no-record", action="store_true", help="no recordings of failed runs")
+    add_no_verify(p)
     p.add_argument(
         "--min-success", type=float, metavar="RATE", help="exit 1 when the success rate is below"
     )
@@ -138,7 +141,10 @@ def run(args: argparse.Namespace) -> int:
         max_sim_time=args.max_sim_time,
         record=not args.no_record,
         options=options,
+        verify=not args.no_verify,
     )
+    if args.no_verify:
+        warn_unverified("tamp campaign", "every run's plan")
     out = Path(args.out or Path("build") / "campaign" / path.stem)
     if out.exists() and not out.is_dir():
         raise InputError(f"{out} is a file, expected a folder", field="--out")

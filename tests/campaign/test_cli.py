@@ -114,3 +114,15 @@ def test_in_process_campaign_of_case1(tmp_path, capsys):
     assert code == 1
     text = capsys.readouterr().out
     assert "success 0/2 = 0.0%" in text and "below --min-success 0.5" in text
+
+
+def test_no_verify_reaches_every_run_and_the_replay(capsys):
+    """``--no-verify`` is the same flag as on ``tamp simulate``: every job skips the gate,
+    the replay command says so, and the summary records it."""
+    from tamp.campaign import CampaignSpec, resolve_scenario
+
+    kind, path = resolve_scenario("case1.yaml", None)
+    spec = CampaignSpec(kind, path, 2, verify=False)
+    assert [job.verify for job in spec.jobs()] == [False, False]
+    assert spec.replay(1).endswith(" --no-verify")
+    assert all(job.verify for job in CampaignSpec(kind, path, 2).jobs())

@@ -330,3 +330,8 @@ def test_taking_more_than_a_pile_holds_is_bad_input(capsys, tmp_path, line, why)
     ev = write(tmp_path, "ev.yaml", f"version: 1\nevents:\n  - {line}\n")
     assert main(["lots", "tower", "--interference", ev]) == 2
     assert why in capsys.readouterr().err
+
+
+def test_no_verify_skips_the_table_gate_with_a_warning(capsys):
+    assert main(["lots", "tower.yaml", "--no-verify"]) == 0
+    assert "--no-verify" in capsys.readouterr().err
