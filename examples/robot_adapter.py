@@ -174,7 +174,7 @@ class FakeActionServer:
 
     def _end(self, goal: Goal, status: GoalStatus, result: str) -> None:
         goal.status, goal.result = status, result
-        what = goal.obj or "({:.2f}, {:.2f})".format(*goal.target)
+        what = goal.obj or "({:.2f}, {:.2f})".format(*(goal.target or (0.0, 0.0)))
         self.log.append(f"goal {goal.id} {goal.kind} {what}: {status.value} ({result})")
 
     def _wait(self, goal: Goal, seconds: float) -> bool:
@@ -191,6 +191,7 @@ class FakeActionServer:
         return True
 
     def _navigate(self, goal: Goal) -> None:
+        assert goal.target is not None
         with self._lock:
             (x0, y0), (x1, y1) = self._state.xy, goal.target
         steps = max(1, math.ceil(math.dist((x0, y0), (x1, y1)) / self.speed / self._step))
@@ -219,6 +220,7 @@ class FakeActionServer:
                 self.log.append(f"a person puts {obj} at ({px:g}, {py:g})")
 
     def _pick(self, goal: Goal) -> None:
+        assert goal.obj is not None
         if not self._wait(goal, self.manipulation_time):
             return
         with self._lock:
@@ -235,6 +237,7 @@ class FakeActionServer:
                 self._end(goal, GoalStatus.SUCCEEDED, "grasped")
 
     def _place(self, goal: Goal) -> None:
+        assert goal.obj is not None and goal.target is not None
         if not self._wait(goal, self.manipulation_time):
             return
         with self._lock:
@@ -404,7 +407,7 @@ def run(
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("demo", nargs="?", default="case3.yaml", help="demonstration file")
     parser.add_argument(
         "--slip", action="append", default=None, help="object whose first grasp slips"

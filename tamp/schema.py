@@ -150,7 +150,7 @@ def _read(tp: Any, raw: Any, f: Fields, key: str, s: Spec) -> Any:
         raise TypeError(f"{path}: unions other than X | None need a parse function")
     if origin is typing.Literal:
         return _string(raw, f, key, tuple(args))
-    if dataclasses.is_dataclass(tp):
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         return load_dataclass(tp, f.sub(key))
     if tp is bool:
         return f.bool(key)
@@ -199,7 +199,7 @@ def _item(tp: Any, raw: Any, f: Fields, path: str, i: int, s: Spec) -> Any:
     """Item ``i`` of a list field: a number within the field's bounds, a string, or a
     dataclass read from a mapping (errors name ``path[i]``)."""
     where = f"{path}[{i}]"
-    if dataclasses.is_dataclass(tp):
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         if not isinstance(raw, Mapping):
             raise InputError("expected a mapping", file=f.file, field=where)
         return load_dataclass(tp, Fields(raw, f.file, where))
@@ -251,7 +251,7 @@ def describe(cls: type, prefix: str = "") -> list[dict[str, Any]]:
     rows = []
     for fld, s, tp in schema_fields(cls):
         key = prefix + (s.key or fld.name)
-        if dataclasses.is_dataclass(tp):
+        if isinstance(tp, type) and dataclasses.is_dataclass(tp):
             rows.extend(describe(tp, key + "."))
             continue
         if fld.default is not MISSING:
@@ -364,7 +364,7 @@ def _type_schema(tp: Any, s: Spec) -> dict[str, Any]:
         return _type_schema(inner[0], s) if len(inner) == 1 else {}
     if origin is typing.Literal:
         return {"enum": list(args)}
-    if dataclasses.is_dataclass(tp):
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         return _object_schema(tp)
     if tp is bool:
         return {"type": "boolean"}
