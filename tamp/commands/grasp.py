@@ -40,7 +40,7 @@ def register(subparsers) -> None:
     p.add_argument("--scenes", type=int, default=100, help="number of scenes (default 100)")
     p.add_argument("--views", type=int, default=4, help="viewpoints per scene (default 4)")
     p.add_argument("--size", type=int, default=128, help="image side in pixels (default 128)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="seed of the scenes (default 0)")
     p.add_argument(
         "--jobs", type=int, default=1, help="render in N processes (same files; default 1)"
     )
@@ -57,11 +57,21 @@ def register(subparsers) -> None:
 
     p = sub.add_parser("train", help="train a grasp network")
     _dataset_args(p)
-    p.add_argument("--model", choices=list(NETWORKS), default=DEFAULT_NETWORK)
-    p.add_argument("--input", choices=list(INPUT_CHANNELS), default="rgbd")
+    p.add_argument(
+        "--model",
+        choices=list(NETWORKS),
+        default=DEFAULT_NETWORK,
+        help=f"the network to train (default {DEFAULT_NETWORK})",
+    )
+    p.add_argument(
+        "--input",
+        choices=list(INPUT_CHANNELS),
+        default="rgbd",
+        help="input channels (default rgbd)",
+    )
     p.add_argument("--out", default="runs/grasp", help="checkpoint folder (default runs/grasp)")
-    p.add_argument("--epochs", type=int, default=10)
-    p.add_argument("--batch-size", type=int, default=8)
+    p.add_argument("--epochs", type=int, default=10, help="training epochs (default 10)")
+    p.add_argument("--batch-size", type=int, default=8, help="images per batch (default 8)")
     p.add_argument("--batches-per-epoch", type=int, default=0, help="0: the whole split")
     p.add_argument("--lr", type=float, default=1e-3, help="(peak) learning rate")
     p.add_argument(
@@ -112,11 +122,11 @@ def register(subparsers) -> None:
     )
     p.add_argument("weights", help="weights file (final.pt, best.pt or models/weights/*.pt)")
     _dataset_args(p, split_choices=("image", "object", "both"), size=None, recorded=True)
-    p.add_argument("--device", default="cpu")
-    p.add_argument("--threads", type=int, default=0)
+    p.add_argument("--device", default="cpu", help="cpu (default), cuda, cuda:1 ...")
+    p.add_argument("--threads", type=int, default=0, help="torch CPU threads (0: default)")
     p.add_argument("--time-size", type=int, default=224, help="image side for the timing")
-    p.add_argument("--quiet", action="store_true")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true", help="print the evaluation as JSON")
     p.set_defaults(func=run_eval)
 
     p = sub.add_parser(
@@ -134,7 +144,7 @@ def register(subparsers) -> None:
         metavar="FILE",
         help="write the calibrated weights to FILE (default: overwrite WEIGHTS)",
     )
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print the calibration as JSON")
     p.set_defaults(func=run_calibrate)
 
     p = sub.add_parser("predict", help="grasps in an image (pixels; world frame with a camera)")
@@ -154,10 +164,16 @@ def register(subparsers) -> None:
         help=f"weights file (default: the shipped {NETWORKS[DEFAULT_NETWORK].weights_file})",
     )
     p.add_argument("--camera", help="JSON with K (3x3) and X_WC (4x4), as `grasp synth` writes")
-    p.add_argument("--intrinsics", nargs=4, type=float, metavar=("FX", "FY", "CX", "CY"))
+    p.add_argument(
+        "--intrinsics",
+        nargs=4,
+        type=float,
+        metavar=("FX", "FY", "CX", "CY"),
+        help="camera intrinsics in pixels (instead of --camera)",
+    )
     p.add_argument("--pose", nargs=16, type=float, metavar="X", help="X_WC, 16 numbers row-major")
     p.add_argument("--top", type=int, default=1, help="number of grasps (default 1)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print the grasps as JSON")
     p.set_defaults(func=run_predict)
 
 
@@ -178,11 +194,25 @@ def _dataset_args(
     )
     rec = " (default: as recorded in the weights)" if recorded else ""
     p.add_argument(
-        "--split", choices=split_choices, default=None if recorded else "image", help=rec
+        "--split",
+        choices=split_choices,
+        default=None if recorded else "image",
+        help="train/test split: by image or by object (eval: both reports each)"
+        + (rec or " (default image)"),
     )
-    p.add_argument("--test-fraction", type=float, default=None if recorded else 0.1, help=rec)
+    p.add_argument(
+        "--test-fraction",
+        type=float,
+        default=None if recorded else 0.1,
+        help="test part of all images/objects" + (rec or " (default 0.1)"),
+    )
     p.add_argument("--fold", type=int, help="test fold for k-fold cross-validation" + rec)
-    p.add_argument("--folds", type=int, default=None if recorded else 5, help=rec)
+    p.add_argument(
+        "--folds",
+        type=int,
+        default=None if recorded else 5,
+        help="folds of k-fold cross-validation" + (rec or " (default 5)"),
+    )
     if recorded:
         p.add_argument("--seed", type=int, default=None, help="split seed" + rec)
     else:

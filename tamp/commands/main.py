@@ -6,7 +6,7 @@ Every subcommand module exposes ``register(subparsers)`` that adds its parser an
 0 success, 1 infeasible task or failed check, 2 bad input (or an optional extra the command
 needs is not installed: the message names it, `tamp.extras`), 3 internal error. Under
 ``--json`` an error is also one JSON document on stdout:
-``{"error": ..., "exit": 2, "file": ..., "field": ...}``.
+``{"schema": 1, "error": ..., "exit": 2, "file": ..., "field": ...}``.
 """
 
 from __future__ import annotations
@@ -27,7 +27,18 @@ from tamp.extras import DISTRIBUTION, from_import_error
 EXIT_INTERNAL = 3
 
 #: Subcommand modules under tamp.commands, in the order `tamp --help` lists them.
-COMMANDS = ("plan", "lots", "simulate", "refine", "grasp", "campaign", "serve", "schema")
+COMMANDS = (
+    "plan",
+    "lots",
+    "simulate",
+    "refine",
+    "grasp",
+    "campaign",
+    "serve",
+    "schema",
+    "scenarios",
+    "completion",
+)
 
 
 def package_version() -> str:
@@ -82,7 +93,10 @@ def error_line(prog: str, exc: TampError) -> str:
 
 def _error_json(message: str, code: int, exc: BaseException | None = None) -> None:
     """The ``--json`` form of an error: one document on stdout, beside the stderr line."""
+    from tamp.commands.output import JSON_SCHEMA
+
     doc = {
+        "schema": JSON_SCHEMA,
         "error": message,
         "exit": code,
         "file": getattr(exc, "file", None),

@@ -1,5 +1,5 @@
-"""Helpers shared by subcommands: JSON printing, progress on stderr, output-file checks, and
-the ``--no-verify`` flag with its warning line."""
+"""Helpers shared by subcommands: JSON printing (every document carries ``"schema": 1``),
+progress on stderr, output-file checks, and the ``--no-verify`` flag with its warning line."""
 
 from __future__ import annotations
 
@@ -12,10 +12,21 @@ from typing import Any
 
 from tamp.errors import InputError
 
+#: Version of the JSON documents the commands print (the ``"schema"`` key of each): raised
+#: when a document changes in a way a reader must know about (a key removed or renamed).
+JSON_SCHEMA = 1
+
+
+def with_schema(payload: Any) -> Any:
+    """``payload`` with ``"schema"`` first when it is a mapping that does not say it yet."""
+    if isinstance(payload, dict) and "schema" not in payload:
+        return {"schema": JSON_SCHEMA, **payload}
+    return payload
+
 
 def print_json(payload: Any) -> None:
-    """Print a JSON document on stdout (what ``--json`` promises)."""
-    json.dump(payload, sys.stdout, indent=2, default=_default)
+    """Print a JSON document on stdout (what ``--json`` promises), with its ``"schema"``."""
+    json.dump(with_schema(payload), sys.stdout, indent=2, default=_default)
     sys.stdout.write("\n")
 
 

@@ -155,7 +155,12 @@ def _add_plan(sub) -> None:
     p = sub.add_parser("plan", help="check an RG goal order and the whole RG against C")
     p.add_argument("demo", metavar="DEMO.yaml", help="demonstration file")
     p.add_argument("--order", help="goal order to check, e.g. G1,G0,G3,G2 (default: tamp plan's)")
-    p.add_argument("--cost", default="distance", choices=("distance", "time", "success"))
+    p.add_argument(
+        "--cost",
+        default="distance",
+        choices=("distance", "time", "success"),
+        help="edge weights of tamp plan's order (default distance)",
+    )
     p.add_argument("--no-graph", action="store_true", help="skip the whole-RG model check")
     _add_output(p)
     p.set_defaults(func=_checked(_cmd_plan))
