@@ -11,9 +11,15 @@ from collections.abc import Iterable, Iterator, Sequence
 
 import spot
 
-from tamp.ltl.letters import Bdd, Letter, bdd_letter, letter_bdd, meets, word_automaton
-
-Automaton = spot.twa_graph
+from tamp.ltl.letters import (
+    Automaton,
+    Bdd,
+    Letter,
+    bdd_letter,
+    letter_bdd,
+    meets,
+    word_automaton,
+)
 
 
 def edges(aut: Automaton, state: int | None = None) -> Iterator[tuple[int, int, Bdd]]:
@@ -102,10 +108,11 @@ def accepting_continuation(
             s = queue.popleft()
             if aut.state_is_accepting(s):
                 path = []
-                while parent[s] is not None:
-                    p, cond = parent[s]
+                step = parent[s]
+                while step is not None:
+                    s, cond = step
                     path.append(bdd_letter(aut, cond))
-                    s = p
+                    step = parent[s]
                 return list(reversed(path)), None
             for _, dst, cond in edges(aut, s):
                 if dst not in parent:

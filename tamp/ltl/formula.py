@@ -10,13 +10,17 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterable
+from typing import TypeAlias
 
 import spot
+import spot.impl
 
 from tamp.errors import InputError
 
 #: Spot's formula type (the only name other layers need for annotations and isinstance).
-Formula = spot.formula
+#: Spot defines it in ``spot.impl`` and extends it in ``spot`` under the same name
+#: (``spot.formula is spot.impl.formula``); a type checker sees its methods on the former.
+Formula: TypeAlias = spot.impl.formula
 
 _COMPARISON = re.compile(r"(?<![\"\w])([A-Za-z_][\w.]*)\s*(<=|>=|==|!=|<|>)\s*(-?\d+)(?![\w\"])")
 #: A proposition made from a comparison: ``holding_count<=1`` -> (name, operator, integer).
@@ -35,7 +39,7 @@ def parse(text: str, *, field: str = "formula", file: str | None = None) -> Form
     if not isinstance(text, str) or not text.strip():
         raise InputError("empty formula", file=file, field=field)
     try:
-        return spot.formula(_quote_comparisons(text))
+        return Formula(_quote_comparisons(text))
     except SyntaxError as exc:
         lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
         reason = next((ln for ln in lines if not ln.startswith((">>>", "^"))), "syntax error")
@@ -44,7 +48,7 @@ def parse(text: str, *, field: str = "formula", file: str | None = None) -> Form
 
 def as_formula(f: str | Formula, *, field: str = "formula") -> Formula:
     """``f`` itself when it is already a formula, else `parse` of the text."""
-    return f if isinstance(f, spot.formula) else parse(f, field=field)
+    return f if isinstance(f, Formula) else parse(f, field=field)
 
 
 def ap_names(f: Formula) -> list[str]:
@@ -65,18 +69,18 @@ def check_aps(f: Formula, declared: Iterable[str], *, file: str | None = None) -
 def conjuncts(f: Formula) -> list[Formula]:
     """Top-level conjuncts of ``f`` (``[f]`` when ``f`` is not a conjunction)."""
     if f.kind() == spot.op_And:
-        return [c for c in f]
+        return [f[i] for i in range(f.size())]
     return [f]
 
 
 def negate(f: Formula) -> Formula:
     """``!f``."""
-    return spot.formula.Not(f)
+    return Formula.Not(f)
 
 
 def atom(name: str) -> str:
     """A proposition as formula text (quoted when it is not a plain identifier)."""
-    return str(spot.formula.ap(name))
+    return str(Formula.ap(name))
 
 
 def temporal_conjuncts(f: Formula) -> int:
@@ -98,7 +102,7 @@ def temporal_operators(f: Formula) -> int:
             count += 1
         return False
 
-    f.traverse(visit)
+    f.traverse(visit)  # pyright: ignore[reportAttributeAccessIssue]  (added by spot.formula)
     return count
 
 

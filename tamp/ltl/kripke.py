@@ -9,17 +9,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import buddy
 import spot
+from spot.impl import buddy  # the module ``import buddy`` names (see tamp.ltl.letters)
 
-from tamp.ltl.letters import Bdd, Letter
+from tamp.ltl.formula import Formula
+from tamp.ltl.letters import Automaton, Bdd, Letter
 
 
 def kripke(
     labels: Sequence[Letter],
     succ: Sequence[Sequence[int]],
     aps: Sequence[str],
-    aut: spot.twa_graph,
+    aut: Automaton,
     *,
     init: int = 0,
     stutter: frozenset[int] | set[int] | None = None,
@@ -33,7 +34,7 @@ def kripke(
     k = spot.make_kripke_graph(bdict)
     varnums = {}
     for name in aps:
-        f = spot.formula.ap(name)
+        f = Formula.ap(name)
         k.register_ap(f)
         varnums[name] = bdict.varnum(f)
     cache: dict[Letter, Bdd] = {}
@@ -56,9 +57,7 @@ def kripke(
     return k
 
 
-def intersecting_lasso(
-    k: spot.kripke_graph, aut: spot.twa_graph
-) -> tuple[list[int], list[int]] | None:
+def intersecting_lasso(k: spot.kripke_graph, aut: Automaton) -> tuple[list[int], list[int]] | None:
     """A run of ``k`` accepted by ``aut`` as (prefix, cycle) state numbers, shortest form."""
     run = k.intersecting_run(aut)
     if run is None:

@@ -7,24 +7,33 @@ are false. Names the automaton does not use are ignored (the runtime-monitor con
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from typing import TypeAlias
 
-import buddy
 import spot
+import spot.impl
+
+# Spot's BDD module: ``import spot`` puts it on ``sys.path`` as ``buddy``; naming it through
+# ``spot.impl`` (which imports it) gives the same module object and lets a type checker find it.
+from spot.impl import buddy
 
 from tamp.ltl.formula import atom
 
 Letter = frozenset[str]
 EMPTY: Letter = frozenset()
 #: a BDD (Spot's edge conditions); opaque to every other layer
-Bdd = buddy.bdd
+Bdd: TypeAlias = buddy.bdd
+#: Spot's automaton. Spot defines its classes in ``spot.impl`` and extends them in ``spot``
+#: under the same name (``Automaton is spot.impl.twa_graph``); a type checker sees the
+#: methods only on the ``spot.impl`` class.
+Automaton: TypeAlias = spot.impl.twa_graph
 
 
-def aps(aut: spot.twa_graph) -> list[str]:
+def aps(aut: Automaton) -> list[str]:
     """The automaton's propositions, in its own order."""
     return [ap.ap_name() for ap in aut.ap()]
 
 
-def letter_bdd(aut: spot.twa_graph, true_props: Iterable[str]) -> Bdd:
+def letter_bdd(aut: Automaton, true_props: Iterable[str]) -> Bdd:
     """The BDD of the full valuation: ``true_props`` true, every other proposition false."""
     d = aut.get_dict()
     true_props = set(true_props)
@@ -35,7 +44,7 @@ def letter_bdd(aut: spot.twa_graph, true_props: Iterable[str]) -> Bdd:
     return b
 
 
-def bdd_letter(aut: spot.twa_graph, cond: Bdd) -> Letter:
+def bdd_letter(aut: Automaton, cond: Bdd) -> Letter:
     """One full valuation inside ``cond`` (free propositions false: the smallest that fits)."""
     d = aut.get_dict()
     cube = buddy.bdd_satone(cond)
@@ -51,7 +60,7 @@ def meets(a: Bdd, b: Bdd) -> bool:
     return (a & b) != buddy.bddfalse
 
 
-def label(aut: spot.twa_graph, cond: Bdd) -> str:
+def label(aut: Automaton, cond: Bdd) -> str:
     """An edge condition as readable formula text (``p1 & !p2``)."""
     return spot.bdd_format_formula(aut.get_dict(), cond)
 
@@ -86,8 +95,8 @@ def word_text(prefix: Sequence[Iterable[str]], cycle: Sequence[Iterable[str]], n
 
 
 def word_automaton(
-    aut: spot.twa_graph, prefix: Sequence[Iterable[str]], cycle: Sequence[Iterable[str]]
-) -> spot.twa_graph:
+    aut: Automaton, prefix: Sequence[Iterable[str]], cycle: Sequence[Iterable[str]]
+) -> Automaton:
     """The automaton of the lasso over ``aut``'s propositions and BDD dictionary."""
     if not cycle:
         raise ValueError("a lasso needs a non-empty cycle")

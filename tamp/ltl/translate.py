@@ -47,6 +47,7 @@ import spot
 
 from tamp.errors import InputError
 from tamp.ltl.formula import Formula, ap_names, short, temporal_conjuncts, temporal_operators
+from tamp.ltl.letters import Automaton
 
 
 @dataclass(frozen=True)
@@ -96,7 +97,7 @@ class CacheInfo:
     size: int = 0
 
 
-_CACHE: OrderedDict[tuple[str, Options], spot.twa_graph] = OrderedDict()
+_CACHE: OrderedDict[tuple[str, Options], Automaton] = OrderedDict()
 _CACHE_MAX = 512
 _INFO = CacheInfo()
 
@@ -119,14 +120,14 @@ def translate(
     limits: Limits = LIMITS,
     file: str | None = None,
     field: str = "formula",
-) -> spot.twa_graph:
+) -> Automaton:
     """The state-based Büchi automaton (or, ``options.finite``, the NFA) of ``f``; cached.
 
     The cache key is the formula's printed form, or with ``options.fresh`` the text as
     written (its order of first appearance fixes the proposition order). A formula that exceeds
     ``limits`` is an `InputError` (``file``/``field`` name where it came from).
     """
-    formula = spot.formula(f) if isinstance(f, str) else f
+    formula = Formula(f) if isinstance(f, str) else f
     # fresh names follow the text as written; otherwise the formula's printed form is the key
     text = f if isinstance(f, str) and options.fresh else str(formula)
     key = (text, options)
@@ -179,13 +180,13 @@ def _inline(f: Formula, limits: Limits) -> bool:
 
 
 def _in_child(
-    job: Callable[[], spot.twa_graph],
+    job: Callable[[], Automaton],
     text: str,
     options: Options,
     limits: Limits,
     file: str | None,
     field: str,
-) -> spot.twa_graph:
+) -> Automaton:
     """Run ``job`` in a forked child; its automaton comes back as HOA text within the limit."""
     r, w = os.pipe()
     pid = os.fork()
@@ -193,7 +194,8 @@ def _in_child(
         code = 1
         try:
             os.close(r)
-            data = job().to_str("hoa").encode()
+            # to_str is added by the ``spot`` extension of twa, which a type checker cannot see
+            data = job().to_str("hoa").encode()  # pyright: ignore[reportAttributeAccessIssue]
             view = memoryview(data)
             while view:
                 view = view[os.write(w, view) :]
@@ -237,25 +239,25 @@ _FRESH = itertools.count()
 _IDENT = re.compile(r"\b[a-z_][a-z0-9_]*\b")
 
 
-def _job(text: str, f: Formula, options: Options) -> Callable[[], spot.twa_graph]:
+def _job(text: str, f: Formula, options: Options) -> Callable[[], Automaton]:
     """The translation as a closure (run in-process or in the child).
 
     Spot's Python ``translate`` rewrites the formula object it is given (it then prints
     differently), so it always gets a new object parsed from ``text``, never the caller's.
     """
     if not options.fresh:
-        return lambda: _spot(spot.formula(text), options, None)
+        return lambda: _spot(Formula(text), options, None)
     return lambda: _fresh(text, f, options)
 
 
-def _spot(f: Formula, options: Options, bdict) -> spot.twa_graph:
+def _spot(f: Formula, options: Options, bdict) -> Automaton:
     g = spot.from_ltlf(f, "alive") if options.finite else f
     kw = {} if bdict is None else {"dict": bdict}
     aut = spot.translate(g, "Buchi", "SBAcc", options.pref, options.level, **kw)
     return spot.to_finite(aut, "alive") if options.finite else aut
 
 
-def _fresh(text: str, f: Formula, options: Options) -> spot.twa_graph:
+def _fresh(text: str, f: Formula, options: Options) -> Automaton:
     """Translate a copy with fresh proposition names in text order, then relabel back."""
     aps = set(ap_names(f))
     order: list[str] = []
@@ -263,15 +265,15 @@ def _fresh(text: str, f: Formula, options: Options) -> spot.twa_graph:
         if m.group(0) in aps and m.group(0) not in order:
             order.append(m.group(0))
     if set(order) != aps:  # a name the plain-identifier scan cannot see: keep it as is
-        return _spot(spot.formula(text), options, spot.make_bdd_dict())
+        return _spot(Formula(text), options, spot.make_bdd_dict())
     tag = next(_FRESH)
     fresh = {name: f"ltlap{tag}x{i}" for i, name in enumerate(order)}
     renamed = _IDENT.sub(lambda m: fresh.get(m.group(0), m.group(0)), text)
     for name in order:  # create the fresh atoms in text order
-        spot.formula.ap(fresh[name])
-    aut = _spot(spot.formula(renamed), options, spot.make_bdd_dict())
+        Formula.ap(fresh[name])
+    aut = _spot(Formula(renamed), options, spot.make_bdd_dict())
     back = spot.relabeling_map()
     for name, new in fresh.items():
-        back[spot.formula.ap(new)] = spot.formula.ap(name)
+        back[Formula.ap(new)] = Formula.ap(name)
     spot.relabel_here(aut, back)
     return aut
