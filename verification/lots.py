@@ -75,6 +75,8 @@ def check_run(
     if not accepted:
         ce = explain_on(started_at(aut.spot_aut, q), word, finite=False)
     elif not ours.holds:
+        # check_trace is exact: a verdict that does not hold carries its counterexample
+        assert ours.counterexample is not None
         ce = ours.counterexample
     else:
         ce = Counterexample(word, "", accepting_word=None)
@@ -113,6 +115,8 @@ def follow(table: Table, lots: Lots, b) -> tuple[list, list[str], str | None]:
             return letters, steps, f"following T loops at W^B {lots.format(e.b)} without done"
         seen.add(e.index)
         if e.kind == "move":
+            # the planner gives every move entry its proposition and class (planner.Entry)
+            assert e.prop is not None and e.cls is not None
             nb = lots.deliver(e.b, frozenset({e.prop}))
             if nb is None:
                 return (
@@ -124,6 +128,7 @@ def follow(table: Table, lots: Lots, b) -> tuple[list, list[str], str | None]:
                     ),
                 )
         else:
+            assert e.cls is not None  # a remove entry names the class it takes out
             nb = lots.remove(e.b, e.cls)
             if nb is None:
                 return letters, steps, f"T[{lots.format(e.b)}] removes an object W^B lacks"
@@ -226,6 +231,7 @@ def judge_word(controller: LotsController) -> Verdict:
         ce.aps = list(aut.ap)
         return Verdict(subject, str(aut.spot_formula), "infinite", False, explored, ce)
     ce = ours.counterexample
+    assert ce is not None  # check_trace is exact: a verdict that does not hold has one
     ce.reason = (
         "what happened (robot deliveries, then the round's cycle forever) does not satisfy "
         "the task: " + ce.reason

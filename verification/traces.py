@@ -157,6 +157,7 @@ def _holds_finite(f: Formula, word: Word) -> tuple[bool, int]:
 
 
 def _holds_lasso(f: Formula, word: Word) -> tuple[bool, int]:
+    assert word.cycle is not None  # called for lassos only
     return accepts_lasso(ltl.translate(f), word.prefix, word.cycle)
 
 
@@ -182,6 +183,7 @@ def explain_on(aut: Automaton, word: Word, *, finite: bool) -> Counterexample:
         letters, cycle = accepting_continuation(aut, q, finite=finite)
         if finite:
             return Word.finite(list(prefix) + letters)
+        assert cycle is not None  # a Büchi continuation always has its cycle
         return Word.lasso(list(prefix) + letters, cycle)
 
     before = cur
@@ -203,6 +205,7 @@ def explain_on(aut: Automaton, word: Word, *, finite: bool) -> Counterexample:
         return Counterexample(word, reason, None, compare(word.prefix, cur))
     # Unroll the cycle until the live set dies or repeats (at most |2^Q| · |cycle| steps,
     # in practice a handful of rounds).
+    assert word.cycle is not None  # an infinite check reads a lasso
     after_prefix = cur
     seen: set[tuple[frozenset[int], int]] = set()
     i = len(word.prefix)
