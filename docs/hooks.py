@@ -9,6 +9,8 @@ cannot go stale.
 - The file-format page (``reference/formats.md``) gets its table of formats, and the site
   gets one JSON Schema per format under ``schemas/``, from `tamp.commands.schema.FORMATS`
   (the registry ``tamp schema`` prints from).
+- The landing page's pictures (`PICTURES`: Case 3's grown tree, a counterexample on its
+  automaton) are drawn from the code (`picture_files`).
 - The notebooks (``notebooks/*.ipynb``), the committed benchmark results
   (``benchmarks/results/``) and the examples (``examples/``) live outside ``docs/``; they are
   added to the site as they are (notebooks are rendered, not executed), and a page's relative
@@ -24,7 +26,13 @@ import json
 import os
 import re
 import sys
+import warnings
 from pathlib import Path
+
+# Spot's SWIG bindings warn on import (as in pytest's configuration, not ours to fix).
+warnings.filterwarnings(
+    "ignore", message="builtin type .* has no __module__ attribute", category=DeprecationWarning
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:  # the build runs from the repository root, installed or not
@@ -211,6 +219,34 @@ def schema_files() -> dict[str, str]:
     }
 
 
+#: Pictures drawn at build time, by their place in the site (see `picture_files`).
+PICTURES = ("images/generated/case3_tree.svg", "images/generated/trace.svg")
+
+#: The counterexample drawn for the landing page (as ``tamp-verify trace --finite --svg``).
+TRACE = ("G !bad & F done", "a; bad; done")
+
+
+def picture_files() -> dict[str, str]:
+    """The pictures of the landing page, drawn from the code when the site is built: the
+    tree SMP-MRO Case 3 grows (``tamp plan case3.yaml --execute --bt-dot tree.svg``) and a
+    counterexample on its automaton (``tamp-verify trace ... --svg trace.svg``)."""
+    from tamp.bt.export import to_dot
+    from tamp.bt.run import execute_plan
+    from tamp.demo import load_demonstration
+    from tamp.pictures import render
+    from tamp.rg import plan
+    from tamp.scenarios import resolve
+    from verification.draw import trace_dot
+    from verification.words import parse_word
+
+    demo = load_demonstration(resolve("case3.yaml"))
+    report = execute_plan(demo, plan(demo).c_goal, events=demo.appear)
+    formula, word = TRACE
+    trace = trace_dot(formula, parse_word(word), finite=True, title=f"{formula}  on  {word}")
+    drawn = (to_dot(report.executor.root), trace)
+    return {uri: render(dot, "svg").decode() for uri, dot in zip(PICTURES, drawn, strict=True)}
+
+
 GENERATED = {
     "cli": cli_markdown,
     "formats": formats_markdown,
@@ -238,7 +274,7 @@ def on_files(files, config):
                         use_directory_urls=config["use_directory_urls"],
                     )
                 )
-    for uri, text in schema_files().items():
+    for uri, text in {**schema_files(), **picture_files()}.items():
         files.append(File.generated(config, uri, content=text))
     return files
 
