@@ -45,7 +45,8 @@ def add_execute_arguments(parser: argparse.ArgumentParser) -> None:
         type=int,
         default=None,
         metavar="N",
-        help="tick budget (default: scales with the goals, see default_max_ticks)",
+        help="tick budget, the symbolic run's limit: it has no sim time, hence no "
+        "--max-sim-time or --meshcat (default: scales with the goals, see default_max_ticks)",
     )
     g.add_argument(
         "--max-expansions",
