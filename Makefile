@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 export DRAKE_ALLOW_NETWORK := meshcat
 export MPLBACKEND := Agg
 
-.PHONY: demo test test-fast test-core bench lint fmt clean system-deps
+.PHONY: demo test test-fast test-core docs bench lint fmt clean system-deps
 
 $(BIN)/python:
 	@command -v $(PY) >/dev/null 2>&1 || { echo "need $(PY)"; exit 2; }
@@ -42,8 +42,8 @@ demo: $(STAMP)
 # start once).
 PYTEST_WORKERS ?= auto
 test: $(STAMP)
-	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples
-	$(BIN)/ruff format --check tamp verification tests benchmarks notebooks examples
+	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples docs/hooks.py
+	$(BIN)/ruff format --check tamp verification tests benchmarks notebooks examples docs/hooks.py
 	$(BIN)/pytest -q -n $(PYTEST_WORKERS) --dist loadfile
 
 # The quick loop while editing: every test not marked slow (under a minute on 2 cores).
@@ -88,13 +88,19 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/refine.py
 	$(BIN)/python benchmarks/campaign.py
 
+# The docs site (mkdocs.yml), into build/site: strict, so a broken link, anchor or API
+# reference fails it; docs/hooks.py writes the CLI reference, the JSON Schemas and the
+# landing-page pictures (tests/test_docs.py builds it too, inside `make test`).
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
 lint: $(STAMP)
-	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples
+	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples docs/hooks.py
 	$(BIN)/pyright
 
 fmt: $(STAMP)
-	$(BIN)/ruff format tamp verification tests benchmarks notebooks examples
-	$(BIN)/ruff check --fix tamp verification tests benchmarks notebooks examples
+	$(BIN)/ruff format tamp verification tests benchmarks notebooks examples docs/hooks.py
+	$(BIN)/ruff check --fix tamp verification tests benchmarks notebooks examples docs/hooks.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .hypothesis
