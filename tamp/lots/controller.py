@@ -52,7 +52,16 @@ from typing import Any
 from tamp.lots.automaton import Automaton, Letter
 from tamp.lots.cell import WASTE, held_kind, skill, visible_counts
 from tamp.lots.lots import Counts, Lots
-from tamp.lots.planner import Entry, Plan, Planner, Table, Tree, initial_lasso, round_goals
+from tamp.lots.planner import (
+    Entry,
+    Plan,
+    Planner,
+    Step,
+    Table,
+    Tree,
+    initial_lasso,
+    round_goals,
+)
 from tamp.lots.task import Task
 from tamp.lots.word import RunWord
 from tamp.world.actions import Action
@@ -157,15 +166,20 @@ class Belief:
         self.held = i
 
     def placed(self) -> None:
-        self.b[self.held] += 1
+        self.b[self._holding()] += 1
         self.held = None
 
     def returned(self) -> None:
         self.held = None
 
     def dropped(self) -> None:
-        self.total[self.held] -= 1
+        self.total[self._holding()] -= 1
         self.held = None
+
+    def _holding(self) -> int:
+        """The class held: placing or dropping follows a pick (`picked`)."""
+        assert self.held is not None, "placed or dropped with nothing picked"
+        return self.held
 
     def lost(self) -> None:
         """The held object left the gripper on the way, to somewhere unknown: the next looks
@@ -369,12 +383,12 @@ class LotsController:
                 self._cycle()
                 if self.result is not None:
                     return self.result
-            self.handle = world.start(self.pending.action)
+            self.handle = world.start(self._chosen().action)
             self.skills += 1
         status = world.poll(self.handle)
         if status is Status.RUNNING:
             return Status.RUNNING
-        done, self.pending, self.handle = self.pending, None, None
+        done, self.pending, self.handle = self._chosen(), None, None
         if status is Status.SUCCESS:
             if done.action.name != "LookAt":  # a retry starts with a look: not progress
                 self.failures = 0
@@ -437,6 +451,12 @@ class LotsController:
                 note,
             )
         )
+
+    def _chosen(self) -> Pending:
+        """The skill to start or running: `_cycle` or the last continuation chose it (or
+        set ``result``, which `tick` returns first)."""
+        assert self.pending is not None, "no skill chosen"
+        return self.pending
 
     def _next(self, then: str, name: str, *args: str, **kw: Any) -> None:
         self.pending = Pending(then, skill(name, *args), **kw)
@@ -506,10 +526,10 @@ class LotsController:
             self._next("look_b_surplus", "LookAt", "B")
             return
         entry = self.decide(b)
-        missing = entry is not None and entry.kind == "move" and a_obs[entry.cls] == 0
+        missing = entry is not None and entry.kind == "move" and a_obs[_cls(entry)] == 0
         if missing:  # this way needs a class W^A lacks: replan over the ways still possible
             other = self._replan(b, cap=tuple(self.belief.total))
-            if other is not None and not (other.kind == "move" and a_obs[other.cls] == 0):
+            if other is not None and not (other.kind == "move" and a_obs[_cls(other)] == 0):
                 entry, missing = other, False
         if entry is None or missing:
             if entry is None:
@@ -519,7 +539,7 @@ class LotsController:
                     + ("" if self.task.returns else _NO_RETURN)
                 )
             else:
-                reason = f"no {lots.classes[entry.cls]} left in W^A for {entry.prop}"
+                reason = f"no {lots.classes[_cls(entry)]} left in W^A for {entry.prop}"
             if self.looks == 1:  # the W^A inference may be stale: look at W^B first
                 self._next("look_b_stale", "LookAt", "B", b=b, note=reason)
             else:
@@ -529,7 +549,7 @@ class LotsController:
         elif entry.kind == "remove":
             self._next("look_b_remove", "LookAt", "B", b=b, entry=entry)
         else:  # move: pick in W^A, carry to W^B, look before placing
-            c = entry.cls
+            c = _cls(entry)
             self._next("picked", "Pick", lots.classes[c], "A", b=b, entry=entry, cls=c)
 
     def _shortage(self, b: Counts, a_obs: Counts) -> str | None:
@@ -543,9 +563,10 @@ class LotsController:
         left = list(a_obs)
         for s in found[1].steps:
             if s.kind == "move":
-                if left[s.cls] == 0:
-                    return f"no {self.lots.classes[s.cls]} left in W^A for {s.prop}"
-                left[s.cls] -= 1
+                c = _cls(s)
+                if left[c] == 0:
+                    return f"no {self.lots.classes[c]} left in W^A for {s.prop}"
+                left[c] -= 1
         return None
 
     def _blocked(self, reason: str) -> None:
@@ -589,24 +610,24 @@ class LotsController:
         b_obs = self._look_b(done, world)
         if b_obs is None or b_obs != done.b:
             return
-        entry = done.entry
+        entry = _entry(done)
         dest = "A" if self._needs_later(entry) else WASTE
-        name = self.lots.classes[entry.cls]
+        name = self.lots.classes[_cls(entry)]
         self._next("removing", "Pick", name, "B", entry=entry, cls=entry.cls, dest=dest)
 
     def _on_removing(self, done: Pending, world: World) -> None:
-        self.pending = Pending("removed", skill("Place", done.dest), **_carry(done))
+        self.pending = Pending("removed", skill("Place", _dest(done)), **_carry(done))
 
     def _on_removed(self, done: Pending, world: World) -> None:
-        self.belief.removed(done.cls, done.dest)
-        self.word.remove(done.cls)
+        self.belief.removed(_cls(done), _dest(done))
+        self.word.remove(_cls(done))
         if done.entry is not None:
             self._last = done.entry
         self._record("remove", done.cls, dest=done.dest, note=done.note)
         self.waits = self.looks = 0
 
     def _on_picked(self, done: Pending, world: World) -> None:
-        self.belief.picked(done.cls)
+        self.belief.picked(_cls(done))
         self.pending = Pending("carried", skill("LookAt", "B"), **_carry(done))
 
     def _on_carried(self, done: Pending, world: World) -> None:
@@ -615,7 +636,7 @@ class LotsController:
         if b_obs is None:
             return
         self.waits = self.looks = 0
-        c = done.cls
+        c = _cls(done)
         if b_obs == done.b:
             self._next("placed", "Place", "B", entry=done.entry, cls=c)
             return
@@ -629,10 +650,11 @@ class LotsController:
             self._next("discarded", "Place", WASTE, cls=c)
 
     def _on_placed(self, done: Pending, world: World) -> None:
+        entry = _entry(done)
         self.belief.placed()
-        self.word.deliver(done.entry.prop)
-        self._last = done.entry
-        self._record("move", done.cls, prop=done.entry.prop)
+        self.word.deliver(_prop(entry))
+        self._last = entry
+        self._record("move", done.cls, prop=entry.prop)
 
     def _on_returned(self, done: Pending, world: World) -> None:
         self.belief.returned()
@@ -648,6 +670,31 @@ _NO_RETURN = (
     " with Zhou et al.'s actions (deliver W^A→W^B, discard); our return action W^B→W^A "
     "is off (--return-action or 'actions: {return: true}')"
 )
+
+
+def _cls(x: Entry | Step | Pending) -> int:
+    """The class a move or remove (entry, step, or the skills carrying it out) handles:
+    the planner and `_next` always set it there."""
+    assert x.cls is not None, f"{x!r} names no class"
+    return x.cls
+
+
+def _prop(e: Entry) -> str:
+    """The proposition a move entry delivers (the planner always sets it)."""
+    assert e.prop is not None, f"{e!r} names no proposition"
+    return e.prop
+
+
+def _entry(p: Pending) -> Entry:
+    """The table entry a place or remove continuation carries out (set by its decision)."""
+    assert p.entry is not None, f"{p.then} without its table entry"
+    return p.entry
+
+
+def _dest(p: Pending) -> str:
+    """Where a removal puts the object (set when the removal was chosen)."""
+    assert p.dest is not None, f"{p.then} without a destination"
+    return p.dest
 
 
 def _carry(p: Pending) -> dict[str, Any]:

@@ -117,10 +117,13 @@ class ScriptedPerson:
     def apply(self, world: SymbolicWorld, e: Event, n: int = 0, phase: str = "idle") -> bool:
         """Apply one human action now; an impossible one is an `InputError` (or skipped)."""
         state = world.state
+        # the task parser requires 'side' of an add or remove, 'from' and 'to' of a move
         if e.kind == "add":  # one pile, however many: counts stay integers
+            assert e.side is not None
             world.happen(Appear(new_uid(state, e.cls), e.side, kind=e.cls, count=e.count))
         else:
             side = e.src if e.kind == "move" else e.side
+            assert side is not None
             piles = [(uid, state.objects[uid].count) for uid in objects_of(state, e.cls, side)]
             have = sum(k for _, k in piles)
             if have < e.count:
@@ -129,6 +132,7 @@ class ScriptedPerson:
             for uid, k in piles:
                 take = min(left, k)
                 if e.kind == "move":
+                    assert e.dst is not None
                     world.happen(Appear(uid, e.dst, count=take))
                 else:
                     world.happen(Remove(uid, count=take))

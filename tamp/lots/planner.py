@@ -32,6 +32,8 @@ from tamp.lots.lots import Counts, Lots
 from tamp.lots.task import Task
 
 Pair = tuple[int, Counts]
+#: a node of `Planner.plan_from`'s search: a pair and the W^A stock left (None: not tracked)
+Node = tuple[int, Counts, Counts | None]
 
 
 @dataclass(frozen=True)
@@ -54,7 +56,10 @@ class Step:
 
     @property
     def letter(self) -> Letter:
-        return frozenset({self.prop}) if self.kind == "move" else EMPTY
+        if self.kind != "move":
+            return EMPTY
+        assert self.prop is not None, "a move names the proposition it delivers"
+        return frozenset({self.prop})
 
 
 @dataclass
@@ -230,7 +235,7 @@ def round_goals(aut: Automaton, task: Task, final: Counts) -> tuple[Counts, ...]
                         yield nq, b, True
 
     start = (aut.initial, (0,) * len(classes), -1, False)  # qf -1: still in the prefix
-    seen = {start}
+    seen: set[tuple[int, Counts, int, bool]] = {start}
     level = [start]
     while level:
         nxt_level: list[tuple[int, Counts, int, bool]] = []
@@ -278,7 +283,9 @@ def cheapest_cycle(aut: Automaton, cost_of: dict[str, float], qf: int) -> list[L
             letters: list[Letter] = []
             node = q
             while True:
-                prev, letter = parent[node]
+                link = parent[node]
+                assert link is not None  # every state pushed has its parent link
+                prev, letter = link
                 letters.append(letter)
                 if prev == -1:
                     break
@@ -346,14 +353,17 @@ class Planner:
             min((p.cost for p in task.propositions if lots.prop_class[p.name] == i), default=0.0)
             for i in range(len(lots.classes))
         ]
-        self.dead: set[Pair] = set()  # pairs proven dead with every object available
-        self._dead_capped: dict[Counts, set[Pair]] = {}  # ... with fewer (per W^B bound)
+        self.dead: set[Node] = set()  # nodes proven dead with every object available
+        # ... with fewer (per W^B bound, stock, relaxation)
+        self._dead_capped: dict[tuple[Counts, Counts | None, bool], set[Node]] = {}
         self._cycles: dict[int, list[Letter]] = {}
         self.expanded = 0  # pairs expanded by plan_from (for the benchmark)
         # per automaton state: (cost, proposition or None, class index or -1, successor)
         self._trans: list[list[tuple[float, str | None, int, int]]] = []
         for q in range(aut.num_states):
-            out = [(0.0, None, -1, nq) for nq in aut.successors(q, EMPTY)]
+            out: list[tuple[float, str | None, int, int]] = [
+                (0.0, None, -1, nq) for nq in aut.successors(q, EMPTY)
+            ]
             for p in (pp.name for pp in task.propositions):
                 for nq in aut.successors(q, frozenset({p})):
                     out.append((self.cost_of[p], p, lots.prop_class[p], nq))
@@ -404,6 +414,7 @@ class Planner:
 
     def step_cost(self, s: Step) -> float:
         if s.kind == "move":
+            assert s.prop is not None, "a move names the proposition it delivers"
             return self.cost_of[s.prop]
         return self.remove_cost if s.kind == "remove" else 0.0
 
@@ -581,12 +592,16 @@ class Entry:
         if self.kind == "move":
             return self.prop or ""
         if self.kind == "remove":
+            assert self.cls is not None, "a remove names the class it takes out"
             return f"remove:{lots.classes[self.cls]}"
         return "done"
 
     @property
     def letter(self) -> Letter:
-        return frozenset({self.prop}) if self.kind == "move" else EMPTY
+        if self.kind != "move":
+            return EMPTY
+        assert self.prop is not None, "a move names the proposition it delivers"
+        return frozenset({self.prop})
 
 
 @dataclass
@@ -724,8 +739,10 @@ class Tree:
     def letters_to(self, pair: Pair) -> list[Letter]:
         """Letters of the tree path from the root to ``pair``: a word reaching its ``q``."""
         path = [pair]
-        while self.parent[path[-1]] is not None:
-            path.append(self.parent[path[-1]])
+        up = self.parent[pair]
+        while up is not None:
+            path.append(up)
+            up = self.parent[up]
         path.reverse()
         return [self.planner.letter_between(a, b) for a, b in zip(path, path[1:], strict=False)]
 

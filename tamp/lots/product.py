@@ -82,9 +82,9 @@ class ProductPlanner:
         nq = aut.num_states
         self.n_ts, self.nq, self._radix = n_ts, nq, radix
         # per-class moves as index deltas (None when not allowed)
-        move = [[None] * len(p) for p in self._pairs]
-        to_a = [[None] * len(p) for p in self._pairs]
-        to_waste = [[None] * len(p) for p in self._pairs]
+        move: list[list[int | None]] = [[None] * len(p) for p in self._pairs]
+        to_a: list[list[int | None]] = [[None] * len(p) for p in self._pairs]
+        to_waste: list[list[int | None]] = [[None] * len(p) for p in self._pairs]
         for c, pairs in enumerate(self._pairs):
             for i, (a, b) in enumerate(pairs):
                 if a >= 1:

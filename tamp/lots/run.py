@@ -7,7 +7,7 @@ advances and the scripted person (`tamp.lots.person`) does what is due.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -109,7 +109,7 @@ def lots_world(task: Task, *, skill_ticks: int | Mapping[str, int] = 1) -> Symbo
 
 def run_task(
     task: Task,
-    events: list[Event] | tuple[Event, ...] = (),
+    events: Sequence[Event] = (),
     *,
     mode: str = "bfs",
     seed: int = 0,

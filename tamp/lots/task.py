@@ -37,6 +37,7 @@ is how a person changes W^B unseen by the eye-in-hand camera.
 
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -235,7 +236,8 @@ def _event(e: Fields, task: Task) -> Event:
     cls = e.str("class")
     if not _NAME.match(cls):
         raise e.error("class", f"class names are lower-case identifiers, got {cls!r}")
-    common = dict(
+    event = functools.partial(
+        Event,
         after=e.int("after", min=0),
         kind=kind,
         cls=cls,
@@ -254,8 +256,8 @@ def _event(e: Fields, task: Task) -> Event:
             raise e.error("to", "'from' and 'to' must differ")
         if cls not in task.classes and cls not in task.initial_a and cls not in task.initial_b:
             raise e.error("class", f"no {cls!r} objects exist in this task to move")
-        return Event(src=src, dst=dst, **common)
+        return event(src=src, dst=dst)
     for bad in ("from", "to"):
         if e.has(bad):
             raise e.error(bad, f"an {kind} (dis_2) takes 'side', not 'from'/'to'")
-    return Event(side=e.str("side", choices=SIDES), **common)
+    return event(side=e.str("side", choices=SIDES))
