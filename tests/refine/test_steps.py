@@ -18,7 +18,10 @@ from tamp.refine.steps import (
     obstruction,
     parallelize,
     refine_rate,
+    relax,
+    restore,
     revert,
+    slack_waits,
 )
 
 from .helpers import reload, task
@@ -172,3 +175,24 @@ def test_parallelization_only_relaxes_the_order(n, d):
         r = p1.robot(x.robot)
         assert not r.gating(r.index(x.absorbed))
         assert d[f"{x.robot}.{x.absorbed}"] < d[f"{x.robot}.{x.host}"]
+
+
+def test_slack_waits_are_those_the_measured_run_did_not_need():
+    """R1's pull-out waits for R2's grip: slack when the grip fired before R1's approach
+    ended, needed when after; R2's release waits for the pull-out, which fired last."""
+    spans = {
+        "R1.lower_arm": (0.0, 57.0),
+        "R1.approach": (57.0, 123.0),
+        "R1.pull_out": (123.0, 254.0),
+        "R1.raise_arm": (254.0, 259.0),
+        "R2.approach": (0.0, 25.0),
+        "R2.grip": (25.0, 54.0),
+        "R2.release": (254.0, 257.0),
+    }
+    (slack,) = slack_waits(task(4), spans)
+    assert slack.describe() == "R1: pull_out no longer waits for R2.grip"
+    relaxed = relax(task(4), slack)
+    assert relaxed.robot("R1").behavior("pull_out").waits_for == ()
+    assert restore(relaxed, slack) == task(4)
+    late = spans | {"R2.grip": (25.0, 130.0)}
+    assert slack_waits(task(4), late) == []
