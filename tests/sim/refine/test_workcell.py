@@ -100,3 +100,39 @@ def test_load_refuses_a_perturbation_it_does_not_simulate(tmp_path):
     with pytest.raises(InputError) as e:
         WORKCELL.load(str(f))
     assert e.value.field == "perturbation.friction" and "refinement workcell" in str(e.value)
+
+
+def test_a_perturbed_run_is_judged_against_the_unperturbed_runs_collisions(tmp_path, monkeypatch):
+    """`RefineWorkcell.run` with a seed that moves the robots: the run of the program as
+    given (simulated once) is the reference; a collision only the perturbed run has fails
+    it with cause new_collision."""
+    import tamp.sim.refine.simulate as workcell
+
+    data = yaml.safe_load(resolve("task4", "refine").read_text())
+    data["perturbation"] = {"robot": {"distribution": "uniform", "xy": 0.02, "yaw": 0.0}}
+    f = tmp_path / "task4.yaml"
+    f.write_text(yaml.safe_dump(data))
+    scenario = WORKCELL.load(str(f))
+    goal = Goal("folding_chair.hinge", 0.35, "the chair is open")
+    calls = []
+
+    def simulate(program, architecture, *, max_sim_time=None, record=None, scene=None, tune=False):
+        calls.append(program.robot("R1").start)
+        order = ["R2.approach", "R1.lower_arm", "R1.approach", "R2.grip", "R1.pull_out"]
+        _, run = _run(
+            {e: float(i + 1) for i, e in enumerate([*order, "R1.raise_arm", "R2.release"])}
+        )
+        run.program = program
+        run.outcome = Outcome({"folding_chair.hinge": 0.48}, (goal,))
+        if program.robot("R1").start != scenario.program.robot("R1").start:
+            run.collisions = {("R1.arm_link", "folding_chair.frame_b"): 12.0}
+        return run
+
+    monkeypatch.setattr(workcell, "simulate", simulate)
+    workcell._REFERENCE.clear()
+    result = WORKCELL.run(scenario, seed=4, verify=False)
+    assert (result.status, result.cause) == ("FAILURE", "new_collision")
+    assert calls[1] == scenario.program.robot("R1").start  # the reference: as given
+    assert "R1.arm_link with folding_chair.frame_b at 12.0 s" in result.reason
+    WORKCELL.run(scenario, seed=5, verify=False)
+    assert len(calls) == 3  # the reference is simulated once per process
