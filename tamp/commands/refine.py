@@ -46,7 +46,9 @@ def register(subparsers) -> None:
     )
     p.add_argument("--gantt", metavar="SVG", help="write Fig. 12-style timelines per phase")
     p.add_argument("--record", metavar="HTML", help="Meshcat animation of the refined run")
-    p.add_argument("--out", metavar="YAML", help="write the refined program")
+    p.add_argument(
+        "--out", metavar="YAML", help="write the refined program (the last accepted one)"
+    )
     add_no_verify(p)
     add_seed(p)
     p.add_argument(
