@@ -21,6 +21,7 @@ RANK = {
     "tamp.errors": 0,
     "tamp.fileio": 0.5,
     "tamp.pictures": 0.5,
+    "tamp.extras": 0.5,
     "tamp.scenarios": 0.5,
     "tamp.perturbation": 0.6,
     "tamp.schema": 0.6,
