@@ -24,6 +24,7 @@ from tamp.errors import InputError
 
 OnDone = Callable[[RunRecord], None]
 
+
 class LocalEngine:
     """Runs every job in this process, in seed order (``--workers 0``)."""
 
