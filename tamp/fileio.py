@@ -16,7 +16,7 @@ import math
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, overload
 
 import yaml
 from yaml.composer import Composer
@@ -94,9 +94,10 @@ if getattr(yaml, "__with_libyaml__", False):  # pragma: no branch - libyaml is u
             Resolver.__init__(self)
 
         # CParser's own versions compose in C without the checks: take the Python ones
-        get_single_node = Composer.get_single_node
-        check_node = Composer.check_node
-        get_node = Composer.get_node
+        # (the stubs type these for a Composer `self`; the loader is one)
+        get_single_node = Composer.get_single_node  # pyright: ignore[reportAssignmentType]
+        check_node = Composer.check_node  # pyright: ignore[reportAssignmentType]
+        get_node = Composer.get_node  # pyright: ignore[reportAssignmentType]
 
     _LOADER = _CStrictLoader
 
@@ -254,7 +255,14 @@ class Fields:
             raise self.error(key, f"expected true or false, got {short_repr(value)}")
         return value
 
+    @overload
+    def vector(self, key: str, n: Literal[2], default: Any = ...) -> tuple[float, float]: ...
+    @overload
+    def vector(self, key: str, n: Literal[3], default: Any = ...) -> tuple[float, float, float]: ...
+    @overload
+    def vector(self, key: str, n: int, default: Any = ...) -> tuple[float, ...]: ...
     def vector(self, key: str, n: int, default: Any = ...) -> tuple[float, ...]:
+        """`check_vector` of field ``key``: exactly ``n`` finite numbers."""
         value = self.raw(key, default)
         return check_vector(value, n, self.file, self._field(key))
 
@@ -287,8 +295,16 @@ def check_number(
     return float(value)
 
 
+@overload
+def check_vector(value: Any, n: Literal[2], file: str, field: str) -> tuple[float, float]: ...
+@overload
+def check_vector(
+    value: Any, n: Literal[3], file: str, field: str
+) -> tuple[float, float, float]: ...
+@overload
+def check_vector(value: Any, n: int, file: str, field: str) -> tuple[float, ...]: ...
 def check_vector(value: Any, n: int, file: str, field: str) -> tuple[float, ...]:
-    """A list of exactly ``n`` finite numbers."""
+    """A list of exactly ``n`` finite numbers (typed as an ``n``-tuple for 2 and 3)."""
     if not isinstance(value, list | tuple) or len(value) != n:
         raise InputError(
             f"expected a list of {n} numbers, got {short_repr(value)}", file=file, field=field
