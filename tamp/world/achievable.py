@@ -15,8 +15,9 @@ is unachievable (the converse does not hold: the search still decides the rest).
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import cast
 
 from tamp.world.actions import Domain
 from tamp.world.predicates import PREDICATES, IsRobotCloseTo, Predicate
@@ -52,7 +53,10 @@ def _true_at_start(name: str, state: WorldState, reach: float) -> bool:
         count *= len(d)
     if count > MAX_INSTANCES:
         return True
-    return any(cls(*args, *extra).holds(state) for args in itertools.product(*domains))
+    # the arguments are the names PREDICATES' kinds list (plus IsRobotCloseTo's reach): a
+    # call a type checker cannot match to each class's fields
+    make = cast(Callable[..., Predicate], cls)
+    return any(make(*args, *extra).holds(state) for args in itertools.product(*domains))
 
 
 def possible_predicates(domain: Domain, state: WorldState) -> set[str]:

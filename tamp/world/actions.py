@@ -42,8 +42,9 @@ class CondPattern:
         return f"{self.predicate}({', '.join(self.args)})"
 
 
-def parse_pattern(text: str, params: Mapping[str, str], file: str, field: str) -> CondPattern:
-    """Parse ``Name(a, b)`` against the template's parameters, checking kinds."""
+def parse_pattern(text: object, params: Mapping[str, str], file: str, field: str) -> CondPattern:
+    """Parse ``Name(a, b)`` (any YAML value: what is not such text is bad input) against the
+    template's parameters, checking kinds."""
     name, args = parse_call(text, field=field, file=file)
     if name not in PREDICATES:
         raise InputError(

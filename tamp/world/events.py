@@ -34,7 +34,7 @@ _OBJ = re.compile(rf"^{_NAME}$")
 
 
 def parse_call(
-    text: str, *, field: str = "action", file: str | None = None
+    text: object, *, field: str = "action", file: str | None = None
 ) -> tuple[str, tuple[str, ...]]:
     """``"Pick(O1)"`` -> ``("Pick", ("O1",))``; ``"MoveTo"`` -> ``("MoveTo", ())``.
 

@@ -32,7 +32,8 @@ Choices where the paper is silent (written down here on purpose):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import Field, dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from tamp.world.geometry import Point, Pose, Quaternion
 from tamp.world.state import WorldState
@@ -62,6 +63,8 @@ class Predicate:
     """Base class: ``holds(state)``, ``achieve(state)``, ``contradicts(other)``."""
 
     name: str = ""
+    if TYPE_CHECKING:  # every predicate is a dataclass: `dataclasses.fields` reads its arguments
+        __dataclass_fields__: ClassVar[dict[str, Field[Any]]]
 
     def holds(self, state: WorldState) -> bool:  # pragma: no cover - abstract
         raise NotImplementedError
