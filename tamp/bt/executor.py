@@ -274,7 +274,7 @@ class PaBtExecutor(TreeGrowth):
             n = queue.popleft()
             if n.tick_id != tick:
                 continue
-            if n.__class__ is Condition:
+            if type(n) is Condition:
                 if n.status is FAILURE and not n.expanded:
                     return n
                 continue
@@ -324,9 +324,7 @@ class PaBtExecutor(TreeGrowth):
                 )
             self._register_new_areas(world)
             return RUNNING
-        failed = [
-            n for n in self.ticked_nodes() if n.__class__ is ActionNode and n.status is FAILURE
-        ]
+        failed = [n for n in self.ticked_nodes() if type(n) is ActionNode and n.status is FAILURE]
         if failed:
             for n in failed:
                 if n.failures > self.max_retries:
@@ -339,9 +337,7 @@ class PaBtExecutor(TreeGrowth):
             self.log_event("retry", names, "skill failed", "ticked again", failed[0])
             return RUNNING
         guards = [
-            str(n.pred)
-            for n in self.ticked_nodes()
-            if n.__class__ is Condition and n.status is FAILURE
+            str(n.pred) for n in self.ticked_nodes() if type(n) is Condition and n.status is FAILURE
         ]
         return self._stop(
             "the tree failed and no failed condition can be grown further"
@@ -377,6 +373,7 @@ class PaBtExecutor(TreeGrowth):
                 f"succeeded from {self._completed_from[key]} times"
             )
             return False
+        assert self.world is not None  # actions start only within a tick
         node.handle = self.world.start(node.action)
         self.running = node
         self._start_key = key
@@ -589,9 +586,11 @@ class PaBtExecutor(TreeGrowth):
         root = self.root
         done = self.finished_goals()
         position: dict[int, int] = {}
-        nodes = [(root.__class__.__name__, len(root.children), root.state_key(tick))]
+        nodes: list[int | tuple] = [
+            (root.__class__.__name__, len(root.children), root.state_key(tick))
+        ]
         for child in root.children[done:]:
-            if child.__class__ is Condition:  # most of them: the goals not reached yet
+            if type(child) is Condition:  # most of them: the goals not reached yet
                 nodes.append(child.key if _untouched(child) else child.state_key(tick))
                 continue
             for n in child.walk():
@@ -669,8 +668,6 @@ class PaBtExecutor(TreeGrowth):
             if node.parent is owner:
                 mine = node.__deepcopy__({id(owner): root})
                 root.children[root.index_of(node)] = mine
-                if self.running is node:  # pragma: no cover - a condition never runs
-                    self.running = mine
             node.status = None
             node.tick_id = -1
             node.parent = owner

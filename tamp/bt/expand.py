@@ -201,15 +201,19 @@ class TreeGrowth:
             return self.recovery(cond_node, why=why, depth=depth)
         self.count_expansion()
         pf = PriorityFallback()
+        now = self.state  # achieving_actions may have added a free area to it
+        assert now is not None
         for a in actions:
             rs = ReactiveSequence([Condition(c) for c in a.con] + [ActionNode(a)])
-            pf.add(rs, self.priority(a, self.state))
+            pf.add(rs, self.priority(a, now))
         sub = ReactiveFallback([Condition(cond, expanded=True), pf])
         parent.replace(cond_node, sub)  # Alg. 3 l. 19
         self.log_event("expand", cond, why, " | ".join(str(a) for a in actions), sub)
         # Alg. 3 l. 14-15: preconditions that do not hold now are expanded at once.
-        for leaf in [n for n in pf.walk() if n.__class__ is Condition]:
-            if leaf.parent is not None and not leaf.pred.holds(self.state):
+        for leaf in [n for n in pf.walk() if type(n) is Condition]:
+            now = self.state  # expanding a precondition may add a free area to it
+            assert now is not None
+            if leaf.parent is not None and not leaf.pred.holds(now):
                 self.expand(
                     leaf,
                     why=f"precondition of {_owner(leaf)}",

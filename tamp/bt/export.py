@@ -97,7 +97,7 @@ def write_dot(root: Node, path: str | Path) -> Path:
 def render_png(root: Node, path: str | Path) -> Path:
     """Render with Graphviz ``dot`` (installed system-wide) to a PNG file."""
     p = Path(path)
-    to_pydot(root).write_png(str(p))
+    to_pydot(root).write(str(p), format="png")  # what pydot's generated write_png calls
     return p
 
 

@@ -47,9 +47,13 @@ def predicate_key(pred: Predicate) -> int:
 
 
 class TickContext(Protocol):
-    """What nodes need from the executor during one tick."""
+    """What nodes need from the executor during one tick.
 
-    state: WorldState
+    ``state`` and ``world`` are the tick's observation and world: set while a tick (or a
+    halt, which needs only ``world``) runs, None between ticks.
+    """
+
+    state: WorldState | None
     world: World | None
     cache: dict[int, bool]
     tick_id: int
@@ -258,6 +262,7 @@ class Condition(Node):
         key = self.key
         value = cache.get(key)
         if value is None:
+            assert ctx.state is not None  # conditions are ticked only within a tick
             value = cache[key] = self.pred.holds(ctx.state)
         st = SUCCESS if value else FAILURE
         self.status = st
@@ -320,6 +325,8 @@ class ActionNode(Node):
         if self.handle is None and not ctx.start_action(self):
             st = FAILURE
         else:
+            # within a tick, and start_action gave the skill its handle
+            assert ctx.world is not None and self.handle is not None
             st = ctx.world.poll(self.handle)
             if st is not RUNNING:
                 ctx.action_finished(self, st)

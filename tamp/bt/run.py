@@ -18,7 +18,7 @@ from tamp.world.actions import Action, Domain
 from tamp.world.events import Appear, Fail
 from tamp.world.interface import Status
 from tamp.world.outcomes import ScriptedOutcomes
-from tamp.world.predicates import Predicate
+from tamp.world.predicates import DEFAULT_REACH, Predicate
 from tamp.world.state import WorldState
 from tamp.world.symbolic import SymbolicWorld
 
@@ -114,7 +114,7 @@ def execute(
         skill_ticks=skill_ticks,
         outcomes=ScriptedOutcomes(failures),
         events=events,
-        **({"reach": domain.reach} if domain is not None else {}),
+        reach=domain.reach if domain is not None else DEFAULT_REACH,
     )
     ex = PaBtExecutor(c_goal, domain, free_areas=free_areas, **executor_options)
     status = ex.run(world, max_ticks=max_ticks, step=world.step)
