@@ -143,8 +143,15 @@ def test_tamp_schema_prints_lists_and_refuses(tmp_path):
     listing = _tamp()
     assert listing.returncode == 0 and listing.stdout.split()[0] == "demonstration"
     assert {line.split()[0] for line in listing.stdout.splitlines()} == set(FORMATS)
-    target = tmp_path / "s.json"
+    target = tmp_path / "schemas"  # --out is a folder, as everywhere
     assert _tamp("domain", "--out", str(target)).returncode == 0
-    assert json.loads(target.read_text())["properties"]["actions"]["type"] == "array"
+    assert (
+        json.loads((target / "domain.json").read_text())["properties"]["actions"]["type"] == "array"
+    )
+    assert _tamp("--out", str(target)).returncode == 0
+    assert {p.stem for p in target.glob("*.json")} == set(FORMATS)
+    (tmp_path / "file").write_text("x")
+    refused = _tamp("domain", "--out", str(tmp_path / "file"))
+    assert refused.returncode == 2 and "--out" in refused.stderr
     bad = _tamp("nope")
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "unknown format" in bad.stderr

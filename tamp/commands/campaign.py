@@ -112,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
     import os
 
     from tamp.campaign import CampaignSpec, resolve_scenario, run_campaign
-    from tamp.commands.output import output_file
+    from tamp.commands.output import output_dir
     from tamp.errors import InputError
     from tamp.scenarios import resolve
 
@@ -145,10 +145,7 @@ def run(args: argparse.Namespace) -> int:
     )
     if args.no_verify:
         warn_unverified("tamp campaign", "every run's plan")
-    out = Path(args.out or Path("build") / "campaign" / path.stem)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"{out} is a file, expected a folder", field="--out")
-    output_file(out / "summary.json", "--out", make_parents=True)
+    out = output_dir(args.out or Path("build") / "campaign" / path.stem, "--out")
     engine = engine_of(args)
     progress(
         f"campaign: {spec.runs} runs of {kind.name} {path.name} (seeds {spec.seeds[0]}.."

@@ -83,3 +83,15 @@ def output_file(path: str | Path, option: str, *, make_parents: bool = False) ->
     if not os.access(parent, os.W_OK):
         raise InputError(f"directory {parent} is not writable", field=option)
     return out
+
+
+def output_dir(path: str | Path, option: str) -> Path:
+    """The folder an ``--out`` option names, checked *before* any work (`output_file`): a file
+    in its place, or a parent that cannot be written, is bad input naming ``option`` (exit 2).
+    Nothing is created here (the command makes the folder when it writes, so a refused run
+    leaves nothing behind). ``--out`` is a folder for every command."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out} is a file, expected a folder", field=option)
+    output_file(out / "probe", option, make_parents=True)
+    return out

@@ -422,20 +422,33 @@ def register(sub: argparse._SubParsersAction) -> None:
         nargs="?",
         help=f"one of: {', '.join(FORMATS)} (none: list them)",
     )
-    p.add_argument("--out", metavar="FILE", help="write the schema to FILE instead of stdout")
+    p.add_argument(
+        "--out",
+        metavar="DIR",
+        help="write FORMAT.json into the folder DIR (every format's when no FORMAT is given) "
+        "instead of printing",
+    )
     p.set_defaults(func=run)
 
 
+def _text(name: str) -> str:
+    return json.dumps(FORMATS[name].schema(), indent=2, ensure_ascii=False) + "\n"
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.format is not None and args.format not in FORMATS:
+        raise InputError(f"unknown format {args.format!r} (formats: {', '.join(FORMATS)})")
+    if args.out:  # a folder, as --out is everywhere
+        from tamp.commands.output import output_dir
+
+        folder = output_dir(args.out, "--out")
+        folder.mkdir(parents=True, exist_ok=True)
+        for name in [args.format] if args.format else list(FORMATS):
+            (folder / f"{name}.json").write_text(_text(name), encoding="utf-8")
+        return 0
     if args.format is None:
         for f in FORMATS.values():
             print(f"{f.name:<20} {f.title}")
         return 0
-    if args.format not in FORMATS:
-        raise InputError(f"unknown format {args.format!r} (formats: {', '.join(FORMATS)})")
-    text = json.dumps(FORMATS[args.format].schema(), indent=2, ensure_ascii=False) + "\n"
-    if args.out:
-        Path(args.out).write_text(text, encoding="utf-8")
-    else:
-        sys.stdout.write(text)
+    sys.stdout.write(_text(args.format))
     return 0
