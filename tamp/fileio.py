@@ -7,6 +7,9 @@ silently), more than `MAX_ALIASES` aliases or `MAX_DEPTH` levels of nesting (an 
 would otherwise hang the loader), files over `MAX_BYTES`, and a ``version`` that is not the
 integer 1 (``true`` is not 1). Numbers must be finite and, unless a field says otherwise,
 within ±`MAX_MAGNITUDE`; messages quote at most a short prefix of a bad value.
+
+The JSON documents the project writes (every ``--json`` output, the MR link's plan result)
+carry ``"schema": JSON_SCHEMA`` first (`with_schema`).
 """
 
 from __future__ import annotations
@@ -310,3 +313,15 @@ def check_vector(value: Any, n: int, file: str, field: str) -> tuple[float, ...]
             f"expected a list of {n} numbers, got {short_repr(value)}", file=file, field=field
         )
     return tuple(check_number(v, file, f"{field}[{i}]") for i, v in enumerate(value))
+
+
+#: Version of the JSON documents the project writes (the ``"schema"`` key of each): raised
+#: when a document changes in a way a reader must know about (a key removed or renamed).
+JSON_SCHEMA = 1
+
+
+def with_schema(payload: Any) -> Any:
+    """``payload`` with ``"schema"`` first when it is a mapping that does not say it yet."""
+    if isinstance(payload, dict) and "schema" not in payload:
+        return {"schema": JSON_SCHEMA, **payload}
+    return payload

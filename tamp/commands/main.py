@@ -93,7 +93,7 @@ def error_line(prog: str, exc: TampError) -> str:
 
 def _error_json(message: str, code: int, exc: BaseException | None = None) -> None:
     """The ``--json`` form of an error: one document on stdout, beside the stderr line."""
-    from tamp.commands.output import JSON_SCHEMA
+    from tamp.fileio import JSON_SCHEMA
 
     doc = {
         "schema": JSON_SCHEMA,

@@ -11,17 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from tamp.errors import InputError
-
-#: Version of the JSON documents the commands print (the ``"schema"`` key of each): raised
-#: when a document changes in a way a reader must know about (a key removed or renamed).
-JSON_SCHEMA = 1
-
-
-def with_schema(payload: Any) -> Any:
-    """``payload`` with ``"schema"`` first when it is a mapping that does not say it yet."""
-    if isinstance(payload, dict) and "schema" not in payload:
-        return {"schema": JSON_SCHEMA, **payload}
-    return payload
+from tamp.fileio import with_schema
 
 
 def print_json(payload: Any) -> None:

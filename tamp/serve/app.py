@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from tamp.errors import TampError
+from tamp.fileio import with_schema
 from tamp.serve.mr import MessageError, pose_stamped, robot_to_mr, stamp
 from tamp.serve.server import Client, RosbridgeServer, ServiceError
 from tamp.serve.session import DemoSession, SessionError, parse_constraints
@@ -337,7 +338,7 @@ class TampApp:
                 _text({"session": self.session.id, "success": False, "message": str(exc)}),
             )
             return {**empty, **self._fail(exc)}
-        doc = result.to_json()
+        doc = with_schema(result.to_json())  # what `tamp plan --json` prints
         plan_json = json.dumps(doc, indent=2)
         with self.lock:
             if version != self.version:
