@@ -37,7 +37,8 @@ def rg_to_dot(demo: Demonstration, rg: nx.DiGraph, order: list[str] | None = Non
         attrs = {"label": f'"{_label(demo, data["places"])}"'}
         if node in chosen_nodes:
             attrs.update(color="firebrick", penwidth="2")
-        dot.add_node(pydot.Node(names[node], **attrs))
+        # obj_dict given (its default) so that the str-valued **attrs cannot bind to it
+        dot.add_node(pydot.Node(names[node], obj_dict=None, **attrs))
     for u, v, data in rg.edges(data=True):
         attrs = {"label": data["goal"], "style": "dashed"}
         if (u, v) in chosen_edges:

@@ -169,40 +169,39 @@ class ReachabilityGraph:
         self.demo = demo
         self.limit = limit
         self.index = GoalIndex.of(demo)
+        # states and edges together, or None past ``limit`` (see `enumeration`)
+        self._enum: tuple[list[int], list[tuple[int, int, int]]] | None
         try:
-            self._masks, self._edges = _masks(self.index, limit)
+            self._enum = _masks(self.index, limit)
         except RGTooLarge:
-            self._masks, self._edges = None, None
+            self._enum = None
         self._stats: RGStats | None = None
         self._nx: nx.DiGraph | None = None
 
     @property
     def complete(self) -> bool:
         """False when the RG has more than ``limit`` states (then only stats say so)."""
-        return self._masks is not None
+        return self._enum is not None
 
     @property
     def stats(self) -> RGStats:
         """State/edge counts when complete, and Alg. 1's node count."""
         if self._stats is None:
-            if self._masks is None:
+            if self._enum is None:
                 self._stats = RGStats(None, None, -1, False)
             else:
-                self._stats = RGStats(
-                    len(self._masks), len(self._edges), _alg1_count(self._masks, self._edges), True
-                )
+                masks, edges = self._enum
+                self._stats = RGStats(len(masks), len(edges), _alg1_count(masks, edges), True)
         return self._stats
 
     def enumeration(self) -> tuple[list[int], list[tuple[int, int, int]]] | None:
         """States as goal bit masks (breadth-first, the root first) and edges ``(state,
         child, goal)`` by state position; None past ``limit``. Shared, not to be modified."""
-        if self._masks is None:
-            return None
-        return self._masks, self._edges
+        return self._enum
 
     def networkx(self) -> nx.DiGraph:
         """The RG as a networkx DiGraph (see `build_rg`); `RGTooLarge` beyond ``limit``."""
-        if self._masks is None:
+        if self._enum is None:
             raise RGTooLarge(f"the RG has more than {self.limit} states")
         if self._nx is None:
             self._nx = self._to_networkx()
@@ -210,16 +209,17 @@ class ReachabilityGraph:
 
     def _to_networkx(self) -> nx.DiGraph:
         demo, index = self.demo, self.index
+        assert self._enum is not None  # called by networkx() only, after its limit check
+        masks, edges = self._enum
         g = nx.DiGraph(source=demo.source)
-        for m in self._masks:
+        for m in masks:
             achieved = index.names(m)
             places = {obj: "P" for obj in demo.objects}
             for goal in demo.goals:  # demonstrated order: the last achieved goal wins
                 if goal.id in achieved:
                     places[goal.object] = goal.id
             g.add_node(achieved, places=places, mask=m)
-        masks = self._masks
-        for at, to, gi in self._edges:
+        for at, to, gi in edges:
             g.add_edge(index.names(masks[at]), index.names(masks[to]), goal=index.ids[gi])
         return g
 

@@ -69,6 +69,7 @@ import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
+from typing import Literal
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -218,7 +219,7 @@ class OrderProblem:
         self._step_rows: dict[int, list[float]] = {}
         self._drive_rows: dict[int, list[float]] = {}
         self._remaining: dict[int, np.ndarray] = {}
-        self._symmetry: Symmetry | None | bool = False  # False: not looked for yet
+        self._symmetry: Symmetry | None | Literal[False] = False  # False: not looked for yet
         # per goal: the bit mask of its direct predecessors (enabled once they are achieved)
         self._pred_masks = [sum(1 << p for p in ps) for ps in self.index.preds]
         # the dummy column's cost per goal: only a goal without successors can be the last
@@ -482,8 +483,8 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
     sym = problem.symmetry() if symmetry else None
     perms = sym.perms if sym is not None else None
     full = index.full
-    start = (0, -1)
-    best_g = {start: 0.0}
+    start: tuple[int, int] = (0, -1)
+    best_g: dict[tuple[int, int], float] = {start: 0.0}
     b0 = problem.bound(0, -1, children=False)
     # a solved bound per state (not a lazy one): its own assignment, or its parent's family
     solved_h: dict[tuple[int, int], float] = {start: b0.h}
@@ -547,6 +548,7 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
             (pmask, _), pg, which = parent[state]
             here = index.enabled_after(enabled[pmask], pmask, pg)
             if which:
+                assert perms is not None  # a nonzero automorphism index implies a symmetry
                 perm = perms[which]
                 here = tuple(sorted(perm[j] for j in here))
             enabled[mask] = here
@@ -559,9 +561,9 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
         # for a bound of every child now, rather than queue them lazily and re-queue each
         fam = children_of(state) if heap and deferred else None
         steps = step_row(last)
-        images = sym.images(mask) if sym is not None else None
+        images = sym.images(mask) if sym is not None else []
         for g in here:
-            if images is None:
+            if sym is None:
                 child_mask, child_last, which = mask | 1 << g, g, 0
             else:
                 child_mask, child_last, which = sym.canonical(images, g)
@@ -585,10 +587,12 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
             if hc is None:
                 cb = None
                 if g == choice:
+                    assert b is not None  # choice comes from b's assignment
                     child_real = mask | 1 << g  # the child in this state's frame
                     cb = b.restricted(g, step, partial(index.ready, child_real))
                 if cb is not None:
                     if which:
+                        assert perms is not None  # as above: which > 0 only under a symmetry
                         cb = cb.mapped(perms[which])
                     hc = solved_h[child] = max(0.0, cb.h)
                     own[child] = cb

@@ -81,6 +81,7 @@ class Symmetry:
             cand = (img | bit[g], p[g])
             if best is None or cand < best:
                 best, arg = cand, i
+        assert best is not None  # perms holds the identity at least, so the loop ran
         return best[0], best[1], arg
 
 
