@@ -1,8 +1,9 @@
 """``tamp refine TASK.yaml``: refine a two-robot program in Drake (Figueroa Heredia et al. 2018).
 
     tamp refine TASK.yaml [--category I|II|III] [--scale base|all] [--json]
-                          [--gantt out.svg] [--record out.html] [--out refined.yaml]
-                          [--no-verify] [--seed N] [--from-log RUN.json|RUN.csv]
+                          [--gantt out.svg] [--plot out.svg] [--record out.html]
+                          [--out refined.yaml] [--no-verify] [--seed N]
+                          [--from-log RUN.json|RUN.csv]
 
 Simulates the original program, then the program after each refinement phase
 (parallelized, speed-adjusted, rate-refined; `tamp.refine.refinement`, every run measured
@@ -45,6 +46,11 @@ def register(subparsers) -> None:
         help="Step 3: the new rate scales the base's speed (the paper's) or every section's",
     )
     p.add_argument("--gantt", metavar="SVG", help="write Fig. 12-style timelines per phase")
+    p.add_argument(
+        "--plot",
+        metavar="SVG",
+        help="write Fig. 14-style bars of the phases' task times (Task 4: beside the paper's)",
+    )
     p.add_argument("--record", metavar="HTML", help="Meshcat animation of the refined run")
     p.add_argument(
         "--out", metavar="YAML", help="write the refined program (the last accepted one)"
@@ -71,6 +77,7 @@ def run(args: argparse.Namespace) -> int:
 
     for option, value, parents in (
         ("--gantt", args.gantt, True),
+        ("--plot", args.plot, True),
         ("--record", args.record, True),
         ("--out", args.out, True),
     ):
@@ -121,6 +128,17 @@ def run(args: argparse.Namespace) -> int:
             args.gantt,
             title=f"{program.name}, Category {result.program.communication.category}",
         )
+    if args.plot:
+        from tamp.refine.gantt import PAPER_TASK4, draw_phases
+
+        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
+        draw_phases(
+            [(p.name, p.task_time) for p in result.phases],
+            args.plot,
+            title=f"{program.name}, Category {result.program.communication.category}",
+            paper=PAPER_TASK4 if program.name == "task4" else None,
+            label="ours (predicted)" if args.from_log else "ours (measured)",
+        )
     if args.out and result.goal_met:  # the last accepted program; none when none meets the goal
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         Path(args.out).write_text(dump_program(result.program))
@@ -129,6 +147,7 @@ def run(args: argparse.Namespace) -> int:
         refined = dump_program(result.program) if result.goal_met else None
         payload["refined_program"] = None if args.out else refined
         payload["gantt"] = args.gantt
+        payload["plot"] = args.plot
         payload["recording"] = result.phases[-1].run.recording
         payload["seed"] = applied.seed
         payload["predicted_from"] = args.from_log
@@ -191,5 +210,7 @@ def _print_text(result, args: argparse.Namespace) -> None:
         print(dump_program(result.program))
     if args.gantt:
         print(f"gantt: {args.gantt}")
+    if args.plot:
+        print(f"plot: {args.plot}")
     if args.record:
         print(f"recording: {result.phases[-1].run.recording}")

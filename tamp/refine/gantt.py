@@ -56,3 +56,60 @@ def draw_gantt(phases: Sequence[tuple[str, Timeline]], path: str | Path, title: 
     fig.savefig(out)
     plt.close(fig)
     return str(out)
+
+
+#: the paper's Task 4 phases (s; Figueroa Heredia et al. 2018, Fig. 12), drawn beside ours
+PAPER_TASK4 = {
+    "original": 260.0,
+    "parallelized": 203.0,
+    "speed-adjusted": 192.0,
+    "rate-refined": 93.0,
+}
+
+
+def draw_phases(
+    phases: Sequence[tuple[str, float]],
+    path: str | Path,
+    title: str = "",
+    paper: dict[str, float] | None = None,
+    label: str = "ours (measured)",
+) -> str:
+    """Fig. 14-style bars: the task time of each phase (name, s), and beside each the
+    paper's (``paper``, phase name -> s) when given; the reduction from the first phase is
+    written on each bar."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [n for n, _ in phases]
+    times = [t for _, t in phases]
+    fig, ax = plt.subplots(figsize=(7, 4))
+    width = 0.38 if paper else 0.6
+    xs = list(range(len(names)))
+    ours = [x - width / 2 for x in xs] if paper else xs
+    bars = ax.bar(ours, times, width, color="#4c72b0", label=label)
+    for bar, t in zip(bars, times, strict=True):
+        change = "" if t == times[0] or not times[0] else f"\n{t / times[0] - 1:+.0%}"
+        ax.text(
+            bar.get_x() + bar.get_width() / 2,
+            t,
+            f"{t:.0f} s{change}",
+            ha="center",
+            va="bottom",
+            fontsize=8,
+        )
+    if paper:
+        theirs = [paper.get(n, 0.0) for n in names]
+        ax.bar([x + width / 2 for x in xs], theirs, width, color="#c0c0c0", label="paper")
+        ax.legend(fontsize=8)
+    ax.set_xticks(xs, names, fontsize=9)
+    ax.set_ylabel("task time (s)")
+    ax.set_ylim(0, max(times + (list(paper.values()) if paper else [])) * 1.2)
+    if title:
+        ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out)
+    plt.close(fig)
+    return str(out)

@@ -116,6 +116,10 @@ def test_cli_from_log_predicts_and_bad_logs_exit_2(tmp_path, capsys):
     bad = csv_log(tmp_path, ROWS[:-1])
     assert tamp_main(["refine", "task4", "--from-log", str(bad)]) == 2
     assert "no row for R2.release" in capsys.readouterr().err
+    plot, log = tmp_path / "fig" / "phases.svg", csv_log(tmp_path)  # the good log again
+    assert tamp_main(["refine", "task4", "--from-log", str(log), "--plot", str(plot)]) == 0
+    assert plot.read_text().lstrip().startswith("<?xml") and "predicted" in plot.read_text()
+    capsys.readouterr()
     rec = str(tmp_path / "r.html")
     assert tamp_main(["refine", "task4", "--from-log", str(log), "--record", rec]) == 2
 
