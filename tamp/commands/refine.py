@@ -2,7 +2,7 @@
 
     tamp refine TASK.yaml [--category I|II|III] [--scale base|all] [--json]
                           [--gantt out.svg] [--plot out.svg] [--record out.html]
-                          [--out refined.yaml] [--no-verify] [--seed N]
+                          [--refined refined.yaml] [--no-verify] [--seed N]
                           [--from-log RUN.json|RUN.csv]
 
 Simulates the original program, then the program after each refinement phase
@@ -11,7 +11,7 @@ by the Drake workcell's `tamp.sim.refine.simulate.simulate`). A phase is accepte
 its run finishes, meets the task's goal on the plant and adds no collision the original
 run did not have; otherwise its change is reverted, undone or (the rate) backed off. Prints
 what each phase tried, measured and kept, the reduction and the refined program (the last
-accepted one; ``--out`` writes it). Every program passes the LTL ordering gate before it is
+accepted one; ``--refined`` writes it). Every program passes the LTL ordering gate before it is
 simulated; a parallelization the property refuses is dropped. ``--from-log RUN`` refines
 from a measured run's log instead (`tamp.refine.predict`: the same steps, every phase a
 prediction from the logged durations; the JSON of ``tamp refine --json`` is such a log).
@@ -53,7 +53,9 @@ def register(subparsers) -> None:
     )
     p.add_argument("--record", metavar="HTML", help="Meshcat animation of the refined run")
     p.add_argument(
-        "--out", metavar="YAML", help="write the refined program (the last accepted one)"
+        "--refined",
+        metavar="FILE.yaml",
+        help="write the refined program (the last accepted one) to FILE.yaml",
     )
     add_no_verify(p)
     add_seed(p)
@@ -79,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
         ("--gantt", args.gantt, True),
         ("--plot", args.plot, True),
         ("--record", args.record, True),
-        ("--out", args.out, True),
+        ("--refined", args.refined, True),
     ):
         if value:
             output_file(value, option, make_parents=parents)
@@ -139,13 +141,13 @@ def run(args: argparse.Namespace) -> int:
             paper=PAPER_TASK4 if program.name == "task4" else None,
             label="ours (predicted)" if args.from_log else "ours (measured)",
         )
-    if args.out and result.goal_met:  # the last accepted program; none when none meets the goal
-        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.out).write_text(dump_program(result.program))
+    if args.refined and result.goal_met:  # the last accepted program; none when none meets the goal
+        Path(args.refined).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.refined).write_text(dump_program(result.program))
     if args.json:
         payload = result.to_json()
         refined = dump_program(result.program) if result.goal_met else None
-        payload["refined_program"] = None if args.out else refined
+        payload["refined_program"] = None if args.refined else refined
         payload["gantt"] = args.gantt
         payload["plot"] = args.plot
         payload["recording"] = result.phases[-1].run.recording
@@ -203,8 +205,8 @@ def _print_text(result, args: argparse.Namespace) -> None:
     )
     if not result.goal_met:
         print(f"NOT refined: {result.failure}")
-    elif args.out:
-        print(f"refined program: {args.out}")
+    elif args.refined:
+        print(f"refined program: {args.refined}")
     else:
         print("refined program:")
         print(dump_program(result.program))

@@ -16,7 +16,7 @@ from tests.sim.refine.helpers import SHORT
 def test_refine_short_program_end_to_end(tmp_path, capsys):
     """The shortened Task 4: every phase simulated, the rate found online, files written."""
     gantt, out = tmp_path / "g" / "phases.svg", tmp_path / "refined.yaml"
-    code = tamp_main(["refine", str(SHORT), "--json", "--gantt", str(gantt), "--out", str(out)])
+    code = tamp_main(["refine", str(SHORT), "--json", "--gantt", str(gantt), "--refined", str(out)])
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     names = [p["name"] for p in doc["phases"]]
@@ -94,7 +94,7 @@ def test_no_accepted_program_meeting_the_goal_exits_1_with_the_reason(
 
     monkeypatch.setattr(workcell, "simulate", _fake_simulate(lambda p: True))
     out = tmp_path / "refined.yaml"
-    assert tamp_main(["refine", "task4", "--out", str(out)]) == 1
+    assert tamp_main(["refine", "task4", "--refined", str(out)]) == 1
     captured = capsys.readouterr()
     assert "the original program does not meet the goal on the plant" in captured.err
     assert "folding_chair.hinge = 0.200 < 0.35" in captured.err
@@ -116,7 +116,7 @@ def test_a_harmful_rate_is_backed_off_and_the_last_accepted_program_written(
 
     monkeypatch.setattr(workcell, "simulate", _fake_simulate(too_fast))
     out = tmp_path / "refined.yaml"
-    assert tamp_main(["refine", "task4", "--json", "--out", str(out)]) == 0
+    assert tamp_main(["refine", "task4", "--json", "--refined", str(out)]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["rates_tried"] == [23.0, 22.0, 21.0] and doc["rate_hz"] == 21.0
     rate = [a for a in doc["attempts"] if a["phase"] == "rate-refined"]
