@@ -44,7 +44,9 @@ PYTEST_WORKERS ?= auto
 test: $(STAMP)
 	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples docs/hooks.py
 	$(BIN)/ruff format --check tamp verification tests benchmarks notebooks examples docs/hooks.py
+	$(BIN)/pyright --pythonpath $(BIN)/python
 	$(BIN)/pytest -q -n $(PYTEST_WORKERS) --dist loadfile
+	$(MAKE) --no-print-directory test-core
 
 # The quick loop while editing: every test not marked slow (under a minute on 2 cores).
 test-fast: $(STAMP)
@@ -96,7 +98,7 @@ docs: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples docs/hooks.py
-	$(BIN)/pyright
+	$(BIN)/pyright --pythonpath $(BIN)/python
 
 fmt: $(STAMP)
 	$(BIN)/ruff format tamp verification tests benchmarks notebooks examples docs/hooks.py

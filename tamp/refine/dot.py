@@ -44,6 +44,7 @@ def program_dot(program: Program) -> str:
         prev = start
         prev_label = "start"
         for g, group in enumerate(r.groups()):
+            tail = group[-1]  # the group's last behavior (a group is never empty)
             src = prev
             if len(group) > 1:
                 fork = _q(f"{r.name}.fork{g}")
@@ -62,7 +63,7 @@ def program_dot(program: Program) -> str:
                     text = _q(event_id(r.name, b.name) + " (marker)")
                     out.append(f"    {marker} [shape=note, fontsize=8, label={text}];")
                     out.append(f"    {node} -> {marker} [style=dotted, arrowhead=none];")
-            last = r.behaviors[group[-1]]
+            last = r.behaviors[tail]
             prev = _node(r.name, last.name)
             prev_label = event_id(r.name, last.name)
         out.append(f"    {prev} -> {end} [label={_q(prev_label)}];")

@@ -155,7 +155,11 @@ class Run:
 
     def sensor_rates(self) -> dict[str, float]:
         """``ROBOT.SENSOR`` -> the rate found watching that sensor (searches that ended)."""
-        return {k: s.found for k, s in self.searches.items() if s is not None and s.done}
+        return {
+            k: s.found
+            for k, s in self.searches.items()
+            if s is not None and s.done and s.found is not None
+        }
 
 
 class Measure(Protocol):

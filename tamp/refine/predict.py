@@ -181,9 +181,11 @@ class Predicting:
             run.searches = self._searches(program, architecture)
         return run
 
-    def _searches(self, program: Program, architecture: Architecture) -> dict[str, RateSearch]:
+    def _searches(
+        self, program: Program, architecture: Architecture
+    ) -> dict[str, RateSearch | None]:
         c = program.communication
-        out = {}
+        out: dict[str, RateSearch | None] = {}
         for r in program.robots:
             current = program.rate(r.behaviors[0])
             sensors = sorted({b.event.sensor for b in r.behaviors if b.event.sensor}) or ["force"]

@@ -122,9 +122,10 @@ def manipulation_starts(
                     "'manipulates' (Step 1 needs it)"
                 )
             index, source = len(r.behaviors), "no object in the task"
-        elif found is None or (marked is not None and marked < found):
-            index, source = marked, "marked"  # type: ignore[assignment]
+        elif marked is not None and (found is None or marked < found):
+            index, source = marked, "marked"
         else:
+            assert found is not None  # both None was handled above
             index, source = found, "touch"
         behavior = r.behaviors[index].name if index < len(r.behaviors) else None
         name = r.behaviors[marked].name if marked is not None else None
