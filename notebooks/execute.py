@@ -65,6 +65,7 @@ def execute(path: Path, timeout: int = 1800) -> nbformat.NotebookNode:
     env_before = dict(os.environ)
     with tempfile.TemporaryDirectory(prefix=f"nb_{path.stem}_") as out_dir:
         os.environ["TAMP_NOTEBOOK_OUT"] = out_dir
+        os.environ.pop("MPLBACKEND", None)  # the kernel's inline backend draws the figures
         try:
             nbclient.NotebookClient(
                 nb,
