@@ -66,12 +66,14 @@ def execute(path: Path, timeout: int = 1800) -> nbformat.NotebookNode:
     with tempfile.TemporaryDirectory(prefix=f"nb_{path.stem}_") as out_dir:
         os.environ["TAMP_NOTEBOOK_OUT"] = out_dir
         os.environ.pop("MPLBACKEND", None)  # the kernel's inline backend draws the figures
+        os.environ["PYTHONHASHSEED"] = "0"  # set orders printed the same way on every run
         try:
             nbclient.NotebookClient(
                 nb,
                 timeout=timeout,
                 kernel_name="python3",
                 record_timing=False,
+                coalesce_streams=True,  # one stream output per cell, however it was flushed
                 resources={"metadata": {"path": str(path.parent)}},
             ).execute()
         finally:
