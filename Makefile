@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 export DRAKE_ALLOW_NETWORK := meshcat
 export MPLBACKEND := Agg
 
-.PHONY: demo test test-fast test-core docs bench lint fmt clean system-deps
+.PHONY: demo test test-fast test-core docs notebooks bench lint fmt clean system-deps
 
 $(BIN)/python:
 	@command -v $(PY) >/dev/null 2>&1 || { echo "need $(PY)"; exit 2; }
@@ -95,6 +95,10 @@ bench: $(STAMP)
 # landing-page pictures (tests/test_docs.py builds it too, inside `make test`).
 docs: $(STAMP)
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
+# Re-execute every notebook in place and save it with its outputs (commit the result).
+notebooks: $(STAMP)
+	$(BIN)/python notebooks/execute.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples docs/hooks.py
