@@ -42,8 +42,8 @@ demo: $(STAMP)
 # start once).
 PYTEST_WORKERS ?= auto
 test: $(STAMP)
-	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples docs/hooks.py
-	$(BIN)/ruff format --check tamp verification tests benchmarks notebooks examples docs/hooks.py
+	$(BIN)/ruff check tamp tests benchmarks notebooks examples docs/hooks.py
+	$(BIN)/ruff format --check tamp tests benchmarks notebooks examples docs/hooks.py
 	$(BIN)/pyright --pythonpath $(BIN)/python
 	$(BIN)/pytest -q -n $(PYTEST_WORKERS) --dist loadfile
 	$(MAKE) --no-print-directory test-core
@@ -101,12 +101,12 @@ notebooks: $(STAMP)
 	$(BIN)/python notebooks/execute.py
 
 lint: $(STAMP)
-	$(BIN)/ruff check tamp verification tests benchmarks notebooks examples docs/hooks.py
+	$(BIN)/ruff check tamp tests benchmarks notebooks examples docs/hooks.py
 	$(BIN)/pyright --pythonpath $(BIN)/python
 
 fmt: $(STAMP)
-	$(BIN)/ruff format tamp verification tests benchmarks notebooks examples docs/hooks.py
-	$(BIN)/ruff check --fix tamp verification tests benchmarks notebooks examples docs/hooks.py
+	$(BIN)/ruff format tamp tests benchmarks notebooks examples docs/hooks.py
+	$(BIN)/ruff check --fix tamp tests benchmarks notebooks examples docs/hooks.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .hypothesis

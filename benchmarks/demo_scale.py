@@ -41,7 +41,7 @@ def measure(path: str) -> dict:
     from tamp.demo import load_demonstration
     from tamp.errors import TampError
     from tamp.rg import plan
-    from verification.gate import gate_order
+    from tamp.verification.gate import gate_order
 
     c_scanner = fileio._LOADER is not fileio._StrictLoader
     row: dict = {"yaml_loader": "libyaml" if c_scanner else "pure-python"}

@@ -34,8 +34,8 @@ def run_task(n: int, category: str | None, scale: str) -> dict:
     from tamp.refine.loader import load_program
     from tamp.refine.refinement import refine
     from tamp.sim.refine.simulate import simulate
-    from verification.gate import gate_program
-    from verification.refine import check_run
+    from tamp.verification.gate import gate_program
+    from tamp.verification.refine import check_run
 
     program = load_program(f"task{n}")
     wall0, cpu0 = time.perf_counter(), time.process_time()

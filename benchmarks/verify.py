@@ -12,10 +12,10 @@ Each row of the first table is measured side by side with a peer in the same run
 
 The scale table (``--scale``): demonstrations of four objects, each moved up its own column
 (`tests.demo.generate`, ``multi`` with 4 objects: 72 goals = four chains of 18 steps). Per
-size: the tree gate (`verification.gate.gate_tree`: every execution of the grown tree, at
+size: the tree gate (`tamp.verification.gate.gate_tree`: every execution of the grown tree, at
 most one skill failure; states explored, wall and CPU seconds), the same exploration without
 the reduction where it runs in reasonable time (``--explicit-up-to``), and the order gate
-(`verification.gate.gate_order`).
+(`tamp.verification.gate.gate_order`).
 
 Prints the tables and one JSON line; ``--out FILE`` also writes the JSON there
 (``benchmarks/results/verify.json`` is the committed run). ``--quick`` skips the slow
@@ -42,12 +42,12 @@ from tamp.ltl.automata import accepts_lasso  # noqa: E402
 from tamp.ltl.kripke import intersecting_lasso  # noqa: E402
 from tamp.rg import build_rg  # noqa: E402
 from tamp.scenarios import path  # noqa: E402
+from tamp.verification.bt import check_tree, executor_for  # noqa: E402
+from tamp.verification.kripke import to_kripke  # noqa: E402
+from tamp.verification.rg import constraint_formula, rg_system  # noqa: E402
+from tamp.verification.traces import check_trace  # noqa: E402
+from tamp.verification.words import Word  # noqa: E402
 from tamp.world import Point  # noqa: E402
-from verification.bt import check_tree, executor_for  # noqa: E402
-from verification.kripke import to_kripke  # noqa: E402
-from verification.rg import constraint_formula, rg_system  # noqa: E402
-from verification.traces import check_trace  # noqa: E402
-from verification.words import Word  # noqa: E402
 
 #: the sizes of the scale table (goals; four objects)
 SCALE_GOALS = (10, 30, 72, 300)
@@ -181,7 +181,7 @@ def bench_rg(n: int = 12, quick: bool = False) -> list[dict]:
     demo = make_demonstration(objects, steps, 0.15, source=f"<{n} independent goals>")
     rg = build_rg(demo)
     f = constraint_formula(demo.goal_ids, demo.constraints)
-    from verification.rg import check_graph
+    from tamp.verification.rg import check_graph
 
     t_ours, v = timed(lambda: check_graph(demo, rg), repeat=3)
     peer_ms = None
@@ -268,7 +268,7 @@ def bench_scale(sizes=SCALE_GOALS, explicit_up_to: int = 10) -> list[dict]:
 def scale_row(demo, *, explicit: bool) -> dict:
     """One size: the tree gate, the explicit exploration (when ``explicit``), the order gate."""
     from tamp.rg import plan
-    from verification.gate import gate_order, gate_tree
+    from tamp.verification.gate import gate_order, gate_tree
 
     result = plan(demo)
     order = list(result.order)

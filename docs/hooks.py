@@ -236,8 +236,8 @@ def picture_files() -> dict[str, str]:
     from tamp.pictures import render
     from tamp.rg import plan
     from tamp.scenarios import resolve
-    from verification.draw import trace_dot
-    from verification.words import parse_word
+    from tamp.verification.draw import trace_dot
+    from tamp.verification.words import parse_word
 
     demo = load_demonstration(resolve("case3.yaml"))
     report = execute_plan(demo, plan(demo).c_goal, events=demo.appear)

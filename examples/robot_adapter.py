@@ -383,8 +383,8 @@ def run(
     demo = load_demonstration(resolve(demo_name))
     result = plan(demo)  # SMP-MRO §IV-B: the cheapest goal order
     if verify:  # the gate tamp plan runs: the order, then every execution of its tree
-        from verification.bt import executor_for
-        from verification.gate import gate_order, gate_tree
+        from tamp.verification.bt import executor_for
+        from tamp.verification.gate import gate_order, gate_tree
 
         gate_order(result)
         gate_tree(executor_for(demo, list(result.order)), demo.initial_world(), events=demo.appear)

@@ -33,7 +33,7 @@ RANK = {
     "tamp.lots": 3,
     "tamp.refine": 3,
     "tamp.grasp": 3,
-    "verification": 4,
+    "tamp.verification": 4,
     "tamp.sim.core": 5,  # what the workcells share ranks below them
     "tamp.sim.smp": 5.5,
     "tamp.sim.lots": 5.5,
@@ -60,7 +60,7 @@ def _layer(module: str) -> str | None:
 
 
 def _modules():
-    for base in ("tamp", "verification"):
+    for base in ("tamp",):
         for path in sorted((ROOT / base).rglob("*.py")):
             rel = path.relative_to(ROOT).with_suffix("")
             parts = list(rel.parts)

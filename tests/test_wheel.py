@@ -26,7 +26,7 @@ import pytest
 pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parent.parent
-SOURCES = ("pyproject.toml", "README.md", "LICENSE", "tamp", "verification", "models")
+SOURCES = ("pyproject.toml", "README.md", "LICENSE", "tamp")
 
 
 def _run(cmd: list[str], cwd: Path, env: dict[str, str], timeout: float = 300):
@@ -71,10 +71,10 @@ def test_wheel_holds_the_models_and_the_license(installed):
     _, _, wheel = installed
     names = set(zipfile.ZipFile(wheel).namelist())
     for name in ("youbot", "bottle", "obstacle", "floor", "area_marker"):
-        assert f"tamp_models/sdf/{name}.sdf" in names
-    assert {"tamp_models/package.xml", "tamp_models/weights/hrgnet_synth_rgbd.pt"} <= names
+        assert f"tamp/models/sdf/{name}.sdf" in names
+    assert {"tamp/models/package.xml", "tamp/models/weights/hrgnet_synth_rgbd.pt"} <= names
     # the three grasp networks of `tamp simulate lots --grasp`; the weights stay small
-    weights = [f"tamp_models/weights/{n}_synth_rgbd.pt" for n in ("grconvnet", "ggcnn")]
+    weights = [f"tamp/models/weights/{n}_synth_rgbd.pt" for n in ("grconvnet", "ggcnn")]
     assert set(weights) <= names
     sizes = [
         i.compress_size for i in zipfile.ZipFile(wheel).infolist() if i.filename.endswith(".pt")
@@ -91,7 +91,7 @@ def test_wheel_holds_the_models_and_the_license(installed):
 
 def test_imports_come_from_the_wheel(installed, tmp_path):
     bin_dir, env, _ = installed
-    code = "import tamp, tamp_models; print(tamp.__file__); print(tamp_models.__file__)"
+    code = "import tamp, tamp.models; print(tamp.__file__); print(tamp.models.__file__)"
     out = _run([str(bin_dir / "python"), "-c", code], tmp_path, env).stdout.split()
     venv = bin_dir.parent.resolve()
     for path in out:

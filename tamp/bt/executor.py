@@ -578,7 +578,7 @@ class PaBtExecutor(TreeGrowth):
         become positions in the live tree (two branches that grew the same subtree with
         different ids are the same state). A stopped executor does nothing more: its key is
         its result. This is the state hashing that makes the verification of a tree grown
-        from per-goal subtrees scale with the goals (`verification.bt.explore`).
+        from per-goal subtrees scale with the goals (`tamp.verification.bt.explore`).
         """
         if self.result is not None:
             return ("stopped", self.result.value)

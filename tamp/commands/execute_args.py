@@ -14,7 +14,7 @@
   first two attempts of Place(O1, L1); ``--fail MoveTo`` the first MoveTo, whatever its target.
 - Before it runs, the grown tree passes the verification gate as in ``tamp simulate``:
   every execution over the symbolic domain (the appearances, one skill failure) against
-  the safety properties and ``F goal`` (`verification.gate.gate_tree`). ``--verify-budget
+  the safety properties and ``F goal`` (`tamp.verification.gate.gate_tree`). ``--verify-budget
   N`` bounds the states it explores; a tree it cannot cover within them is refused as
   unknown (exit 1, the message names the budget); a long check logs its progress.
 - exit status 0 when every goal was reached, 1 otherwise (the reason is printed).
@@ -120,8 +120,8 @@ def execution_payload(args: argparse.Namespace, demo: Any, plan_result: Any, *, 
     appear, fail = demo_events(args, demo)
     verified = None
     if verify:
-        from verification.bt import executor_for
-        from verification.gate import gate_tree
+        from tamp.verification.bt import executor_for
+        from tamp.verification.gate import gate_tree
 
         verified = gate_tree(
             executor_for(demo, list(plan_result.order)),

@@ -120,7 +120,7 @@ def register(subparsers) -> None:
         description="Evaluates on the test part of the split recorded in the weights unless "
         "--split/--seed/--test-fraction/--fold say otherwise (then with a warning).",
     )
-    p.add_argument("weights", help="weights file (final.pt, best.pt or models/weights/*.pt)")
+    p.add_argument("weights", help="weights file (final.pt, best.pt or tamp/models/weights/*.pt)")
     _dataset_args(p, split_choices=("image", "object", "both"), size=None, recorded=True)
     p.add_argument("--device", default="cpu", help="cpu (default), cuda, cuda:1 ...")
     p.add_argument("--threads", type=int, default=0, help="torch CPU threads (0: default)")

@@ -87,8 +87,8 @@ def run(args: argparse.Namespace) -> int:
     events = load_events(args.interference, task) if args.interference else []
     if args.no_verify:
         warn_unverified("tamp lots", "every LOTS table")
-    from verification import gate
-    from verification.lots import judge_verdict
+    from tamp.verification import gate
+    from tamp.verification.lots import judge_verdict
 
     report = run_task(
         task,

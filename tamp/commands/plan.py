@@ -50,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     result = plan(demo, args.cost)
     verify = not args.no_verify
     if verify:
-        from verification.gate import gate_order
+        from tamp.verification.gate import gate_order
 
         gate_order(result)
     else:

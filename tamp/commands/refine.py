@@ -102,8 +102,8 @@ def run(args: argparse.Namespace) -> int:
 
     from tamp.refine.refinement import refine
     from tamp.sim.refine.simulate import simulate
-    from verification.gate import gate_program
-    from verification.refine import check_run
+    from tamp.verification.gate import gate_program
+    from tamp.verification.refine import check_run
 
     measure = partial(simulate, scene=scene)
     if args.from_log:

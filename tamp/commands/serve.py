@@ -90,7 +90,7 @@ def check_arguments(args: argparse.Namespace) -> None:
 def plan_demo(demo: Any, cost: str) -> Any:
     """What ``tamp plan`` does to a demonstration: RG, A*, the order's verification gate."""
     from tamp.rg import plan
-    from verification.gate import gate_order
+    from tamp.verification.gate import gate_order
 
     result = plan(demo, cost)
     gate_order(result)

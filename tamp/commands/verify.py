@@ -13,7 +13,7 @@ parse, a malformed file), 3 internal error, 4 unknown (``bt`` whose exploration 
 ``--max-states`` without a counterexample: nothing established). ``--json`` prints at least
 ``{"status": "holds"|"violated"|"unknown", "holds": bool, "counterexample": …,
 "states_explored": int}``. ``--svg FILE`` draws the counterexample on the automaton of the
-property it violates (`verification.draw`; ``trace`` draws its trace whatever the verdict),
+property it violates (`tamp.verification.draw`; ``trace`` draws its trace whatever the verdict),
 in the format of the file's suffix (``.svg``, ``.png``, ``.dot``: `tamp.pictures`).
 
 Spot and the planning layers are imported inside each command, so ``--help`` stays fast.
@@ -75,7 +75,7 @@ def _draw(report, path: str, word=None) -> None:
     import logging
 
     from tamp.pictures import write_graph
-    from verification.draw import trace_dot
+    from tamp.verification.draw import trace_dot
 
     failed = [v for v in report.failed if v.counterexample is not None]
     if failed:
@@ -94,9 +94,9 @@ def _draw(report, path: str, word=None) -> None:
 
 def _cmd_trace(args) -> int:
     from tamp.ltl.formula import parse as parse_formula
-    from verification.traces import check_trace
-    from verification.verdict import Report
-    from verification.words import load_trace, parse_word
+    from tamp.verification.traces import check_trace
+    from tamp.verification.verdict import Report
+    from tamp.verification.words import load_trace, parse_word
 
     formula = parse_formula(args.formula, field="--formula")
     word = load_trace(args.trace) if args.trace is not None else parse_word(args.word)
@@ -135,8 +135,8 @@ def _order(text: str) -> list[str]:
 
 def _cmd_plan(args) -> int:
     from tamp.demo import load_demonstration
-    from verification.rg import check_graph, check_order
-    from verification.verdict import Report
+    from tamp.verification.rg import check_graph, check_order
+    from tamp.verification.verdict import Report
 
     demo = load_demonstration(args.demo)
     if args.order is not None:
@@ -172,14 +172,14 @@ def _add_plan(sub) -> None:
 def _cmd_bt(args) -> int:
     from tamp.commands.events_args import demo_events
     from tamp.demo import load_demonstration
-    from verification.bt import DEFAULT_PROPERTIES, check_tree, executor_for
-    from verification.rg import check_order_ids
+    from tamp.verification.bt import DEFAULT_PROPERTIES, check_tree, executor_for
+    from tamp.verification.rg import check_order_ids
 
     demo = load_demonstration(args.demo)
     if args.max_failures < 0:
         raise InputError(f"must be >= 0, got {args.max_failures}", field="--max-failures")
     if args.max_states is None:
-        from verification.bt import DEFAULT_MAX_STATES
+        from tamp.verification.bt import DEFAULT_MAX_STATES
 
         args.max_states = DEFAULT_MAX_STATES
     if args.max_states < 1:
@@ -235,7 +235,7 @@ def _add_bt(sub) -> None:
 
 
 def _cmd_lots(args) -> int:
-    from verification.lots import check_task_file
+    from tamp.verification.lots import check_task_file
 
     return _emit(check_task_file(args.task, args.interference), args)
 

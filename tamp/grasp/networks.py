@@ -2,7 +2,7 @@
 
 HRG-Net (Zhou et al., IEEE T-ASE 2023, §IV-B, Fig. 5) and the two baselines it is compared
 with in §V-A (GG-CNN [49], GR-ConvNet [57]) are registered here with their constructor, the
-weights file shipped for them in ``models/weights`` and their input. The grasp CLI
+weights file shipped for them in ``tamp/models/weights`` and their input. The grasp CLI
 (``tamp grasp train --model``), the LOTS workcell (``grasp.network`` of a scenario file,
 ``tamp simulate lots --grasp``), training and the benchmarks take their names from
 :data:`NETWORKS`.
@@ -30,7 +30,7 @@ class GraspNetwork:
 
     ``constructor`` is ``"module:Class"``, imported only by :meth:`model_class` so that the
     registry loads without torch; the class takes the input channel count first.
-    ``weights_file`` lies in ``models/weights`` and was trained for input ``input``.
+    ``weights_file`` lies in ``tamp/models/weights`` and was trained for input ``input``.
     ``fusion``: the constructor takes HRG-Net's ``fusion`` setting (:data:`FUSION_MODES`).
     """
 

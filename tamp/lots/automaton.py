@@ -7,7 +7,7 @@ The robot does one thing at a time, so only *executable* letters are read: the e
 (no delivery this step) and the singletons ``{p}``. :class:`Automaton` precomputes
 ``δ(q, σ)`` for those letters once, so the planners never touch a BDD in their inner loops.
 
-This wrapper is also what ``verification`` consumes (stable API): ``spot_aut``, ``initial``,
+This wrapper is also what ``tamp.verification`` consumes (stable API): ``spot_aut``, ``initial``,
 ``accepting``, ``edges`` (with readable label formulas), ``ap``, :meth:`successors`,
 :meth:`accepts_lasso`.
 """

@@ -13,7 +13,7 @@
   that can still complete the task is found, or the reachable pairs are exhausted (verdict:
   the state cannot lead to completion, Alg. 1 line 23).
 
-Pairs, tables and plans are the stable API that ``verification`` reads: ``Plan.prefix`` /
+Pairs, tables and plans are the stable API that ``tamp.verification`` reads: ``Plan.prefix`` /
 ``Plan.cycle`` (letters = frozensets of true propositions), ``Table.as_mapping()`` and
 :func:`follow_table`.
 """
@@ -67,7 +67,7 @@ class Plan:
     """A run from ``start`` to a goal pair, and the accepting cycle that continues it.
 
     ``prefix`` lists the letters of ``steps``; ``prefix · cycle^ω`` is accepted by the task
-    automaton (what ``verification`` checks).
+    automaton (what ``tamp.verification`` checks).
     """
 
     start: Pair

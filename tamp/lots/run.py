@@ -96,7 +96,7 @@ def run_word_json(c: LotsController) -> dict[str, Any]:
 
 def judge_run(c: LotsController) -> tuple[bool, dict[str, Any]]:
     """The automaton's verdict on the run's word, without the verification module (a front
-    end passes ``verification.lots.judge_word`` instead, which also checks the formula)."""
+    end passes ``tamp.verification.lots.judge_word`` instead, which also checks the formula)."""
     ok = c.word.accepting(list(c.plan.cycle)) is not None
     return ok, {"holds": ok, "subject": "LOTS run's word"}
 
@@ -123,7 +123,7 @@ def run_task(
     """Run Alg. 1 to the end. Infeasibility is reported (``satisfied`` False, ``reason``).
 
     ``check`` is called with the controller after every table it builds (the initial one and
-    each replan), before the robot acts on it: the front ends pass `verification.gate`, which
+    each replan), before the robot acts on it: the front ends pass `tamp.verification.gate`, which
     raises when the planned run or a table entry does not lead to acceptance (the
     verification gate of the architecture). What ``check`` raises propagates, even an
     `InfeasibleError` such as `VerificationError`: a rejected table is not an infeasible task
@@ -131,7 +131,7 @@ def run_task(
 
     The run is satisfied when the controller completed its round, W^B holds the end of a
     round (ground truth), and the run's word is accepted: ``judge`` (default `judge_run`)
-    gives the verdict on it; the front ends pass `verification.lots.judge_verdict`.
+    gives the verdict on it; the front ends pass `tamp.verification.lots.judge_verdict`.
     """
     controller = LotsController(task, mode=mode, seed=seed, max_waits=max_waits, check=check)
     controller.max_actions = (

@@ -16,7 +16,7 @@ closed under ∅ letters, which only advance the automaton), each with one witne
 the controller never plans from a state the run cannot be in (which is how a replan could
 take a block that started in W^B for a delivery that never happened), and a run is judged
 on its word: accepted when some reachable state accepts the round's accepting cycle forever
-(`accepting`). ``verification.lots.judge_word`` checks the witness against the formula.
+(`accepting`). ``tamp.verification.lots.judge_word`` checks the witness against the formula.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@
 - ``automata``   edges, copies started elsewhere, lasso acceptance, live states, a letter stepper
 - ``kripke``     Kripke structures of explicit systems and their runs accepted by an automaton
 
-Every other module of ``tamp`` and ``verification`` reaches Spot through these.
+Every other module of ``tamp`` (``tamp.verification`` too) reaches Spot through these.
 """
 
 from tamp.ltl.automata import accepts_lasso, started_at

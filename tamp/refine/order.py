@@ -9,7 +9,7 @@ linear extension of this order, so:
 - a cycle means some event can never fire (`check_can_finish` raises `InfeasibleError`);
 - the executions' event sequences are the paths through the *downsets* of the order
   (`downsets`): the states a model checker explores to prove an LTL ordering property of
-  every execution before any simulation (Step 2's safety, in `verification.refine`).
+  every execution before any simulation (Step 2's safety, in `tamp.verification.refine`).
 """
 
 from __future__ import annotations

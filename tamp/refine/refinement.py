@@ -73,7 +73,7 @@ from tamp.refine.steps import (
 class Gate(Protocol):
     """Refuses ``program`` (raises an `InfeasibleError`, with the counterexample) when some
     execution of it breaks its ordering property; ``subject`` names it in the report
-    (`verification.gate.gate_program`)."""
+    (`tamp.verification.gate.gate_program`)."""
 
     def __call__(self, program: Program, *, subject: str) -> object: ...
 
@@ -84,7 +84,7 @@ class Verdict(Protocol):
 
 class RunCheck(Protocol):
     """The verdict of one measured event ``order`` against ``program``'s ordering property
-    (`verification.refine.check_run`)."""
+    (`tamp.verification.refine.check_run`)."""
 
     def __call__(self, program: Program, order: Sequence[str]) -> Verdict: ...
 

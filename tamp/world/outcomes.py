@@ -5,7 +5,7 @@ preconditions still holding (a skill whose preconditions fail needs no decision:
 
 - `ScriptedOutcomes`: `Fail` entries (``--fail``); the first ``times`` attempts of a
   matching action fail, every other attempt succeeds.
-- `BranchingOutcomes`: what the explorer of every execution (`verification.bt`) configures.
+- `BranchingOutcomes`: what the explorer of every execution (`tamp.verification.bt`) configures.
   Before a tick it sets the outcomes to use (`choose`); each finishing skill that may fail
   takes the next one (SUCCESS when none is left) and records it in ``decisions``, so the
   explorer can branch on every decision. A skill may fail when it matches one of

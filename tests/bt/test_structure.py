@@ -29,7 +29,7 @@ def _imports(package: str) -> nx.DiGraph:
 
 
 def test_no_import_cycles_between_modules() -> None:
-    for package in ("tamp.bt", "tamp.world", "verification.bt"):
+    for package in ("tamp.bt", "tamp.world", "tamp.verification.bt"):
         g = _imports(package)
         assert len(g) > 2
         assert list(nx.simple_cycles(g)) == [], package

@@ -1,4 +1,4 @@
-"""The shipped HRG-Net weights (models/weights/): load, run at 224x224 RGB-D, and find
+"""The shipped HRG-Net weights (tamp/models/weights/): load, run at 224x224 RGB-D, and find
 correct grasps on synthetic scenes rendered with a seed the training set never used."""
 
 from __future__ import annotations
@@ -12,7 +12,9 @@ import torch
 
 from tamp.grasp.predict import GraspPredictor
 
-WEIGHTS = Path(__file__).resolve().parents[2] / "models" / "weights" / "hrgnet_synth_rgbd.pt"
+WEIGHTS = (
+    Path(__file__).resolve().parents[2] / "tamp" / "models" / "weights" / "hrgnet_synth_rgbd.pt"
+)
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ from tamp.lots.person import actions_done
 from tamp.lots.product import ProductPlanner
 from tamp.lots.run import run_task
 from tamp.lots.task import Event, Proposition, Task, load_events, load_task
-from verification.lots import check_run_of
+from tamp.verification.lots import check_run_of
 
 from .helpers import TWO_CLASSES, random_tasks, scenario, take_away, write_files
 

@@ -12,9 +12,9 @@ from tamp.lots.person import ScriptedPerson
 from tamp.lots.planner import Table
 from tamp.lots.run import lots_world, run_task
 from tamp.lots.task import Event, load_task
-from verification import gate
-from verification.lots import check_controller, check_run
-from verification.verdict import VerificationError
+from tamp.verification import gate
+from tamp.verification.lots import check_controller, check_run
+from tamp.verification.verdict import VerificationError
 
 from .helpers import events
 

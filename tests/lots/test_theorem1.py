@@ -19,7 +19,7 @@ from tamp.lots.cell import held_kind, side_counts
 from tamp.lots.run import run_task
 from tamp.lots.task import Event, Proposition, Task, load_task
 from tamp.scenarios import path
-from verification import gate
+from tamp.verification import gate
 
 #: with our return action: an object a person put into W^B too early for the automaton's order
 #: (a delivery that happened) can go back to W^A and be delivered again; with Zhou et al.'s

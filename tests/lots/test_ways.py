@@ -38,7 +38,7 @@ from tamp.lots.controller import LotsController
 from tamp.lots.person import actions_done
 from tamp.lots.run import run_task
 from tamp.lots.task import Event, Proposition, Task, load_events, load_task
-from verification.lots import check_run_of
+from tamp.verification.lots import check_run_of
 
 from .helpers import CLASSES, TWO_CLASSES, random_tasks, take_away, write_files
 

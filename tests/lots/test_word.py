@@ -19,9 +19,9 @@ from hypothesis import strategies as st
 from tamp.errors import InfeasibleError
 from tamp.lots.controller import LotsController
 from tamp.lots.run import run_task
-from verification.lots import judge_word
-from verification.traces import check_trace
-from verification.words import Word
+from tamp.verification.lots import judge_word
+from tamp.verification.traces import check_trace
+from tamp.verification.words import Word
 
 from .helpers import random_tasks
 from .test_theorem1 import abstract_event, make_policy

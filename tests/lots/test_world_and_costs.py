@@ -16,8 +16,8 @@ from tamp.lots.person import ScriptedPerson, actions_done
 from tamp.lots.product import ProductPlanner
 from tamp.lots.run import lots_world, run_task
 from tamp.lots.task import Event, Proposition, Task
+from tamp.verification import lots as vlots
 from tamp.world.interface import Status, World
-from verification import lots as vlots
 
 
 def execute(world, name, *args, person=None):

@@ -13,9 +13,9 @@ from tamp.errors import InputError
 from tamp.refine.architecture import default_architecture
 from tamp.refine.predict import load_log, predicted_timeline, predicting
 from tamp.refine.refinement import refine
+from tamp.verification.gate import gate_program
+from tamp.verification.refine import check_run
 from tests.refine.helpers import task
-from verification.gate import gate_program
-from verification.refine import check_run
 
 ROWS = [
     ("R1.lower_arm", 0.0, 53.3),

@@ -25,10 +25,10 @@ from tamp.refine.order import direct_predecessors
 from tamp.refine.program import Program, event_id
 from tamp.refine.steps import RateSearch
 from tamp.refine.timeline import BehaviorRecord, Timeline
+from tamp.verification.gate import gate_program
+from tamp.verification.refine import check_run
+from tamp.verification.verdict import VerificationError
 from tests.refine.helpers import task
-from verification.gate import gate_program
-from verification.refine import check_run
-from verification.verdict import VerificationError
 
 ARCH = default_architecture()
 OPEN = Goal("folding_chair.hinge", 0.35, "the chair is open")

@@ -7,10 +7,10 @@ from dataclasses import replace
 import pytest
 
 from tamp.refine.steps import Parallelization, join, parallelize
+from tamp.verification.gate import gate, gate_program
+from tamp.verification.refine import check_program, check_run, executions
+from tamp.verification.verdict import VerificationError
 from tests.refine.helpers import task
-from verification.gate import gate, gate_program
-from verification.refine import check_program, check_run, executions
-from verification.verdict import VerificationError
 
 T4 = {"R1.lower_arm": 57.0, "R1.approach": 68.0}
 
@@ -118,7 +118,7 @@ def test_measured_run_order():
 
 
 def test_gate_dispatches_on_programs():
-    """`verification.gate` knows programs: the same Report as `gate_program`."""
+    """`tamp.verification.gate` knows programs: the same Report as `gate_program`."""
     report = gate(task(4))
     assert report.holds and len(report.verdicts) == 1
     assert report.verdicts[0].subject == "program task4"

@@ -109,8 +109,8 @@ def test_a_long_chain_of_one_object_plans_and_verifies(capsys, tmp_path, steps) 
     automaton size guard as bad input (exit 2); the encoding is checked directly now."""
     from tamp.demo import load_demonstration
     from tamp.rg import plan
+    from tamp.verification.gate import gate_order
     from tests.demo.generate import write_demo
-    from verification.gate import gate_order
 
     demo_file = write_demo(tmp_path / f"chain{steps}.yaml", steps, "one")
     code, out, err = _run(capsys, "plan", str(demo_file), "--json")

@@ -17,6 +17,9 @@ from typing import Any
 
 #: fields that say where a file was, not what it holds
 EXCLUDED = ("source",)
+#: fields added after the snapshot was written, left out while they hold their default (a
+#: scenario's appearance of one object: `tamp.world.events.Appear.count`)
+ADDED_DEFAULTS = {"count": 1}
 
 
 def normalise(value: Any) -> Any:
@@ -26,6 +29,7 @@ def normalise(value: Any) -> Any:
             f.name: normalise(getattr(value, f.name))
             for f in dataclasses.fields(value)
             if f.name not in EXCLUDED
+            and not (f.name in ADDED_DEFAULTS and getattr(value, f.name) == ADDED_DEFAULTS[f.name])
         }
     if isinstance(value, dict):
         return {str(k): normalise(v) for k, v in value.items()}

@@ -3,7 +3,7 @@
 Property: on random demonstrations of growing size, with random skill failures, obstacles,
 and injected faults (a Place without its IsAreaFree precondition: an unsafe step; no
 retries left after a failure, or no Place at all: an unachievable goal), every property's
-verdict of the reduced exploration (`verification.bt.explore`, ``reduce=True``) equals the
+verdict of the reduced exploration (`tamp.verification.bt.explore`, ``reduce=True``) equals the
 explicit exploration's (``reduce=False``), which merges states only on the whole tree, and
 the reduced system never has more states. Then: the reduced exploration grows linearly with
 the goals, and ``tamp plan --execute`` runs the 72-goal demonstration (four objects, 18
@@ -23,13 +23,13 @@ from hypothesis import strategies as st
 from tamp.bt.executor import PaBtExecutor
 from tamp.commands.main import main
 from tamp.demo import load_demonstration
+from tamp.verification import VerificationError
+from tamp.verification.bt import DEFAULT_PROPERTIES, VerificationUnknown, check_tree, executor_for
+from tamp.verification.gate import gate_tree
 from tamp.world.events import Appear, Fail
 from tamp.world.predicates import IsObjectAt
 from tests.demo.generate import write_demo
 from tests.rg.strategies import demonstrations
-from verification import VerificationError
-from verification.bt import DEFAULT_PROPERTIES, VerificationUnknown, check_tree, executor_for
-from verification.gate import gate_tree
 
 #: Examples per size (raise with VERIFY_EXAMPLES=200 for a longer sweep).
 EXAMPLES = int(os.environ.get("VERIFY_EXAMPLES", "12"))

@@ -181,7 +181,7 @@ def test_every_tree_state_budget_has_the_gates_default(capsys):
     """`tamp-verify bt --max-states`, `tamp plan --execute --verify-budget` and `tamp simulate
     smp-mro --verify-budget` bound one exploration: their help names its one default."""
     from tamp.commands.main import main as tamp
-    from verification.bt import DEFAULT_MAX_STATES
+    from tamp.verification.bt import DEFAULT_MAX_STATES
 
     helps = []
     for entry, argv in (

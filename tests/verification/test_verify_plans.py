@@ -13,11 +13,11 @@ from tamp.demo import load_demonstration
 from tamp.errors import InfeasibleError, InputError
 from tamp.rg import build_rg, plan
 from tamp.scenarios import path
+from tamp.verification import VerificationError, gate
+from tamp.verification.bt import check_tree, executor_for
+from tamp.verification.rg import check_graph, check_order, constraint_formula, order_word
 from tamp.world.events import Appear, Fail
 from tests.verification.ltlf_oracle import lasso_violates
-from verification import VerificationError, gate
-from verification.bt import check_tree, executor_for
-from verification.rg import check_graph, check_order, constraint_formula, order_word
 
 
 @pytest.fixture(scope="module")
@@ -331,8 +331,8 @@ def test_order_scan_agrees_with_the_automata() -> None:
     import random
 
     from tamp.demo import cyclic_swap
-    from verification.traces import check_trace
-    from verification.words import Word
+    from tamp.verification.traces import check_trace
+    from tamp.verification.words import Word
 
     demo = cyclic_swap(3)  # 6 goals, 6 constraints: 12 conjuncts
     ids = demo.goal_ids

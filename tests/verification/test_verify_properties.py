@@ -16,9 +16,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tamp import ltl
+from tamp.verification.traces import check_trace
+from tamp.verification.words import Word
 from tests.verification.ltlf_oracle import lasso_violates, ltlf_holds, prefix_is_bad
-from verification.traces import check_trace
-from verification.words import Word
 
 #: Examples per property (raise with VERIFY_EXAMPLES=2000 for a longer sweep).
 EXAMPLES = int(os.environ.get("VERIFY_EXAMPLES", "150"))
@@ -148,7 +148,7 @@ def _hoa_violates(props, labels, succ, f: spot.formula) -> bool:
 @settings(max_examples=EXAMPLES // 2)
 @given(systems())
 def test_model_check_matches_hoa_product_oracle(case) -> None:
-    from verification.kripke import TransitionSystem, model_check
+    from tamp.verification.kripke import TransitionSystem, model_check
 
     props, labels, succ, text = case
     f = spot.formula(text)

@@ -7,9 +7,9 @@ import spot
 
 from tamp import ltl
 from tamp.errors import InputError
+from tamp.verification.traces import check_trace
+from tamp.verification.words import Word, load_trace, parse_word
 from tests.verification.ltlf_oracle import lasso_violates, ltlf_holds, prefix_is_bad
-from verification.traces import check_trace
-from verification.words import Word, load_trace, parse_word
 
 # Zhou et al. §IV Example 1 / §VI-A (model building) and §VI-B (tower, an F-chain).
 PHI_MODEL = "GF p1 & GF p2 & GF p3 & GF p4"

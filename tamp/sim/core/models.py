@@ -1,11 +1,11 @@
 """Where the project's model data lives: the SDF models and the network weights.
 
-They are the top-level ``models/`` folder, installed as the data package ``tamp_models``
-(``pyproject.toml``) and found with `importlib.resources`, so a wheel works from any
-directory. The SDFs resolve in Drake as ``package://tamp_models/sdf/...`` through
-``models/package.xml`` (`tamp.sim.core.parsing.make_parser`); nothing is fetched. What each
-workcell knows about its models (joints, gains, object sizes) lives in its own subpackage.
-No Drake import here, so scenario validation and the grasp CLI run without Drake.
+They are the ``tamp/models/`` folder, package data of ``tamp`` (``pyproject.toml``), found
+with `importlib.resources`, so a wheel works from any directory. The SDFs resolve in Drake as
+``package://tamp_models/sdf/...`` through ``tamp/models/package.xml``
+(`tamp.sim.core.parsing.make_parser`); nothing is fetched. What each workcell knows about
+its models (joints, gains, object sizes) lives in its own subpackage. No Drake import here,
+so scenario validation and the grasp CLI run without Drake.
 """
 
 from __future__ import annotations
@@ -14,38 +14,32 @@ import re
 from importlib import resources
 from pathlib import Path
 
-import tamp
 from tamp.errors import TampError
 from tamp.fileio import MAX_BYTES, Fields
 
+#: The Drake package name of the model folder (``package://tamp_models/...``, its package.xml).
 PACKAGE = "tamp_models"
 
 
 def models_dir() -> Path:
-    """The ``models/`` folder: the installed ``tamp_models`` package.
-
-    A source checkout that was never installed (only ``PYTHONPATH`` set) has no
-    ``tamp_models`` to import; then the folder beside the ``tamp`` package is used.
-    """
-    try:
-        root = resources.files(PACKAGE)
-    except ModuleNotFoundError:
-        root = Path(tamp.__file__).resolve().parent.parent / "models"
+    """The ``tamp/models/`` folder (package data of ``tamp``), found with `importlib.resources`
+    so that a wheel works from any directory."""
+    root = resources.files("tamp.models")
     if not isinstance(root, Path) or not (root / "package.xml").is_file():
         raise TampError(
-            f"the model data ({PACKAGE}: models/package.xml, models/sdf, models/weights) is "
-            "not installed; reinstall tamp (pip install .)"
+            "the model data (tamp/models: package.xml, sdf/, weights/) is not installed; "
+            "reinstall tamp-hrc (pip install .)"
         )
     return root
 
 
 def package_xml() -> Path:
-    """``models/package.xml``, which makes the SDFs ``package://tamp_models/...``."""
+    """``tamp/models/package.xml``, which makes the SDFs ``package://tamp_models/...``."""
     return models_dir() / "package.xml"
 
 
 def sdf_path(name: str) -> Path:
-    """The file of model ``name`` (``models/sdf/<name>.sdf``), for text substitution."""
+    """The file of model ``name`` (``tamp/models/sdf/<name>.sdf``), for text substitution."""
     return models_dir() / "sdf" / f"{name}.sdf"
 
 

@@ -1,6 +1,6 @@
 """What the LOTS workcell is made of: the arm's numbers and the object classes (no Drake here).
 
-The SDF files are in ``models/sdf`` (``package://tamp_models/sdf/lots_*.sdf``). The arm is a
+The SDF files are in ``tamp/models/sdf`` (``package://tamp_models/sdf/lots_*.sdf``). The arm is a
 Panda-like 7-DoF arm built from Franka's published kinematics (``lots_arm.sdf`` states the
 numbers); the classes are the tools of Zhou et al. §V (model building, tower, Example 1) plus
 the "new tools" a person brings in Fig. 9-10 (wrench, toy car).

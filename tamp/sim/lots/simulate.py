@@ -14,7 +14,7 @@ the time limit, and measures the result on the plant: counts per class in W^A, W
 waste basket from the objects' poses. The run is a SUCCESS only when the controller
 completed its round, the plant's W^B is a W^B state that ends a round of the task
 (`Lots.is_goal`), and the run's word — the robot's deliveries and the W^B states its camera
-saw, in order — is accepted by the task automaton (`verification.lots.judge_word`): the
+saw, in order — is accepted by the task automaton (`tamp.verification.lots.judge_word`): the
 same verdict as ``tamp lots``, which applies it to its symbolic ground truth.
 `LotsWorkcell` (``WORKCELL``) is the cell's `tamp.sim.core.workcell.Workcell`.
 Drake is imported only inside functions, so listing the workcells builds nothing.
@@ -309,7 +309,7 @@ def perturbed_run(scenario: LotsScenario, seed: int) -> tuple[LotsScenario, Appl
 
 
 class TableGate:
-    """The verification gate on every table the LOTS controller builds (`verification.gate`:
+    """The verification gate on every table the LOTS controller builds (`tamp.verification.gate`:
     the initial one before anything moves, each replanned one before it is used); what it
     raises propagates. ``holds``: every table checked so far was proved."""
 
@@ -317,7 +317,7 @@ class TableGate:
         self.reports: list[Any] = []
 
     def __call__(self, controller: LotsController) -> None:
-        from verification import gate
+        from tamp.verification import gate
 
         self.reports.append(gate(controller))
 
@@ -344,8 +344,8 @@ def simulate_lots(
     from tamp.lots.run import run_word_json
     from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
     from tamp.sim.core.runner import make_simulator, run_in_chunks
+    from tamp.verification.lots import judge_verdict
     from tamp.world.interface import Status
-    from verification.lots import judge_verdict
 
     run, applied = perturbed_run(scenario, seed)  # the run's draw of its perturbation
     cell_scenario, task = run.cell, run.task

@@ -20,7 +20,7 @@ Format (the fields, their defaults and bounds are stated once, in the dataclasse
     name: open_chair                  # default: the file's stem
     description: The folded chair lying on the floor (Fig. 9(d)).
     objects:
-      - model: folding_chair          # a packaged model (models/sdf/<name>.sdf), an .sdf
+      - model: folding_chair          # a packaged model (tamp/models/sdf/<name>.sdf), an .sdf
                                       # file relative to this file, or a
                                       # package://tamp_models/... URL
         name: folding_chair           # the object's name in the plant (default: the model's)
@@ -73,7 +73,7 @@ def _model(raw: object, f: Fields, key: str) -> str:
     if not sdf_path(ref).is_file():
         raise f.error(
             key,
-            f"no packaged model {ref!r} (models/sdf/{ref}.sdf); a model of your own is an "
+            f"no packaged model {ref!r} (tamp/models/sdf/{ref}.sdf); a model of your own is an "
             f".sdf file relative to the scene file or a package://{PACKAGE}/ URL",
         )
     return model_url(ref)

@@ -300,13 +300,13 @@ class RefineWorkcell:
         verify: bool = True,
     ) -> RefineResult:
         """Gate the ordering property, perturb by ``seed``, simulate and judge (`judge`)."""
-        from verification.refine import check_run
+        from tamp.verification.refine import check_run
 
         moved, applied = self.perturbed(scenario, seed)
         program = moved.program
         verified = {}
         if verify:
-            from verification.gate import gate_program
+            from tamp.verification.gate import gate_program
 
             gate_program(program, subject=f"program {program.name}")
             verified["ordering"] = True

@@ -13,7 +13,7 @@ Exported ports of the Diagram, per robot ``R``: ``R_state`` (its plant state),
 ``R_progress`` (its state machine's progress), ``R_delivered`` (what its channel delivered);
 and ``rates`` (the supervisor's command rates).
 
-Robots (``models/sdf/pioneer_lift.sdf``, ``pioneer_parallel.sdf``, Fig. 7): the base moves
+Robots (``tamp/models/sdf/pioneer_lift.sdf``, ``pioneer_parallel.sdf``, Fig. 7): the base moves
 on planar joints (x, y, yaw) driven along its heading or about the vertical axis, the lift
 lever pitches (``arm_pitch``, up positive) and two prismatic paddles/fingers open and close
 (`tamp.refine.machine.JOINTS`). Every joint is a PD-controlled actuator of the plant (SAP,

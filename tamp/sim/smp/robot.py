@@ -1,7 +1,7 @@
 """What the SMP-MRO workcell knows about its models: the youBot-like robot and the objects.
 
 Numbers that skills, IK and the scenario checks need (joint names, PD gains, footprints,
-grasp heights), next to the SDFs they describe (``models/sdf/youbot.sdf``, ``bottle.sdf``,
+grasp heights), next to the SDFs they describe (``tamp/models/sdf/youbot.sdf``, ``bottle.sdf``,
 ``obstacle.sdf``). A scenario may declare object models of its own
 (`tamp.sim.smp.object_models`); they are `ObjectKind` s too. No Drake import here, so
 scenario validation runs without Drake.
@@ -25,7 +25,7 @@ class ObjectKind:
     the palm stays clear of the object's top). ``radius`` is the footprint radius used for
     overlap checks and base path planning; ``half_width`` is what the fingers close on.
     ``path``: the SDF of a model a scenario declares (None: the packaged
-    ``models/sdf/<name>.sdf``); ``colour``: the RGBA its visuals get (None: the SDF's).
+    ``tamp/models/sdf/<name>.sdf``); ``colour``: the RGBA its visuals get (None: the SDF's).
     """
 
     name: str
@@ -72,7 +72,7 @@ OBJECT_KINDS: dict[str, ObjectKind] = {
 
 @dataclass(frozen=True)
 class RobotSpec:
-    """The youBot-like robot of ``models/sdf/youbot.sdf`` (SMP-MRO §V: KUKA youBot)."""
+    """The youBot-like robot of ``tamp/models/sdf/youbot.sdf`` (SMP-MRO §V: KUKA youBot)."""
 
     url: str = model_url("youbot")
     base_joints: tuple[str, ...] = ("base_x", "base_y", "base_yaw")

@@ -64,14 +64,14 @@ def prepare(
 ) -> Prepared:
     """Plan, build the tree, and pass the verification gate (the hook before simulation);
     ``verify_budget``: the states the tree gate may explore before its verdict is unknown
-    (refused, exit 1; default `verification.bt.DEFAULT_MAX_STATES`)."""
+    (refused, exit 1; default `tamp.verification.bt.DEFAULT_MAX_STATES`)."""
     from tamp.rg import plan as rg_plan
 
     result = rg_plan(scenario.demo, scenario.planner.cost)
     tree = make_tree(scenario, result)
     prepared = Prepared(scenario, result, tree)
     if verify:
-        from verification import gate
+        from tamp.verification import gate
 
         t0 = time.perf_counter()
         prepared.reports["order"] = gate(result)

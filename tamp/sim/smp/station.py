@@ -1,7 +1,7 @@
 """The SMP-MRO station: `build_station` builds the Drake diagram of a `SimScenario` (one
 function, one named Diagram) and returns its handles (`SmpStation`).
 
-    MultibodyPlant + SceneGraph  (models/sdf: floor, youBot-like robot, objects, area discs)
+    MultibodyPlant + SceneGraph  (tamp/models/sdf: floor, youBot-like robot, objects, area discs)
       body_poses ─► WorldStateEstimator ─► world_state ─► BtExecutor ─► skill_command
       skill_command, robot state, body_poses ─► YouBotSkillController ─► desired_state (PD)
       YouBotSkillController.grasp ─► WorldStateEstimator, and the weld switch of `SimRunner`

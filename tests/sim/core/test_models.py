@@ -1,4 +1,4 @@
-"""The shared model data: found as the ``tamp_models`` package, parsed offline only."""
+"""The model data: found as ``tamp.models`` (Drake's ``tamp_models``), parsed offline only."""
 
 from __future__ import annotations
 

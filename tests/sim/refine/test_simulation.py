@@ -10,8 +10,8 @@ from tamp.refine.architecture import ServiceTimes, default_architecture
 from tamp.refine.order import precedence
 from tamp.refine.steps import refine_rate
 from tamp.sim.refine.simulate import simulate
+from tamp.verification.refine import check_run
 from tests.sim.refine.helpers import fast_architecture, short
-from verification.refine import check_run
 
 pytestmark = pytest.mark.slow  # Drake simulations of the short Task 4 program
 

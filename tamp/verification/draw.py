@@ -14,7 +14,7 @@ from tamp import ltl
 from tamp.ltl.automata import edges, live_states
 from tamp.ltl.formula import Formula, as_formula
 from tamp.ltl.letters import aps, label, letter_bdd, meets
-from verification.words import Word
+from tamp.verification.words import Word
 
 
 def _esc(text: str) -> str:

@@ -5,10 +5,10 @@ Modules, one job each: `explore` (the executions as a transition system, on the 
 `check` (`check_tree`, the entry point), `demo` (an executor for a demonstration).
 """
 
-from verification.bt.check import VerificationUnknown, check_tree
-from verification.bt.demo import executor_for
-from verification.bt.explore import DEFAULT_MAX_STATES, Exploration, explore
-from verification.bt.labels import DEFAULT_PROPERTIES, FLAGS, Labeller
+from tamp.verification.bt.check import VerificationUnknown, check_tree
+from tamp.verification.bt.demo import executor_for
+from tamp.verification.bt.explore import DEFAULT_MAX_STATES, Exploration, explore
+from tamp.verification.bt.labels import DEFAULT_PROPERTIES, FLAGS, Labeller
 
 __all__ = [
     "DEFAULT_MAX_STATES",

@@ -10,12 +10,12 @@ from collections.abc import Iterable, Sequence
 
 from tamp.bt.executor import PaBtExecutor
 from tamp.ltl.formula import Formula, ap_names, as_formula
+from tamp.verification.bt.explore import DEFAULT_MAX_STATES, explore
+from tamp.verification.bt.labels import DEFAULT_PROPERTIES
+from tamp.verification.kripke import model_check
+from tamp.verification.verdict import Report, VerificationError
 from tamp.world.events import Appear, Fail
 from tamp.world.state import WorldState
-from verification.bt.explore import DEFAULT_MAX_STATES, explore
-from verification.bt.labels import DEFAULT_PROPERTIES
-from verification.kripke import model_check
-from verification.verdict import Report, VerificationError
 
 
 def check_tree(
@@ -35,9 +35,9 @@ def check_tree(
     ``events``: interference (`Appear`). ``failures``: the skills that may fail (`Fail`
     entries; None: every skill), at most ``max_failures`` failures per execution.
     ``executor`` is not ticked (the exploration works on copies). Properties use the
-    propositions of `verification.bt.labels`; an unknown one is an `InputError`.
+    propositions of `tamp.verification.bt.labels`; an unknown one is an `InputError`.
     ``reduce``: the reduced exploration (default) or the explicit one
-    (`verification.bt.explore`).
+    (`tamp.verification.bt.explore`).
     """
     formulas = [as_formula(p, field="--property") for p in properties]
     aps = sorted({a for f in formulas for a in ap_names(f)})

@@ -28,9 +28,9 @@ from dataclasses import dataclass, field
 from tamp import ltl
 from tamp.ltl.formula import Formula
 from tamp.ltl.kripke import intersecting_lasso, kripke
-from verification.traces import MAX_CONJUNCTS_FOR_WHOLE, as_formula, check_trace, explain
-from verification.verdict import Verdict
-from verification.words import Word
+from tamp.verification.traces import MAX_CONJUNCTS_FOR_WHOLE, as_formula, check_trace, explain
+from tamp.verification.verdict import Verdict
+from tamp.verification.words import Word
 
 
 @dataclass

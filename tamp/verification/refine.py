@@ -5,8 +5,8 @@ refused with the counterexample.
 The executions of a program are the paths through the downsets of its event order
 (`tamp.refine.order.downsets`): each state is the set of events fired so far, which is
 also its label ("has fired" semantics), and the full set repeats forever. That system goes
-to `verification.kripke.model_check`; a finished run (the measured event order) goes to
-`verification.traces.check_trace` as a finite word of the same labels.
+to `tamp.verification.kripke.model_check`; a finished run (the measured event order) goes to
+`tamp.verification.traces.check_trace` as a finite word of the same labels.
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ from collections.abc import Sequence
 
 from tamp.refine.order import downsets
 from tamp.refine.program import Program
-from verification.kripke import TransitionSystem, model_check
-from verification.traces import check_trace
-from verification.verdict import Verdict
-from verification.words import Word
+from tamp.verification.kripke import TransitionSystem, model_check
+from tamp.verification.traces import check_trace
+from tamp.verification.verdict import Verdict
+from tamp.verification.words import Word
 
 
 def executions(program: Program) -> TransitionSystem:

@@ -37,7 +37,7 @@ Choices written down here:
   --execute` sees it in the arrival tick).
 - The exploration is bounded by ``max_states``; when the bound is hit the states left
   unexpanded are recorded (`TransitionSystem.unexpanded`): a path that stops there is a
-  counterexample only when it is already a bad prefix (see `verification.kripke`), never
+  counterexample only when it is already a bad prefix (see `tamp.verification.kripke`), never
   merely because the exploration stopped.
 - A long exploration says so: every `PROGRESS_SECONDS` a line on the ``tamp`` logger
   (stderr in the CLIs) with the states explored, the frontier and the bound.
@@ -53,13 +53,13 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from tamp.bt.executor import ExecutorSnapshot, PaBtExecutor
+from tamp.verification.bt.labels import Labeller
+from tamp.verification.kripke import TransitionSystem
 from tamp.world.events import Appear, Fail
 from tamp.world.interface import Status
 from tamp.world.outcomes import BranchingOutcomes
 from tamp.world.state import WorldState
 from tamp.world.symbolic import SymbolicWorld
-from verification.bt.labels import Labeller
-from verification.kripke import TransitionSystem
 
 #: seconds between two progress lines of a long exploration
 PROGRESS_SECONDS = 2.0
@@ -112,7 +112,7 @@ def explore(
     """Breadth-first over every execution of ``executor`` from ``state`` (module doc).
 
     ``executor`` itself is never ticked; states are labelled with the propositions ``aps``
-    (`verification.bt.labels`). ``reduce``: merge on the live part of the executor (the
+    (`tamp.verification.bt.labels`). ``reduce``: merge on the live part of the executor (the
     default) or on the whole tree (the explicit reference).
     """
     events = list(events)

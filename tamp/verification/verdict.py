@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 from tamp.errors import InfeasibleError
 from tamp.ltl.formula import short
-from verification.words import Word
+from tamp.verification.words import Word
 
 #: Characters of a formula or word that text output shows (JSON carries it whole): the
 #: encoding of a plan of 5,000 goals is 10,000 conjuncts long.

@@ -1,6 +1,6 @@
 """Propositions of BT properties: what a state of an execution is labelled with.
 
-A state is an (executor, world) pair after a tick (`verification.bt.explore`). Unknown
+A state is an (executor, world) pair after a tick (`tamp.verification.bt.explore`). Unknown
 names are bad input (``--property``).
 
 - flags: ``goal`` (the tree returned SUCCESS: every goal of C_goal reached in order),

@@ -5,16 +5,16 @@ each returns the `Report` (what ``--json`` front ends print) or raises `Verifica
 `InfeasibleError`: the CLIs exit 1) carrying the report and its counterexample:
 
 - `gate_order` — the RG planner's `tamp.rg.PlanResult`: the order trace against the LTL
-  encoding of C, and every path of the plan's reachability graph (`verification.rg`);
+  encoding of C, and every path of the plan's reachability graph (`tamp.verification.rg`);
 - `gate_tree` — a `tamp.bt.PaBtExecutor` before it ticks: every execution of the grown tree
   from ``state`` (appearances, bounded skill failures) against the safety properties and
-  ``F goal`` (`verification.bt`, explored goal subtree by goal subtree); the executor itself
+  ``F goal`` (`tamp.verification.bt`, explored goal subtree by goal subtree); the executor itself
   is not ticked; a tree that its state budget cannot cover is refused as unknown;
 - `gate_table` — a `tamp.lots.controller.LotsController`: the planned run and every entry
-  of its current table T, from where that table was built (`verification.lots`);
+  of its current table T, from where that table was built (`tamp.verification.lots`);
 - `gate_program` — a refinement `tamp.refine.Program`: every execution of its state
   machines (the downsets of its event order) against its LTL ordering property
-  (`verification.refine`), before the (refined) program is simulated.
+  (`tamp.verification.refine`), before the (refined) program is simulated.
 
 `gate(plan, ...)` dispatches on the plan's type to the same three functions.
 """
@@ -24,7 +24,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING
 
-from verification.verdict import Report, VerificationError
+from tamp.verification.verdict import Report, VerificationError
 
 if TYPE_CHECKING:
     from tamp.bt.executor import PaBtExecutor
@@ -49,7 +49,7 @@ def gate_order(plan: PlanResult, *, graph: bool = True) -> Report:
     usable action template of the robot's domain (`tamp.world.achievable`); otherwise the
     task is infeasible (`InfeasibleError`, exit 1) for that reason, before any model checking.
     """
-    from verification.rg import check_plan
+    from tamp.verification.rg import check_plan
 
     _achievable(plan)
     return _passed(check_plan(plan, graph=graph))
@@ -88,16 +88,16 @@ def gate_tree(
     """Every execution of ``executor``'s grown tree from ``state`` (it is not ticked).
 
     ``properties``: LTL over the exploration's propositions (default
-    `verification.bt.DEFAULT_PROPERTIES`); ``events``: appearances; ``failures``: the skills
+    `tamp.verification.bt.DEFAULT_PROPERTIES`); ``events``: appearances; ``failures``: the skills
     that may fail (None: every skill), at most ``max_failures`` per execution.
     ``budget``: the states the exploration may visit (default
-    `verification.bt.DEFAULT_MAX_STATES`; ``--verify-budget``). A tree it cannot cover
+    `tamp.verification.bt.DEFAULT_MAX_STATES`; ``--verify-budget``). A tree it cannot cover
     within the budget is neither passed nor refused as unsafe: `VerificationUnknown` (exit
     1) names the budget and how to raise it; ``allow_unknown`` lets such a report pass,
     its notes saying so.
     """
-    from verification.bt import DEFAULT_MAX_STATES, DEFAULT_PROPERTIES, check_tree
-    from verification.bt.check import VerificationUnknown
+    from tamp.verification.bt import DEFAULT_MAX_STATES, DEFAULT_PROPERTIES, check_tree
+    from tamp.verification.bt.check import VerificationUnknown
 
     limit = DEFAULT_MAX_STATES if budget is None else budget
     report = check_tree(
@@ -116,7 +116,7 @@ def gate_tree(
 
 def gate_table(controller: LotsController) -> Report:
     """The LOTS controller's planned run and every entry of its table T."""
-    from verification.lots import check_controller
+    from tamp.verification.lots import check_controller
 
     return _passed(check_controller(controller))
 
@@ -125,7 +125,7 @@ def gate_program(program: Program, *, subject: str | None = None) -> Report:
     """Every execution of ``program`` against its ordering property (the safety of Step 2 of
     Figueroa Heredia et al. 2018, §3.2): a refinement that lets some execution break it is
     refused."""
-    from verification.refine import check_program
+    from tamp.verification.refine import check_program
 
     return _passed(Report([check_program(program, subject=subject)]))
 

@@ -27,8 +27,8 @@ from tamp import ltl
 from tamp.errors import InputError
 from tamp.ltl.automata import Automaton, Stepper, accepting_continuation, accepts_lasso
 from tamp.ltl.formula import Formula, as_formula
-from verification.verdict import Counterexample, Verdict
-from verification.words import Word
+from tamp.verification.verdict import Counterexample, Verdict
+from tamp.verification.words import Word
 
 #: Above this many top-level conjuncts the whole-formula automaton is not built (it can be
 #: exponential in the number of conjuncts while each conjunct alone is tiny): the verdict is

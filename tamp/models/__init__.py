@@ -1,4 +1,4 @@
-"""The project's model data, installed as the package ``tamp_models``.
+"""The project's model data, package data of ``tamp`` (the Drake package ``tamp_models``).
 
 ``sdf/`` (the workcells' robots, objects and markers, ``package://tamp_models/...`` through
 ``package.xml``) and ``weights/`` (trained grasp networks). Data only: find it with

@@ -38,9 +38,9 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from tamp.ltl.automata import accepts_lasso, started_at
-from verification.traces import check_trace, explain_on
-from verification.verdict import Counterexample, Report, Verdict
-from verification.words import Word
+from tamp.verification.traces import check_trace, explain_on
+from tamp.verification.verdict import Counterexample, Report, Verdict
+from tamp.verification.words import Word
 
 if TYPE_CHECKING:
     from tamp.lots.automaton import Automaton, Letter

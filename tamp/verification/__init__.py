@@ -6,10 +6,10 @@ is what the planner front ends call; `check_trace` checks one finite
 Depends on the data types of the planning layers, never on `tamp.sim` or Drake.
 """
 
-from verification.gate import gate
-from verification.traces import check_trace
-from verification.verdict import Counterexample, Report, Verdict, VerificationError
-from verification.words import Word, load_trace, parse_word
+from tamp.verification.gate import gate
+from tamp.verification.traces import check_trace
+from tamp.verification.verdict import Counterexample, Report, Verdict, VerificationError
+from tamp.verification.words import Word, load_trace, parse_word
 
 __all__ = [
     "Counterexample",

@@ -38,9 +38,9 @@ import networkx as nx
 
 from tamp.errors import InputError
 from tamp.ltl.formula import Formula, as_formula
-from verification.kripke import TransitionSystem, model_check
-from verification.verdict import Counterexample, Report, Verdict
-from verification.words import Word
+from tamp.verification.kripke import TransitionSystem, model_check
+from tamp.verification.verdict import Counterexample, Report, Verdict
+from tamp.verification.words import Word
 
 #: Up to this many goals a counterexample's letters carry every goal proposition; beyond,
 #: only those of the conjuncts it names (a run of 5,000 cumulative letters would otherwise
@@ -433,7 +433,7 @@ def rg_system(rg: nx.DiGraph) -> TransitionSystem:
 def check_graph_explicit(demo, rg: nx.DiGraph) -> Verdict:
     """Every path of ``rg`` against the whole encoding, by the explicit automaton method:
     Spot's product of the RG's Kripke structure with the automaton of the negated
-    conjunction (`verification.kripke.model_check`). Subject to the translation guard of
+    conjunction (`tamp.verification.kripke.model_check`). Subject to the translation guard of
     `tamp.ltl` (at most 64 goals); the direct check agrees with it wherever it runs."""
     ids = demo.goal_ids
     ts = rg_system(rg)
