@@ -63,6 +63,9 @@ def _executor():
 
 @pytest.mark.slow  # executes every notebook
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
-def test_notebook_runs(path: Path) -> None:
+def test_notebook_runs(path: Path, monkeypatch) -> None:
+    # the campaign notebook's committed outputs are its 20 seeds (`make notebooks`); the
+    # suite checks that it runs, on 4
+    monkeypatch.setenv("TAMP_NOTEBOOK_RUNS", "4")
     nb = _executor().execute(path, timeout=600)  # raises on a cell error
     assert all(c.execution_count for c in nb.cells if c.cell_type == "code")
