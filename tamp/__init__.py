@@ -7,4 +7,4 @@ search), ``tamp.bt`` (behavior trees), ``tamp.lots`` (LTL with local observation
 ``tamp.grasp.synthetic`` imports Drake.
 """
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
