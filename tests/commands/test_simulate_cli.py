@@ -103,6 +103,15 @@ def test_meshcat_on_a_cell_without_a_live_view_is_refused(cells, capsys):
     assert "--meshcat" in capsys.readouterr().err
 
 
+def test_every_registered_workcell_has_a_live_view():
+    """`--meshcat` wherever a run happens: each packaged cell's run takes it."""
+    from tamp.commands.simulate import check_meshcat
+    from tamp.sim.core.workcell import get, workcells
+
+    for name in workcells():
+        check_meshcat(get(name))  # raises for a cell without one
+
+
 def test_hold_open_waits_for_the_user_and_takes_ctrl_c(capsys):
     from tamp.sim.core.recording import hold_open
 

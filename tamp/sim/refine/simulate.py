@@ -72,17 +72,18 @@ def simulate(
     max_sim_time: float | None = None,
     record: str | Path | None = None,
     scene: Scene | None = None,
+    meshcat: Any = None,
 ) -> Run:
     """Build the station of ``program`` in its scene (``scene``: already loaded, else
-    `load_scene` of ``program.scene``) and run it to the end (module docstring)."""
+    `load_scene` of ``program.scene``) and run it to the end (module docstring);
+    ``meshcat``: draw the run there (a live view), else only a recording makes a viewer."""
     from tamp.sim.core.runner import ChunkedRun, make_simulator, run_in_chunks
     from tamp.sim.refine.outcome import measure, start_heights
     from tamp.sim.refine.station import build_station
 
     if scene is None:
         scene = load_scene(program.scene)
-    meshcat = None
-    if record is not None:
+    if record is not None and meshcat is None:
         from tamp.sim.core.recording import new_meshcat
 
         meshcat = new_meshcat()
@@ -298,8 +299,11 @@ class RefineWorkcell:
         record: str | Path | None = None,
         max_sim_time: float | None = None,
         verify: bool = True,
+        meshcat: bool = False,
     ) -> RefineResult:
-        """Gate the ordering property, perturb by ``seed``, simulate and judge (`judge`)."""
+        """Gate the ordering property, perturb by ``seed``, simulate and judge (`judge`);
+        ``meshcat``: draw the run in a local Meshcat (the command line's live view,
+        `tamp.sim.core.recording.new_meshcat`)."""
         from tamp.verification.refine import check_run
 
         moved, applied = self.perturbed(scenario, seed)
@@ -316,6 +320,7 @@ class RefineWorkcell:
             max_sim_time=max_sim_time,
             record=record,
             scene=moved.scene,
+            meshcat=_live_meshcat() if meshcat else None,
         )
         reference = run
         moved_robots = any(any(v) for v in applied.robots.values())
@@ -342,3 +347,10 @@ class RefineWorkcell:
 
 
 WORKCELL = RefineWorkcell()
+
+
+def _live_meshcat() -> Any:
+    """The command line's live view (`tamp.sim.core.recording.new_meshcat`)."""
+    from tamp.sim.core.recording import new_meshcat
+
+    return new_meshcat()
