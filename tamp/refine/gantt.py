@@ -14,12 +14,10 @@ COLORS = {"base": "#4c72b0", "arm": "#dd8452", "gripper": "#55a868"}
 def draw_gantt(phases: Sequence[tuple[str, Timeline]], path: str | Path, title: str = "") -> str:
     """Write the timelines of ``phases`` (name, timeline) as one figure (SVG, PNG, PDF by
     the file's suffix); absorbed behaviors (completion markers) are hatched."""
-    import matplotlib
+    from matplotlib.figure import Figure  # no pyplot: a notebook's inline backend stays on
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(len(phases), 1, figsize=(9, 1.6 + 1.4 * len(phases)), squeeze=False)
+    fig = Figure(figsize=(9, 1.6 + 1.4 * len(phases)))
+    axes = fig.subplots(len(phases), 1, squeeze=False)
     end = max((t.task_time for _, t in phases), default=1.0) * 1.05 or 1.0
     for ax, (name, timeline) in zip(axes[:, 0], phases, strict=True):
         rows: list[str] = []
@@ -54,7 +52,6 @@ def draw_gantt(phases: Sequence[tuple[str, Timeline]], path: str | Path, title: 
     fig.tight_layout()
     out = Path(path)
     fig.savefig(out)
-    plt.close(fig)
     return str(out)
 
 
@@ -77,14 +74,12 @@ def draw_phases(
     """Fig. 14-style bars: the task time of each phase (name, s), and beside each the
     paper's (``paper``, phase name -> s) when given; the reduction from the first phase is
     written on each bar."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # no pyplot: a notebook's inline backend stays on
 
     names = [n for n, _ in phases]
     times = [t for _, t in phases]
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig = Figure(figsize=(7, 4))
+    ax = fig.subplots()
     width = 0.38 if paper else 0.6
     xs = list(range(len(names)))
     ours = [x - width / 2 for x in xs] if paper else xs
@@ -111,5 +106,4 @@ def draw_phases(
     fig.tight_layout()
     out = Path(path)
     fig.savefig(out)
-    plt.close(fig)
     return str(out)

@@ -60,10 +60,8 @@ def spans(doc: Mapping[str, Any]) -> list[Span]:
 def draw_timeline(doc: Mapping[str, Any], path: str | Path) -> Path:
     """Draw the run ``doc``'s spans as a Gantt chart at ``path`` (SVG, PNG or PDF by its
     suffix): one row per lane, a bar per span, the run's verdict in the title."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.patches
+    from matplotlib.figure import Figure  # no pyplot: a notebook's inline backend stays on
 
     items = spans(doc)
     lanes: list[str] = []
@@ -72,7 +70,8 @@ def draw_timeline(doc: Mapping[str, Any], path: str | Path) -> Path:
             lanes.append(s.lane)
     sim_time = float(doc.get("sim_time") or 0.0)
     end = max([sim_time, *(s.end or s.start for s in items)]) or 1.0
-    fig, ax = plt.subplots(figsize=(10, 1.2 + 0.45 * max(len(lanes), 1)))
+    fig = Figure(figsize=(10, 1.2 + 0.45 * max(len(lanes), 1)))
+    ax = fig.subplots()
     for s in items:
         stop = s.end if s.end is not None else end
         y = lanes.index(s.lane)
@@ -105,7 +104,6 @@ def draw_timeline(doc: Mapping[str, Any], path: str | Path) -> Path:
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out)
-    plt.close(fig)
     return out
 
 
