@@ -73,6 +73,8 @@ def configure_logging(prog: str) -> None:
         handler.setFormatter(logging.Formatter(f"{prog}: %(message)s"))
         handler._tamp = True  # type: ignore[attr-defined]
         logger.addHandler(handler)
+    # said once: not again by a root handler (Drake's Meshcat configures one when it starts)
+    logger.propagate = False
     level = os.environ.get("TAMP_LOG", "INFO").upper()
     if level not in logging.getLevelNamesMapping():
         logger.setLevel(logging.INFO)

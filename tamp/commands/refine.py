@@ -3,7 +3,7 @@
     tamp refine TASK.yaml [--category I|II|III] [--scale base|all] [--json]
                           [--gantt out.svg] [--plot out.svg] [--record out.html]
                           [--refined refined.yaml] [--no-verify] [--seed N]
-                          [--from-log RUN.json|RUN.csv]
+                          [--from-log RUN.json|RUN.csv] [--meshcat] [--max-sim-time S]
 
 Simulates the original program, then the program after each refinement phase
 (parallelized, speed-adjusted, rate-refined; `tamp.refine.refinement`, every run measured
@@ -27,7 +27,7 @@ from __future__ import annotations
 import argparse
 
 from tamp.commands.output import add_no_verify, output_file, print_json, progress, warn_unverified
-from tamp.commands.simulate import add_seed
+from tamp.commands.simulate import add_live_view, add_seed, check_max_sim_time
 from tamp.errors import InfeasibleError
 
 
@@ -58,6 +58,7 @@ def register(subparsers) -> None:
         help="write the refined program (the last accepted one) to FILE.yaml",
     )
     add_no_verify(p)
+    add_live_view(p)
     add_seed(p)
     p.add_argument(
         "--from-log",
@@ -89,23 +90,44 @@ def run(args: argparse.Namespace) -> int:
     from tamp.sim.refine.simulate import WORKCELL
 
     check_seed(args.seed)
-    if args.from_log and args.record:
+    check_max_sim_time(args.max_sim_time)
+    simulated = [
+        flag
+        for flag, given in (
+            ("--record", args.record),
+            ("--meshcat", args.meshcat),
+            ("--max-sim-time", args.max_sim_time is not None),
+        )
+        if given
+    ]
+    if args.from_log and simulated:
         from tamp.errors import InputError
 
-        raise InputError("--record needs a simulation; --from-log predicts without one")
+        raise InputError("needs a simulation; --from-log predicts without one", field=simulated[0])
     scenario, applied = WORKCELL.perturbed(WORKCELL.load(args.task), args.seed)
     program, arch, scene = scenario.program, scenario.architecture, scenario.scene
     if args.no_verify:
         warn_unverified("tamp refine", "each refined program")
-
-    from functools import partial
 
     from tamp.refine.refinement import refine
     from tamp.sim.refine.simulate import simulate
     from tamp.verification.gate import gate_program
     from tamp.verification.refine import check_run
 
-    measure = partial(simulate, scene=scene)
+    viewer = None
+    if args.meshcat:  # one live view that every phase's run draws into
+        from tamp.sim.core.recording import new_meshcat
+
+        viewer = new_meshcat()
+        progress(f"meshcat: {viewer.web_url()}", quiet=False)
+
+    def measure(p, a, **kw):  # every phase's run, in the live view when there is one
+        if args.max_sim_time is not None and kw.get("max_sim_time") is None:
+            kw["max_sim_time"] = args.max_sim_time
+        if viewer is not None:
+            kw["meshcat"] = viewer
+        return simulate(p, a, scene=scene, **kw)
+
     if args.from_log:
         from tamp.refine.predict import load_log, predicting
 
@@ -157,12 +179,17 @@ def run(args: argparse.Namespace) -> int:
         print_json(payload)
     else:
         _print_text(result, args)
+    code = 0
     if not result.goal_met:
         import sys
 
         print(f"tamp refine: error: {result.failure}", file=sys.stderr)
-        return InfeasibleError.exit_code
-    return 0
+        code = InfeasibleError.exit_code
+    if viewer is not None:
+        from tamp.sim.core.recording import hold_open
+
+        hold_open(viewer)
+    return code
 
 
 def _print_text(result, args: argparse.Namespace) -> None:

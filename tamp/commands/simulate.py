@@ -53,18 +53,7 @@ def add_run_arguments(parser) -> None:
     parser.add_argument(
         "--record", metavar="HTML", help="write a Meshcat animation (static HTML, offline)"
     )
-    parser.add_argument(
-        "--meshcat",
-        action="store_true",
-        help="watch the run in a local Meshcat (URL on stderr); it stays open after the run "
-        "until you press Enter or Ctrl-C",
-    )
-    parser.add_argument(
-        "--max-sim-time",
-        type=float,
-        metavar="S",
-        help="override the scenario's sim-time limit (s)",
-    )
+    add_live_view(parser)
     add_no_verify(parser)
     parser.add_argument(
         "--timeline",
@@ -77,6 +66,35 @@ def add_run_arguments(parser) -> None:
         help="draw the workcell's Drake diagram with Graphviz (.dot, .svg or .png)",
     )
     parser.add_argument("--json", action="store_true", help="machine-readable output")
+
+
+def add_live_view(parser) -> None:
+    """``--meshcat`` and ``--max-sim-time``: what every command that simulates takes (each
+    ``tamp simulate`` cell, ``tamp refine``)."""
+    parser.add_argument(
+        "--meshcat",
+        action="store_true",
+        help="watch the run in a local Meshcat (URL on stderr); it stays open after the run "
+        "until you press Enter or Ctrl-C",
+    )
+    parser.add_argument(
+        "--max-sim-time",
+        type=float,
+        metavar="S",
+        help="override the scenario's sim-time limit (s)",
+    )
+
+
+def check_max_sim_time(value: float | None) -> None:
+    """A given ``--max-sim-time`` is a positive, finite number of seconds (else exit 2)."""
+    import math
+
+    from tamp.errors import InputError
+
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise InputError(
+            f"must be a positive number of seconds, got {value}", field="--max-sim-time"
+        )
 
 
 def add_seed(parser) -> None:
@@ -92,22 +110,15 @@ def add_seed(parser) -> None:
 
 def check_common(args: argparse.Namespace) -> None:
     """The flags every ``tamp simulate`` workcell has, checked before any work is done."""
-    import math
     import os
 
-    from tamp.errors import InputError
     from tamp.pictures import GRAPH_FORMATS, PLOT_FORMATS, check_picture
 
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
     from tamp.perturbation import check_seed
 
     check_seed(args.seed)
-    if args.max_sim_time is not None and not (
-        math.isfinite(args.max_sim_time) and args.max_sim_time > 0
-    ):
-        raise InputError(
-            f"must be a positive number of seconds, got {args.max_sim_time}", field="--max-sim-time"
-        )
+    check_max_sim_time(args.max_sim_time)
     if args.record:
         output_file(args.record, "--record", make_parents=True)
     for flag, formats in (("--timeline", PLOT_FORMATS), ("--diagram", tuple(GRAPH_FORMATS))):

@@ -93,6 +93,8 @@ def test_diagnostics_go_through_logging(capsys, caplog, monkeypatch):
     from tamp.commands.output import progress
 
     caplog.set_level(logging.DEBUG, logger="tamp")
+    # the CLI's "tamp" logger does not propagate to the root (where caplog listens)
+    monkeypatch.setattr(logging.getLogger("tamp"), "propagate", True)
     progress("working")
     progress("quiet one", quiet=True)
     names = [(r.name, r.levelno, r.getMessage()) for r in caplog.records]
