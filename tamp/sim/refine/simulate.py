@@ -320,7 +320,7 @@ class RefineWorkcell:
             max_sim_time=max_sim_time,
             record=record,
             scene=moved.scene,
-            meshcat=_live_meshcat() if meshcat else None,
+            **({"meshcat": _live_meshcat()} if meshcat else {}),
         )
         reference = run
         moved_robots = any(any(v) for v in applied.robots.values())
