@@ -56,8 +56,9 @@ class MissingExtra(TampError):
         self.extra = extra
         self.module = module
         need = f"{what} needs" if what else "this needs"
+        library = extra.library if module == extra.modules[0] else module
         super().__init__(
-            f"{need} {extra.library} ({module!r} is not installed), which comes with the "
+            f"{need} {library} ({module!r} is not installed), which comes with the "
             f"{extra.name!r} extra, for {extra.purpose}: {extra.install}"
         )
 

@@ -10,10 +10,13 @@ from pathlib import Path
 
 import pytest
 
-from tamp.commands import simulate as simulate_cmd
-from tamp.commands.main import main
-from tamp.perturbation import Applied
-from tamp.sim.core.workcell import Option, RunResult, register, unregister
+# the live view and the timeline are the sim extra's (Drake's Meshcat, matplotlib)
+pytest.importorskip("pydrake", reason="needs the sim extra (pip install 'tamp-hrc[sim]')")
+
+from tamp.commands import simulate as simulate_cmd  # noqa: E402
+from tamp.commands.main import main  # noqa: E402
+from tamp.perturbation import Applied  # noqa: E402
+from tamp.sim.core.workcell import Option, RunResult, register, unregister  # noqa: E402
 
 
 @dataclass(kw_only=True)
