@@ -40,10 +40,12 @@ EXTRAS = (
     Extra("serve", ("websockets",), "websockets", "the live MR link (tamp serve)"),
 )
 
-#: Top-level module name -> the extra that installs it.
+#: Extra name -> extra.
+BY_NAME = {e.name: e for e in EXTRAS}
+#: Top-level module name -> the extra that installs it (matplotlib and tqdm: also pulled in
+#: by others, named here by the one every simulating command needs).
 _BY_MODULE = {m: e for e in EXTRAS for m in e.modules}
-#: Libraries the extras pull in besides their main one, named in the message all the same.
-_BY_MODULE.update({"matplotlib": EXTRAS[0], "tqdm": EXTRAS[0]})
+_BY_MODULE.update({"matplotlib": BY_NAME["sim"], "tqdm": BY_NAME["sim"]})
 
 
 class MissingExtra(TampError):
@@ -71,14 +73,13 @@ def extra_of(module: str) -> Extra | None:
 
 def missing(name: str) -> bool:
     """Is extra ``name``'s main module absent from this environment? (No import happens.)"""
-    extra = next(e for e in EXTRAS if e.name == name)
-    return importlib.util.find_spec(extra.modules[0]) is None
+    return importlib.util.find_spec(BY_NAME[name].modules[0]) is None
 
 
 def require(name: str, what: str | None = None) -> None:
     """Raise `MissingExtra` when extra ``name`` is not installed (``what``: the command or
     feature that needs it, for the message)."""
-    extra = next(e for e in EXTRAS if e.name == name)
+    extra = BY_NAME[name]
     for module in extra.modules:
         if importlib.util.find_spec(module) is None:
             raise MissingExtra(extra, module, what)

@@ -159,16 +159,22 @@ def load_yaml(path: str | Path, *, kind: str) -> tuple[dict[str, Any], str]:
         raise InputError(f"not valid YAML{where}", file=name) from None
     if not isinstance(data, dict):
         raise InputError(f"a {kind} file must be a YAML mapping", file=name)
+    check_version(data, name)
+    return data, name
+
+
+def check_version(data: dict[str, Any], source: str) -> None:
+    """``data["version"]`` is present and one the project reads (the integer 1: ``true``
+    is not 1); else `InputError` naming ``source`` and the field."""
     version = data.get("version")
     if version is None:
-        raise InputError("missing field", file=name, field="version")
+        raise InputError("missing field", file=source, field="version")
     if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
         raise InputError(
             f"unsupported version {short_repr(version)} (supported: {list(SUPPORTED_VERSIONS)})",
-            file=name,
+            file=source,
             field="version",
         )
-    return data, name
 
 
 class Fields:

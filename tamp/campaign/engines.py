@@ -79,10 +79,10 @@ def import_ray():
     try:
         import ray
     except ImportError:
-        from tamp.extras import EXTRAS, MissingExtra
+        from tamp.extras import BY_NAME, MissingExtra
 
-        campaign = next(e for e in EXTRAS if e.name == "campaign")
-        raise MissingExtra(campaign, "ray", "running seeds on workers (--workers >= 1)") from None
+        why = "running seeds on workers (--workers >= 1)"
+        raise MissingExtra(BY_NAME["campaign"], "ray", why) from None
     return ray
 
 

@@ -38,8 +38,8 @@ import numpy as np
 from tamp.demo.build import make_demonstration
 from tamp.demo.frames import IDENTITY, UNITY_TO_ROS, MRFrame, check_rotation
 from tamp.demo.model import Demonstration
-from tamp.errors import InputError, short_repr
-from tamp.fileio import SUPPORTED_VERSIONS, Fields, check_vector, gc_paused, load_yaml
+from tamp.errors import InputError
+from tamp.fileio import Fields, check_vector, check_version, gc_paused, load_yaml
 from tamp.scenarios import resolve
 from tamp.world.events import Appear, check_events, parse_appear
 from tamp.world.geometry import Area, Point, Pose, Quaternion
@@ -111,15 +111,7 @@ def demonstration_from_dict(data: Any, source: str) -> Demonstration:
     since there is no file to resolve it against."""
     if not isinstance(data, dict):
         raise InputError("a demonstration must be a mapping", file=source)
-    version = data.get("version")
-    if version is None:
-        raise InputError("missing field", file=source, field="version")
-    if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
-        raise InputError(
-            f"unsupported version {short_repr(version)} (supported: {list(SUPPORTED_VERSIONS)})",
-            file=source,
-            field="version",
-        )
+    check_version(data, source)
     robot = data.get("robot")
     domain = robot.get("domain") if isinstance(robot, dict) else None
     if isinstance(domain, str) and not Path(domain).is_absolute():

@@ -87,10 +87,10 @@ class GoalIndex:
         return seen == len(self.ids)
 
     def names(self, mask: int) -> frozenset[str]:
-        return frozenset(self.ids[i] for i in _bits(mask))
+        return frozenset(self.ids[i] for i in set_bits(mask))
 
 
-def _bits(mask: int) -> Iterator[int]:
+def set_bits(mask: int) -> Iterator[int]:
     """Positions of the set bits of ``mask``, ascending (O(set bits · words))."""
     while mask:
         low = mask & -mask

@@ -38,6 +38,7 @@ import networkx as nx
 
 from tamp.errors import InputError
 from tamp.ltl.formula import Formula, as_formula
+from tamp.rg.graph import set_bits
 from tamp.verification.kripke import TransitionSystem, model_check
 from tamp.verification.verdict import Counterexample, Report, Verdict
 from tamp.verification.words import Word
@@ -259,17 +260,10 @@ class GoalGraph:
         """``{G0, G1}``; a large set is abbreviated to its first goals and its size."""
         mask = self.masks[state]
         count = mask.bit_count()
-        names = [self.ids[k] for k in itertools.islice(_bits(mask), 8 if count <= 8 else 3)]
+        names = [self.ids[k] for k in itertools.islice(set_bits(mask), 8 if count <= 8 else 3)]
         if count <= 8:
             return "{" + ", ".join(names) + "}"
         return "{" + ", ".join(names) + f", … ({count} goals)" + "}"
-
-
-def _bits(mask: int):
-    while mask:
-        low = mask & -mask
-        yield low.bit_length() - 1
-        mask ^= low
 
 
 @dataclass(frozen=True)
@@ -296,7 +290,7 @@ def _search(gg: GoalGraph, preds: list[list[int]]) -> tuple[int, list[int], _Wit
     stutter: list[tuple[int, int]] = []  # edges keeping the goal set: cycles can only use them
 
     def breaks(mask: int, new: int) -> bool:
-        return any(not mask >> i & 1 for j in _bits(new) for i in preds[j])
+        return any(not mask >> i & 1 for j in set_bits(new) for i in preds[j])
 
     if breaks(masks[gg.init], masks[gg.init]):
         broken = _Witness(gg.init, False)
@@ -392,13 +386,13 @@ def check_goal_graph(demo, gg: GoalGraph, *, subject: str | None = None) -> Verd
     run = prefix + cycle
     # the goals each step adds (the run never loses one): O(run · |G| / 64 + |G|)
     added = [gg.masks[run[0]]] + [gg.masks[b] & ~gg.masks[a] for a, b in itertools.pairwise(run)]
-    at = {ids[k]: t for t, new in enumerate(added) for k in _bits(new)}
+    at = {ids[k]: t for t, new in enumerate(added) for k in set_bits(new)}
     broken = run_violations(ids, demo.constraints, at, demo.constraint_reasons)
 
     def word_of(keep):
         letters, cur = [], frozenset()
         for new in added:
-            props = {goal_prop(ids[k]) for k in _bits(new)}
+            props = {goal_prop(ids[k]) for k in set_bits(new)}
             cur = cur | {p for p in props if keep is None or p in keep} if props else cur
             letters.append(cur)
         return Word.lasso(letters[: len(prefix)], letters[len(prefix) :])
