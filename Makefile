@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 export DRAKE_ALLOW_NETWORK := meshcat
 export MPLBACKEND := Agg
 
-.PHONY: demo test test-fast test-core docs notebooks bench lint fmt clean system-deps
+.PHONY: demo test test-fast test-core test-paper docs notebooks bench lint fmt clean system-deps
 
 $(BIN)/python:
 	@command -v $(PY) >/dev/null 2>&1 || { echo "need $(PY)"; exit 2; }
@@ -37,16 +37,21 @@ demo: $(STAMP)
 	$(BIN)/tamp simulate smp-mro --case 3 --record build/case3.html
 	@echo "recording: build/case3.html (open it in a browser)"
 
-# Everything, as CI runs it: lint, then every test (simulations, notebooks, training, the wheel),
-# one pytest worker per core; a test file stays on one worker (its fixtures, e.g. a local Ray,
-# start once).
+# Everything, as CI runs it: lint, types, then every test (simulations, notebooks, training,
+# the wheel, the docs build) but the paper's whole narratives (`make test-paper`: each of their
+# features has a shorter run here), one pytest worker per core; a test file stays on one
+# worker (its fixtures, e.g. a local Ray, start once); then the core on Python 3.12 and 3.13.
 PYTEST_WORKERS ?= auto
 test: $(STAMP)
 	$(BIN)/ruff check tamp tests benchmarks notebooks examples docs/hooks.py
 	$(BIN)/ruff format --check tamp tests benchmarks notebooks examples docs/hooks.py
 	$(BIN)/pyright --pythonpath $(BIN)/python
-	$(BIN)/pytest -q -n $(PYTEST_WORKERS) --dist loadfile
+	$(BIN)/pytest -q -n $(PYTEST_WORKERS) --dist loadfile -m "not paper"
 	$(MAKE) --no-print-directory test-core
+
+# The paper's narratives end to end in Drake (Zhou et al. Fig. 8-10, Example 1: 3-5 min each).
+test-paper: $(STAMP)
+	$(BIN)/pytest -q -rP -n $(PYTEST_WORKERS) --dist loadfile -m paper
 
 # The quick loop while editing: every test not marked slow (under a minute on 2 cores).
 test-fast: $(STAMP)
@@ -60,7 +65,7 @@ CORE_PYTHONS ?= 3.12 3.13
 CORE_TESTS := tests/world tests/ltl tests/demo tests/rg tests/bt tests/lots tests/refine \
 	tests/verification tests/commands tests/test_schema.py tests/test_fileio.py \
 	tests/test_perturbation.py tests/test_core_install.py
-test-core:
+test-core: $(STAMP)
 	@for v in $(CORE_PYTHONS); do \
 	  py=""; for p in python$$v $$HOME/.pyenv/versions/$$v.*/bin/python; do \
 	    if $$p -c "" 2>/dev/null; then py=$$p; break; fi; done; \
@@ -69,9 +74,9 @@ test-core:
 	    echo "warning: no python$$v: its core tests are skipped"; continue; fi; \
 	  venv=build/venv-core-$$v; \
 	  if [ ! -f $$venv/.installed ]; then \
-	    rm -rf $$venv && $$py -m venv $$venv && $$venv/bin/pip install -q --upgrade pip \
-	    && $$venv/bin/pip install -q -c constraints.txt -e '.[test-core]' && touch $$venv/.installed \
-	    || exit 1; fi; \
+	    rm -rf $$venv && $$py -m venv --without-pip $$venv \
+	    && $(BIN)/pip --python $$venv/bin/python install -q -c constraints.txt -e '.[test-core]' \
+	    && touch $$venv/.installed || exit 1; fi; \
 	  echo "core tests on $$($$venv/bin/python --version)"; \
 	  $$venv/bin/python -m pytest -q -p no:cacheprovider -m "not slow" -n $(PYTEST_WORKERS) \
 	    --dist loadfile $(CORE_TESTS) || exit 1; \

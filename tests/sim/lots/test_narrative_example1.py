@@ -8,6 +8,7 @@ from tests.sim.lots.narratives import kinds, run_narrative
 
 
 @pytest.mark.slow
+@pytest.mark.paper  # a whole narrative of the paper (2-5 min): make test-paper
 def test_example1_screwdriver_moved_early_is_replanned_and_completed():
     """The person puts the screwdriver into W^B before the first action: that is the
     person's p3 in the run's word. With Zhou et al.'s actions the robot cannot take it back:

@@ -8,6 +8,7 @@ from tests.sim.lots.narratives import kinds, run_narrative
 
 
 @pytest.mark.slow
+@pytest.mark.paper  # a whole narrative of the paper (2-5 min): make test-paper
 def test_fig10_surplus_body_discarded_peak_put_back_body_rebuilt_car_ignored():
     """Fig. 10: the person builds the body, takes it away while the robot carries the peak,
     moves the robot's body back to W^A, adds a toy car. In the cell the hand's move after

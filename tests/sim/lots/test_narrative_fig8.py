@@ -8,6 +8,7 @@ from tests.sim.lots.narratives import kinds, run_narrative
 
 
 @pytest.mark.slow
+@pytest.mark.paper  # a whole narrative of the paper (2-5 min): make test-paper
 def test_fig8_scissors_moved_by_the_person_are_used_and_the_robots_pair_is_discarded():
     """The person moves the other scissors to W^B while the robot carries one; the robot
     drops its pair into the waste basket and brings the hammer. Carrying the hammer, it

@@ -8,6 +8,7 @@ from tests.sim.lots.narratives import kinds, run_narrative
 
 
 @pytest.mark.slow
+@pytest.mark.paper  # a whole narrative of the paper (2-5 min): make test-paper
 def test_fig9_scissors_sent_back_are_brought_again_and_a_new_tool_is_ignored():
     r = run_narrative("fig9")
     assert r.satisfied and r.exit_code == 0

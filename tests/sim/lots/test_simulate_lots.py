@@ -87,27 +87,32 @@ def test_a_person_adding_more_than_the_shelf_holds_is_refused_naming_the_count(c
 
 @pytest.mark.slow
 def test_a_task_in_the_tower_cell_through_the_cli(tmp_path):
-    """The CLI end to end on the tower's cell with a one-delivery task (the bottom to W^B):
-    the JSON document measured on the plant. The whole tower, in order and with the person,
-    is the Fig. 10 narrative (tests/sim/lots/test_narrative_fig10.py)."""
+    """The CLI end to end on the tower's cell: a one-delivery task (the bottom to W^B) while
+    the person's hand first moves a body into W^B (dis_1). Measured on the plant, the robot
+    sees the surplus body, discards it, and delivers the bottom; the JSON says so. The whole
+    narratives of the paper are `make test-paper`'s (tests/sim/lots/test_narrative_*.py)."""
     task = tmp_path / "tower.yaml"  # named tower: the packaged tower cell is its default
-    text = load_task("tower").file
-    task.write_text(
-        Path(text).read_text().replace('formula: "F(p1 & F(p2 & F p3))"', 'formula: "F p1"')
+    text = Path(load_task("tower").file).read_text()
+    task.write_text(text.replace('formula: "F(p1 & F(p2 & F p3))"', 'formula: "F p1"'))
+    events = tmp_path / "ev.yaml"
+    events.write_text(
+        "version: 1\nevents:\n  - {after: 0, kind: move, class: body, from: A, to: B}\n"
     )
-    r = cli(str(task), "--json", "--max-sim-time", "300", timeout=3000)
+    r = cli(
+        str(task), "--interference", str(events), "--json", "--max-sim-time", "300", timeout=3000
+    )
     assert r.returncode == 0, r.stderr[-2000:] + r.stdout[-2000:]
     out = json.loads(r.stdout)
     assert out["satisfied"] is True and out["status"] == "SUCCESS"
-    # measured on the plant: the bottom in W^B, the rest left in W^A
+    # measured on the plant: the bottom in W^B, the moved body in the basket
     assert out["final_counts"]["B"] == {"bottom": 1}
-    assert out["final_counts"]["A"] == {"body": 2, "peak": 1}
-    assert out["final_counts"]["waste"] == {} and out["elsewhere"] == []
-    moves = [a["prop"] for a in out["robot_actions"] if a["kind"] == "move"]
-    assert moves == ["p1"]
-    picks = [a for a in out["actions"] if a["action"].startswith("Pick")]
-    assert [a["action"] for a in picks] == ["Pick(bottom, A)"]
+    assert out["final_counts"]["A"] == {"body": 1, "peak": 1}
+    assert out["final_counts"]["waste"] == {"body": 1} and out["elsewhere"] == []
+    assert [a["outcome"] for a in out["person_actions"]] == ["done"]
+    kinds = [a["kind"] for a in out["robot_actions"]]
+    assert "remove" in kinds and kinds[-1] == "move"  # the surplus body out, then p1
+    assert [a["prop"] for a in out["robot_actions"] if a["kind"] == "move"] == ["p1"]
     assert all(a["end"] > a["start"] for a in out["actions"])
-    assert out["grasps"]["successes"] == 1 and out["grasps"]["attempts"] >= 1
+    assert out["grasps"]["successes"] >= 2 and out["grasps"]["attempts"] >= 2
     assert out["frames_rendered"] > 0 and out["sim_time"] > 20 and out["wall_time"] > 0
-    assert out["safety_stops"] == []  # no hand in this cell; limits and command rate kept
+    assert out["safety_stops"] == []  # the hand kept clear; limits and command rate kept
