@@ -1,7 +1,8 @@
 """``tamp refine TASK.yaml``: refine a two-robot program in Drake (Figueroa Heredia et al. 2018).
 
     tamp refine TASK.yaml [--category I|II|III] [--scale base|all] [--json]
-                          [--gantt out.svg] [--plot out.svg] [--record out.html]
+                          [--timeline out.svg] [--plot out.svg] [--record out.html]
+                          [--diagram out.svg]
                           [--refined refined.yaml] [--no-verify] [--seed N]
                           [--from-log RUN.json|RUN.csv] [--meshcat] [--max-sim-time S]
 
@@ -45,7 +46,19 @@ def register(subparsers) -> None:
         default="base",
         help="Step 3: the new rate scales the base's speed (the paper's) or every section's",
     )
-    p.add_argument("--gantt", metavar="SVG", help="write Fig. 12-style timelines per phase")
+    p.add_argument(
+        "--timeline",
+        "--gantt",  # the 0.1 name, kept as an alias
+        dest="timeline",
+        metavar="FILE",
+        help="draw each phase's run over sim time, Fig. 12 style (.svg, .png or .pdf; "
+        "--gantt is the old name)",
+    )
+    p.add_argument(
+        "--diagram",
+        metavar="FILE",
+        help="draw the original program's Drake diagram with Graphviz (.dot, .svg or .png)",
+    )
     p.add_argument(
         "--plot",
         metavar="SVG",
@@ -76,10 +89,14 @@ def run(args: argparse.Namespace) -> int:
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
     from pathlib import Path
 
+    from tamp.pictures import GRAPH_FORMATS, PLOT_FORMATS, check_picture
     from tamp.refine.loader import dump_program
 
+    for flag, formats in (("--timeline", PLOT_FORMATS), ("--diagram", tuple(GRAPH_FORMATS))):
+        path = getattr(args, flag[2:])
+        if path:
+            output_file(check_picture(path, flag, formats), flag, make_parents=True)
     for option, value, parents in (
-        ("--gantt", args.gantt, True),
         ("--plot", args.plot, True),
         ("--record", args.record, True),
         ("--refined", args.refined, True),
@@ -108,6 +125,11 @@ def run(args: argparse.Namespace) -> int:
     program, arch, scene = scenario.program, scenario.architecture, scenario.scene
     if args.no_verify:
         warn_unverified("tamp refine", "each refined program")
+    if args.diagram:
+        from tamp.pictures import write_graph
+
+        diagram = WORKCELL.build(scenario)
+        write_graph(diagram.GetGraphvizString(max_depth=1), args.diagram, "--diagram")
 
     from tamp.refine.refinement import refine
     from tamp.sim.refine.simulate import simulate
@@ -143,13 +165,13 @@ def run(args: argparse.Namespace) -> int:
         record=args.record,
         progress=lambda m: progress(m, quiet=args.json),
     )
-    if args.gantt:
+    if args.timeline:
         from tamp.refine.gantt import draw_gantt
 
-        Path(args.gantt).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.timeline).parent.mkdir(parents=True, exist_ok=True)
         draw_gantt(
             [(p.name, p.run.timeline) for p in result.phases],
-            args.gantt,
+            args.timeline,
             title=f"{program.name}, Category {result.program.communication.category}",
         )
     if args.plot:
@@ -170,7 +192,8 @@ def run(args: argparse.Namespace) -> int:
         payload = result.to_json()
         refined = dump_program(result.program) if result.goal_met else None
         payload["refined_program"] = None if args.refined else refined
-        payload["gantt"] = args.gantt
+        payload["timeline"] = args.timeline
+        payload["diagram"] = args.diagram
         payload["plot"] = args.plot
         payload["recording"] = result.phases[-1].run.recording
         payload["seed"] = applied.seed
@@ -237,8 +260,10 @@ def _print_text(result, args: argparse.Namespace) -> None:
     else:
         print("refined program:")
         print(dump_program(result.program))
-    if args.gantt:
-        print(f"gantt: {args.gantt}")
+    if args.timeline:
+        print(f"timeline: {args.timeline}")
+    if args.diagram:
+        print(f"diagram: {args.diagram}")
     if args.plot:
         print(f"plot: {args.plot}")
     if args.record:

@@ -16,7 +16,8 @@ from tests.sim.refine.helpers import SHORT
 def test_refine_short_program_end_to_end(tmp_path, capsys):
     """The shortened Task 4: every phase simulated, the rate found online, files written."""
     gantt, out = tmp_path / "g" / "phases.svg", tmp_path / "refined.yaml"
-    code = tamp_main(["refine", str(SHORT), "--json", "--gantt", str(gantt), "--refined", str(out)])
+    args = ["--json", "--timeline", str(gantt), "--refined", str(out)]
+    code = tamp_main(["refine", str(SHORT), *args])
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     names = [p["name"] for p in doc["phases"]]

@@ -120,6 +120,12 @@ def test_cli_from_log_predicts_and_bad_logs_exit_2(tmp_path, capsys):
     plot, log = tmp_path / "fig" / "phases.svg", csv_log(tmp_path)  # the good log again
     assert tamp_main(["refine", "task4", "--from-log", str(log), "--plot", str(plot)]) == 0
     assert plot.read_text().lstrip().startswith("<?xml") and "predicted" in plot.read_text()
+    dot, timeline = tmp_path / "d" / "station.dot", tmp_path / "t" / "phases.png"
+    args = ["--diagram", str(dot), "--timeline", str(timeline)]
+    assert tamp_main(["refine", "task4", "--from-log", str(log), *args]) == 0
+    assert dot.read_text().startswith("digraph") and "MultibodyPlant" in dot.read_text()
+    assert timeline.read_bytes().startswith(b"\x89PNG")
+    assert tamp_main(["refine", "task4", "--from-log", str(log), "--timeline", "t.txt"]) == 2
     capsys.readouterr()
     rec = str(tmp_path / "r.html")
     assert tamp_main(["refine", "task4", "--from-log", str(log), "--record", rec]) == 2

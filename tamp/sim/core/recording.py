@@ -78,9 +78,10 @@ def add_visualizer(builder, scene_graph, meshcat: Meshcat) -> MeshcatVisualizer:
 
 def cell_bounds(builder, scene_graph) -> tuple[np.ndarray, np.ndarray] | None:
     """Lower and upper corners of the illustration geometry of the builder's finalized
-    `MultibodyPlant` in its default configuration, plus the world-anchored geometry; each
-    shape counts as the sphere around it, shapes larger than `MAX_FRAMED_EXTENT` (ground,
-    walls) are left out. None without a finalized plant or any framed shape."""
+    `MultibodyPlant` in its default configuration, plus the world-anchored geometry: the
+    corners of each shape's own bounding box (`shape_half_extents`) in the world; shapes
+    larger than `MAX_FRAMED_EXTENT` (ground, walls) are left out. None without a finalized
+    plant or any framed shape."""
     from pydrake.math import RigidTransform
     from pydrake.multibody.plant import MultibodyPlant
     from pydrake.multibody.tree import BodyIndex
@@ -91,42 +92,49 @@ def cell_bounds(builder, scene_graph) -> tuple[np.ndarray, np.ndarray] | None:
     plant = plants[0]
     inspector = scene_graph.model_inspector()
     context = plant.CreateDefaultContext()
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
     points: list[np.ndarray] = []
 
-    def add(X_WG: RigidTransform, radius: float | None) -> None:
-        if radius is None or radius > MAX_FRAMED_EXTENT:
+    def add(X_WG: RigidTransform, half: np.ndarray | None) -> None:
+        if half is None or float(half.max()) > MAX_FRAMED_EXTENT:
             return
-        centre = X_WG.translation()
-        points.extend((centre - radius, centre + radius))
+        corners = signs * half  # the shape's box in its own frame, 8 x 3
+        points.append(X_WG.rotation().matrix() @ corners.T + X_WG.translation()[:, None])
 
     for i in range(plant.num_bodies()):
         body = plant.get_body(BodyIndex(i))
         X_WB = plant.EvalBodyPoseInWorld(context, body)
         for gid in plant.GetVisualGeometriesForBody(body):
-            add(X_WB @ inspector.GetPoseInFrame(gid), shape_radius(inspector.GetShape(gid)))
+            add(X_WB @ inspector.GetPoseInFrame(gid), shape_half_extents(inspector.GetShape(gid)))
     for gid in inspector.GetGeometries(inspector.world_frame_id(), Role.kIllustration):
-        add(inspector.GetPoseInFrame(gid), shape_radius(inspector.GetShape(gid)))
+        add(inspector.GetPoseInFrame(gid), shape_half_extents(inspector.GetShape(gid)))
     if not points:
         return None
-    stacked = np.array(points)
-    return stacked.min(axis=0), stacked.max(axis=0)
+    stacked = np.hstack(points)
+    return stacked.min(axis=1), stacked.max(axis=1)
 
 
-def shape_radius(shape) -> float | None:
-    """Radius of a sphere around ``shape`` (None: unbounded or unknown, e.g. a half space)."""
-    from pydrake.geometry import Box, Capsule, Cylinder, Ellipsoid, Sphere
+def shape_half_extents(shape) -> np.ndarray | None:
+    """Half extents of ``shape``'s bounding box in its own frame (None: unbounded, e.g. a
+    half space); a mesh counts as a 0.1 m cube around its frame (the cell's boxes carry
+    the bounds)."""
+    from pydrake.geometry import Box, Capsule, Cylinder, Ellipsoid, HalfSpace, Sphere
 
     if isinstance(shape, Box):
-        return 0.5 * math.hypot(shape.width(), shape.depth(), shape.height())
+        return 0.5 * np.array([shape.width(), shape.depth(), shape.height()])
     if isinstance(shape, Sphere):
-        return shape.radius()
+        return np.full(3, shape.radius())
     if isinstance(shape, Cylinder):
-        return math.hypot(shape.radius(), 0.5 * shape.length())
+        r = shape.radius()
+        return np.array([r, r, 0.5 * shape.length()])
     if isinstance(shape, Capsule):
-        return shape.radius() + 0.5 * shape.length()
+        r = shape.radius()
+        return np.array([r, r, r + 0.5 * shape.length()])
     if isinstance(shape, Ellipsoid):
-        return max(shape.a(), shape.b(), shape.c())
-    return 0.1  # a mesh: its frame with a small margin (the cell's boxes carry the bounds)
+        return np.array([shape.a(), shape.b(), shape.c()])
+    if isinstance(shape, HalfSpace):
+        return None
+    return np.full(3, 0.1)
 
 
 def camera_for(

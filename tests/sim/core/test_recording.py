@@ -68,3 +68,27 @@ def test_the_diagram_is_drawn_by_its_suffix(tmp_path):
     write_diagram(cell, scenario, str(tmp_path / "d.svg"))
     svg = (tmp_path / "d.svg").read_text()
     assert "<svg" in svg and "plant" in svg
+
+
+def test_the_bounds_are_the_shapes_own_boxes_not_spheres_around_them():
+    """A 1 x 0.5 x 0.1 m table top at 0.4 m, turned 90 degrees about z, and a 5 cm sphere:
+    the bounds are exact (a sphere around the box would reach 0.56 m down and up)."""
+    from pydrake.geometry import Box, Sphere
+    from pydrake.math import RigidTransform, RollPitchYaw
+    from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
+    from pydrake.multibody.tree import SpatialInertia
+    from pydrake.systems.framework import DiagramBuilder
+
+    from tamp.sim.core.recording import cell_bounds
+
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
+    X_top = RigidTransform(RollPitchYaw(0, 0, math.pi / 2), [0, 0, 0.4])
+    plant.RegisterVisualGeometry(plant.world_body(), X_top, Box(1.0, 0.5, 0.1), "top", [1] * 4)
+    ball = plant.AddRigidBody("ball", SpatialInertia.SolidSphereWithMass(0.1, 0.05))
+    plant.RegisterVisualGeometry(ball, RigidTransform(), Sphere(0.05), "ball", [1] * 4)
+    plant.SetDefaultFreeBodyPose(ball, RigidTransform([0.3, 0.0, 0.5]))
+    plant.Finalize()
+    lower, upper = cell_bounds(builder, scene_graph)
+    assert np.allclose(lower, [-0.25, -0.5, 0.35], atol=1e-9)
+    assert np.allclose(upper, [0.35, 0.5, 0.55], atol=1e-9)
