@@ -1,12 +1,17 @@
-"""Grasp choice over several views (Zhou et al. §IV-B, Fig. 6), on top of `tamp.grasp.predict`.
+"""Grasp candidates of one view (Zhou et al. §IV-B, Fig. 6), on top of `tamp.grasp.predict`.
 
-Each view gives the network a square crop around the target; its grasps are moved onto the
-target's mask along their closing line (`snap_to_mask`), preferred where the pads can hold
-the target while carrying it (`seated`: re-centred on the chord, within the opening,
-antipodal contacts, each pad on one face), and mapped to the world through the crop's
-intrinsics and the camera pose (the arm's own kinematics). The skill keeps the best grasp of
-every view and, after the last (lowest) view, takes the best of all of them, seated ones
-first (`GraspCandidate.seated`).
+Each view gives the network a square crop around the target; with post-processing on
+(``grasp.post_process``, the default) its grasps are moved onto the target's mask along
+their closing line (`snap_to_mask`), preferred where the pads can hold the target while
+carrying it (`seated`: re-centred on the chord, within the opening, antipodal contacts, each
+pad on one face) and checked for other objects in the open jaws' sweep (`clear_of_others`);
+with it off, the network's grasps whose centre lies on the target's mask are taken as they
+are. Either way they are mapped to the world through the crop's intrinsics and the camera
+pose (the arm's own kinematics) and ranked clear first, then seated, then by quality. The
+descent (`tamp.sim.lots.descent`) fuses the best grasp of each view over views.
+
+``grasp.predictor: mask_axis`` replaces the network by the target mask's geometry
+(`mask_axis_grasps`, a control with no network): closing across the mask's principal axis.
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ import numpy as np
 
 from tamp.grasp.depth import valid_depth
 from tamp.grasp.pinhole import pixel_to_camera
-from tamp.grasp.predict import to_world
+from tamp.grasp.predict import PredictedGrasp, to_world
 from tamp.grasp.rect import GraspRect, angle_difference
 from tamp.sim.core.messages import TargetCrop
 from tamp.sim.core.models import models_dir
@@ -99,14 +104,24 @@ SNAPPED_BEST = 5
 
 
 class GraspPlanner:
-    """Loads the chosen network once; turns a `TargetCrop` into world-frame candidates."""
+    """Loads the chosen network once (none for ``predictor: mask_axis``); turns a `TargetCrop`
+    into world-frame candidates."""
 
     def __init__(self, settings: GraspSettings, intrinsics: tuple[float, float, float, float]):
-        from tamp.grasp.predict import GraspPredictor
+        self.kind = settings.predictor
+        self.predictor = None
+        if self.kind == "network":
+            from tamp.grasp.predict import GraspPredictor
 
-        weights = settings.weights or str(models_dir() / DEFAULT_WEIGHTS[settings.network])
-        self.weights = Path(weights)
-        self.predictor = GraspPredictor.load(self.weights)
+            weights = settings.weights or str(models_dir() / DEFAULT_WEIGHTS[settings.network])
+            self.weights: Path | None = Path(weights)
+            self.predictor = GraspPredictor.load(self.weights)
+            self.depth_range = self.predictor.depth_range
+        else:
+            self.weights = None
+            from tamp.grasp.depth import DEFAULT_DEPTH_RANGE
+
+            self.depth_range = DEFAULT_DEPTH_RANGE
         self.intrinsics = intrinsics
         self.calls = 0
         #: time spent in the network (pre-processing, inference, peak reading)
@@ -116,59 +131,114 @@ class GraspPlanner:
         self.record = False
         self.history: list[tuple[TargetCrop, list, list[GraspCandidate]]] = []
         #: move each grasp's centre along its closing line onto the target (see `snap_to_mask`)
-        self.snap = True
+        self.snap = settings.post_process
         #: prefer grasps the pads can hold while carrying, centred on the target's chord
-        #: (see `seated`); off: the snapped grasps alone, as before
-        self.seat = True
+        #: (see `seated`) and check the jaws' sweep (`clear_of_others`); off: the grasps
+        #: on the mask as predicted
+        self.seat = settings.post_process
+
+    def _predict(self, crop: TargetCrop, K, X_WC: np.ndarray, n: int) -> list[PredictedGrasp]:
+        if self.predictor is None:
+            return mask_axis_grasps(np.asarray(crop.mask), n)
+        with torch_threads(INFERENCE_THREADS):
+            return self.predictor.predict(
+                rgb=np.asarray(crop.rgb),
+                depth=np.asarray(crop.depth, np.float32),
+                intrinsics=K,
+                X_WC=X_WC,
+                n=n,
+            )
 
     def candidates(
         self, crop: TargetCrop, X_WC: np.ndarray, view_height: float
     ) -> list[GraspCandidate]:
-        """Grasps on the target's mask: the seated ones (best first), then the snapped
-        fallbacks (``seated=False``, best first); see `SEATED_BEST`."""
+        """Grasps on the target's mask, best first: clear of other objects first, then
+        seated, then by quality (a clear grasp is never ranked behind one that is not).
+        Without post-processing every grasp counts as clear and seated."""
         n = SEATED_BEST if self.seat else SNAPPED_BEST
         fx, fy, cx, cy = self.intrinsics
         u0, v0 = crop.origin
-        with self.network, torch_threads(INFERENCE_THREADS):
-            grasps = self.predictor.predict(
-                rgb=np.asarray(crop.rgb),
-                depth=np.asarray(crop.depth, np.float32),
-                intrinsics=(fx, fy, cx - u0, cy - v0),
-                X_WC=X_WC,
-                n=n,
-            )
+        K = (fx, fy, cx - u0, cy - v0)
+        with self.network:
+            grasps = self._predict(crop, K, X_WC, n)
         self.calls += 1
         mask = dilate(np.asarray(crop.mask), 1)
         depth = np.where(crop.mask, crop.depth, 0.0).astype(np.float32)  # the target's top
-        top = depth[crop.mask & valid_depth(depth, self.predictor.depth_range)]
+        top = depth[crop.mask & valid_depth(depth, self.depth_range)]
         top = float(np.median(top)) if top.size else float("nan")
         opening = (MAX_OPENING - 2 * PAD_CLEARANCE) * fx / top  # in pixels at the top
         half_pad = PAD_WIDTH / 2 * fx / top
-        out, fallbacks = [], []
+        out = []
         for i, g in enumerate(grasps):
             rect = snap_to_mask(g.rect(), mask) if self.snap else on_mask(g.rect(), mask)
             good = rect is not None and self.seat and seated(rect, mask, opening, half_pad)
             if good:
-                rect, into = good, out
-            elif i < SNAPPED_BEST and rect is not None:
-                into = fallbacks
-            else:
+                rect = good
+            elif rect is None or (self.seat and i >= SNAPPED_BEST):
                 continue
-            K = (fx, fy, cx - u0, cy - v0)
             (x, y, z), yaw, width = to_world(rect, depth, K, X_WC)
             if not all(math.isfinite(v) for v in (x, y, z)) or z < MIN_TOP:
                 continue  # no depth, or too thin there for the pads (a saw's blade)
             w = min(width, MAX_OPENING)
-            clear = clear_of_others(rect, crop, K, X_WC, FINGER_REACH * fx / top, half_pad)
-            into.append(
+            clear = not self.seat or clear_of_others(
+                rect, crop, K, X_WC, FINGER_REACH * fx / top, half_pad
+            )
+            out.append(
                 GraspCandidate(
-                    x, y, z, yaw, w, g.quality, view_height, seated=into is out, clear=clear
+                    x,
+                    y,
+                    z,
+                    yaw,
+                    w,
+                    g.quality,
+                    view_height,
+                    seated=bool(good) or not self.seat,
+                    clear=clear,
                 )
             )
-        out += fallbacks
+        out = rank(out)
         if self.record:
             self.history.append((crop, grasps, out))
         return out
+
+
+def rank(cands: list[GraspCandidate]) -> list[GraspCandidate]:
+    """Best first: clear of other objects, then seated, then by quality (stable)."""
+    return sorted(cands, key=lambda c: (not c.clear, not c.seated, -c.quality))
+
+
+def mask_axis_grasps(mask: np.ndarray, n: int, samples: int = 9) -> list[PredictedGrasp]:
+    """Grasps from the mask's geometry alone (a control with no network): closing across the
+    principal axis of the mask's pixels, at ``samples`` points along it between 10 % and 90 %
+    of its extent; each grasp's opening is its chord across the mask, its quality falls from
+    1 at the centroid to 0.5 at the ends (best ``n`` returned, best first)."""
+    vs, us = np.nonzero(mask)
+    if len(us) < 5:
+        return []
+    pts = np.c_[us, vs].astype(float)
+    c = pts.mean(axis=0)
+    _, vecs = np.linalg.eigh(np.cov((pts - c).T))
+    axis = vecs[:, -1]  # the principal (longest) direction
+    across = np.array([-axis[1], axis[0]])
+    along = (pts - c) @ axis
+    lo, hi = np.percentile(along, 10), np.percentile(along, 90)
+    angle = math.atan2(-across[1], across[0])  # GraspRect: direction (cos a, -sin a)
+    ext = max(abs(lo), abs(hi), 1e-6)
+    out = []
+    for t in np.linspace(lo, hi, samples):
+        p = c + t * axis
+        rect = GraspRect(float(p[0]), float(p[1]), angle, 10.0, 5.0)
+        ends = chord(rect, mask)
+        if ends is None:
+            continue
+        mid = (ends[0] + ends[1]) / 2
+        u, v = p + mid * across
+        width = ends[1] - ends[0] + 1.0
+        out.append(
+            PredictedGrasp(float(u), float(v), angle, float(width), 1.0 - 0.5 * abs(t) / ext)
+        )
+    out.sort(key=lambda g: -g.quality)
+    return out[:n]
 
 
 @contextmanager

@@ -13,7 +13,7 @@ with status 2. No Drake import here. Example (``tamp/scenarios/lots_sim/model_bu
     camera: {width: 320, height: 180, fov_y_deg: 42.5}
     control: {period: 0.01, perception_period: 0.02, speed: 0.35, look_height: 0.47}
     safety: {hand_distance: 0.05, min_command_rate: 1000}   # optional
-    grasp: {network: hrgnet, view_heights: [0.34, 0.27, 0.2], attempts: 3}
+    grasp: {network: hrgnet, attempts: 3, descent: {preset_height: 0.2}}
     workspaces:
       A: {center: [0.5, 0.25], size: [0.34, 0.34]}
       B: {center: [0.5, -0.25], size: [0.34, 0.34]}
@@ -238,28 +238,84 @@ class SafetySettings:
     recovery: float = spec(1.0, min=0.0, max=60.0, unit="s")
 
 
+#: where a pick's grasps come from: the grasp network, or no network (`tamp.sim.lots.grasping.
+#: mask_axis_grasps`: closing across the target mask's principal axis, a control)
+PREDICTORS = ("network", "mask_axis")
+
+
+@dataclass(frozen=True)
+class DescentSettings:
+    """The closed-loop descent of a pick (Zhou et al. §IV-B, Fig. 6; `tamp.sim.lots.descent`):
+    the hand moves down towards the target keeping it centred, takes a view every
+    ``view_period`` and fuses the last ``window`` views' grasps; it explores (descends at
+    ``explore_speed``, the camera shifted ``explore_shift`` sideways) while the fused grasp is
+    uncertain and commits (descends at ``commit_speed``) once at least ``min_views`` views
+    agree within ``max_spread`` and ``max_angle_spread`` with a mean quality of at least
+    ``min_quality``; at ``preset_height`` it hovers at most ``hover`` seconds for confidence,
+    else the attempt fails."""
+
+    preset_height: float = spec(
+        0.2,
+        min=0.15,
+        max=0.3,  # below every control.look_height
+        unit="m",
+        help="camera above the target's top: the paper's 0.2 m",
+    )
+    view_period: float = spec(
+        0.2, min=0.02, max=2.0, unit="s", help="sim time between frames of the descent"
+    )
+    explore_speed: float = spec(
+        0.05, min=0.0, strict_min=True, max=0.5, unit="m/s", help="descent while uncertain"
+    )
+    commit_speed: float = spec(
+        0.3, min=0.0, strict_min=True, max=1.0, unit="m/s", help="descent once confident"
+    )
+    accel: float = spec(0.8, min=0.05, max=5.0, unit="m/s^2", help="TCP acceleration bound")
+    explore_shift: float = spec(
+        0.03, min=0.0, max=0.08, unit="m", help="sideways camera offset while uncertain"
+    )
+    window: int = spec(4, min=1, max=20, help="views fused (the latest ones)")
+    min_views: int = spec(3, min=1, max=20, help="views with a grasp needed for confidence")
+    max_spread: float = spec(
+        0.008, min=0.0, strict_min=True, unit="m", help="RMS spread of the fused grasp centres"
+    )
+    max_angle_spread: float = spec(
+        15.0, min=0.0, strict_min=True, max=90.0, unit="deg", help="spread of closing angles"
+    )
+    min_quality: float = spec(0.3, min=0.0, max=2.0, help="mean quality of the fused grasps")
+    hover: float = spec(
+        1.5, min=0.0, max=30.0, unit="s", help="extra views at the lowest point before failing"
+    )
+
+    def check(self, f: Fields) -> None:
+        if self.min_views > self.window:
+            raise f.error("min_views", f"must be <= window ({self.window}), got {self.min_views}")
+        if self.commit_speed < self.explore_speed:
+            raise f.error(
+                "commit_speed",
+                f"must be >= explore_speed ({self.explore_speed:g} m/s), got {self.commit_speed}",
+            )
+
+
 @dataclass(frozen=True)
 class GraspSettings:
-    """Which network (`tamp.grasp.networks`), its weights (default: the shipped ones), the
-    camera heights above the target of the descending views (the last is the paper's
-    preset 0.2 m), attempts."""
+    """Which network (`tamp.grasp.networks`) and weights (default: the shipped ones), or no
+    network (``predictor: mask_axis``), whether the network's grasps are post-processed on the
+    target's mask (`tamp.sim.lots.grasping`: ``snap_to_mask``, ``seated``,
+    ``clear_of_others``), the closed-loop descent, attempts."""
 
     network: str = spec(DEFAULT_NETWORK, choices=tuple(NETWORKS))
     weights: str | None = spec(
         None, parse=lambda raw, f, key: _weights_file(f, key), help="weights file"
     )
-    view_heights: tuple[float, ...] = spec(
-        (0.34, 0.27, 0.2), min=0.15, min_items=1, unit="m", help="descending camera heights"
-    )
+    predictor: str = spec("network", choices=PREDICTORS, help="where the grasps come from")
+    post_process: bool = spec(True, help="snap, seat and check the jaws' sweep on the mask")
+    descent: DescentSettings = spec(DescentSettings)
     attempts: int = spec(3, min=1)
 
     def check(self, f: Fields) -> None:
         if self.weights is None and self.network not in DEFAULT_WEIGHTS:
             raise f.error("network", f"no shipped weights for {self.network!r}: give grasp.weights")
-        if list(self.view_heights) != sorted(self.view_heights, reverse=True):
-            raise f.error(
-                "view_heights", "expected descending camera heights, e.g. [0.34, 0.27, 0.2]"
-            )
 
 
 def _weights_file(f: Fields, key: str) -> str:
@@ -349,12 +405,6 @@ class CellScenario:
                 f"must be >= plant.time_step ({time_step:g} s), got {control.period}",
             )
         self._check_safety(f)
-        for i, h in enumerate(self.grasp.view_heights):
-            if h > control.look_height:
-                raise f.error(
-                    f"grasp.view_heights[{i}]",
-                    f"must be <= control.look_height ({control.look_height:g} m), got {h}",
-                )
         if self.workspaces["A"].tray:
             raise f.error("workspaces.A.tray", "only W^B holds Example 1's basket")
         a, b = self.workspaces["A"], self.workspaces["B"]

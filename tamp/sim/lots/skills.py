@@ -10,13 +10,19 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   than `LOOK_AGAIN_COVER` of the image, a second view with the hand about half a turn round
   (the camera on the other side of the held object; perception's memory joins the two).
 - ``Pick(cls[, side])``: closed-loop multi-view grasp (Zhou et al. §IV-B, Fig. 6): a view at
-  the look pose finds the target; the hand then descends keeping the target centred under
-  the camera, viewing it at each height of ``grasp.view_heights`` above the target's top
-  (down to the paper's preset 0.2 m); the grasp network runs on every view and the best
-  grasp over all views is taken; approach, close, lift. A grasp fails when the fingers close
-  on nothing (finger width) or when the target is still on the table in the next view (not
-  lifted); it is retried with new predictions up to ``grasp.attempts`` times, never again
-  with a grasp that missed or slipped in this pick (`grasping.near_grasp`).
+  the look pose finds the target and makes the first prediction; the hand then moves
+  continuously down towards the target's preset height (camera ``grasp.descent.
+  preset_height`` above its top, the paper's 0.2 m), keeping it centred under the camera
+  (differential IK, every control period), and takes a view every ``descent.view_period``
+  without stopping; the grasp network runs on each and the views' best grasps are fused
+  (`tamp.sim.lots.descent`). While the fused grasp is uncertain the hand descends slowly
+  with the camera shifted sideways (exploring); once confident it commits and descends at
+  full speed. At the preset height it executes the fused grasp (approach, close, lift), or
+  hovers up to ``descent.hover`` seconds for confidence and else fails the attempt. A grasp
+  fails when the fingers close on nothing (finger width) or when the target is still on the
+  table in the next view (not lifted); it is retried with new predictions up to
+  ``grasp.attempts`` times, never again with a grasp that missed or slipped in this pick
+  (`grasping.near_grasp`).
 - ``Place(side)``: look at W^side (at the hand's present yaw), put the held object's centre
   (its offset from the TCP kept at the grasp) on the freest spot seen (away from objects
   perception remembers there but cannot see; its reach inside the edges), lift, one view
@@ -34,8 +40,11 @@ Each skill is a queue of small steps (move, settle, grip, view, check, finish) k
 abstract state; views end in a handler that appends the next steps from what was seen, so
 the whole skill is data in the Context and one update advances it by one control period.
 Moves are straight TCP lines with a minimum-jerk profile, tracked by Drake's differential
-IK (`tamp.sim.lots.kinematics`). The target is kept centred by re-aiming the camera at
-each view (position-based visual servoing at the view rate: images cost ~50 ms each).
+IK (`tamp.sim.lots.kinematics`); the descent is one step that sets a TCP velocity every
+period (position-based visual servoing on the target's centre from the latest view: images
+cost ~50 ms each, so views come at ``descent.view_period``, not every period). Only a pick's
+own views ask perception for a target (and so for a colour image): a class left from an
+earlier pick never makes a later look render colour or follow an instance.
 A new command id starts a skill (while another runs it is cancelled first); ``cancel=True``
 stops the arm where it is (braking within the acceleration limits) and reports FAILURE
 ("cancelled").
@@ -45,7 +54,7 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from pydrake.common.eigen_geometry import Quaternion
@@ -59,6 +68,15 @@ from tamp.sim.core.camera import backproject
 from tamp.sim.core.messages import Observation, SkillCommand, SkillStatus, ViewRequest
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.lots.catalogue import ARM
+from tamp.sim.lots.descent import (
+    FusedGrasp,
+    Thresholds,
+    ViewGrasp,
+    approach_velocity,
+    confident,
+    explore_offset,
+    fuse,
+)
 from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner, near_grasp
 from tamp.sim.lots.kinematics import ArmKinematics, down, hand_yaw_for_closing, pose_error
 from tamp.sim.lots.scenario import CellScenario
@@ -83,6 +101,10 @@ LOOK_AGAIN_COVER = 0.02
 #: this much of the wrist-centred yaw (the wrist's +-2.9 rad less a margin)
 HALF_TURN = math.pi - 0.1
 WRIST_REACH = 2.6
+#: views in a row without the target that end a descent (it left the view)
+LOST_VIEWS = 3
+#: a descent that has not reached the preset height after this long (sim s) gives up
+DESCENT_TIMEOUT = 30.0
 #: peak TCP angular speed of that turn (rad/s): the wrist alone turns the hand there, and
 #: Franka's last joint allows 2.61 rad/s (the IK plans within 90 %)
 TURN_SPEED = 2.0
@@ -96,7 +118,8 @@ MAX_PLACE_MARGIN = 0.10
 class Step:
     """One step of a skill. ``pose``: TCP goal (x, y, z, yaw) of a move."""
 
-    kind: str  # move | settle | grip | wait | view | check_fingers | check_held | finish
+    #: move | descend | brake | settle | grip | wait | view | check_fingers | check_held | finish
+    kind: str
     pose: tuple[float, float, float, float] | None = None
     speed: float = 0.0
     turn_speed: float = 0.0  # peak TCP angular speed of a move (0: `ANGULAR_SPEED`)
@@ -129,8 +152,28 @@ class SkillState:
     target_xy: tuple[float, float] | None = None
     target_top: float = 0.0  # the target's top above the table, from the last view
     target_radius: float = 0.0  # the target's reach from its centre in the table plane (m)
-    views_done: int = 0
-    candidates: tuple[GraspCandidate, ...] = ()
+    views_done: int = 0  # views of this attempt (the look's and the descent's)
+    #: the descent (`tamp.sim.lots.descent`): the latest views' best grasps, their fusion,
+    #: whether the hand committed, the other objects' centres in the latest view, views in a
+    #: row without the target, the exploring views so far, when the last view was asked
+    #: for, when the lowest point was reached (None: not yet)
+    window: tuple[ViewGrasp, ...] = ()
+    fused: FusedGrasp | None = None
+    committed: bool = False
+    #: the latest confident fusion and the target's centre then: the grasp executed (views
+    #: after the commit refine it only while they stay confident)
+    sure: tuple[FusedGrasp, tuple[float, float]] | None = None
+    others: tuple[tuple[float, float], ...] = ()
+    lost: int = 0
+    explored: int = 0
+    view_asked: float | None = None
+    view_done_t: float = 0.0
+    bottom_t: float | None = None
+    #: the descent's TCP set point (x, y, z), its velocity (m/s) and the hand's yaw
+    servo: tuple[np.ndarray, np.ndarray, float] | None = None
+    #: (time, measured arm joints) of the last control periods: a view taken while moving is
+    #: back-projected from where the camera was when it was rendered
+    recent_q: tuple[tuple[float, np.ndarray], ...] = ()
     chosen: GraspCandidate | None = None
     #: (x, y, yaw) of this pick's grasps that missed or slipped: a retry takes another
     missed: tuple[tuple[float, float, float], ...] = ()
@@ -256,7 +299,7 @@ class PandaSkillController(LeafSystem):
             # stopped by the safety monitor: the targets follow the held arm; a move starts
             # afresh from rest where the arm stands when it resumes (a new minimum-jerk
             # profile), any other step's clock stands still
-            if s.steps[0].kind == "move":
+            if s.steps[0].kind in ("move", "descend"):
                 s.step_t0, s.move_from = None, None
             elif s.step_t0 is not None:
                 s.step_t0 += self.dt
@@ -382,8 +425,15 @@ class PandaSkillController(LeafSystem):
         return (self._move(self.look_pose(side)), Step("settle"))
 
     def _begin_attempt(self, s: SkillState) -> None:
-        s.candidates, s.chosen, s.views_done, s.target_xy = (), None, 0, None
+        self._reset_descent(s)
+        s.chosen, s.target_xy = None, None
         s.steps = (*self._look(s.side), Step("view", handler="target"))
+
+    @staticmethod
+    def _reset_descent(s: SkillState) -> None:
+        s.views_done, s.window, s.fused, s.committed, s.others = 0, (), None, False, ()
+        s.sure = None
+        s.lost, s.explored, s.view_asked, s.bottom_t, s.servo = 0, 0, None, None, None
 
     # ---- step execution ------------------------------------------------------------------
     def _advance(self, s, t, q_meas, v_meas, obs: Observation) -> None:
@@ -395,6 +445,15 @@ class PandaSkillController(LeafSystem):
         done = False
         if step.kind == "move":
             done = self._track(s, el)
+        elif step.kind == "descend":
+            return self._descend(s, t, el, q_meas, obs)
+        elif step.kind == "brake":
+            s.v = self.kin.brake(s.v)
+            s.q = s.q + s.v * self.dt
+            done = not np.any(s.v)
+            if done:
+                s.steps, s.step_t0, s.move_from = s.steps[1:], None, None
+            return
         elif step.kind == "settle":
             ok = np.max(np.abs(v_meas[:7])) < 0.03 and np.max(np.abs(q_meas[:7] - s.q)) < 0.01
             done = (el >= 0.1 and ok) or el >= 1.0
@@ -452,13 +511,19 @@ class PandaSkillController(LeafSystem):
             speed = step.speed if s.finger != CLOSED else min(step.speed, CARRY_SPEED)
             T = max(1.875 * dist / speed, 1.875 * ang / (step.turn_speed or ANGULAR_SPEED), 0.2)
             s.move_from = (X0.translation().copy(), X0.rotation().ToQuaternion().wxyz(), T)
+        elif step.kind == "descend":
+            p = self.kin.tcp_pose(s.q).translation().copy()
+            s.servo = (p, np.zeros(3), self.kin.tcp_yaw(s.q))
         elif step.kind == "grip":
             s.finger = step.width
         elif step.kind == "view":
             # where the camera is, from the arm's own kinematics (the arm has settled):
-            # perception back-projects what it sees and projects what it remembers with it
+            # perception back-projects what it sees and projects what it remembers with it;
+            # only a pick's views look for its target (and render colour)
             X_WC = self.kin.camera_pose(q_meas[:7])
-            s.request = ViewRequest(s.next_view, s.side, s.target_cls, s.track, X_WC)
+            aim = step.handler == "target"
+            target, track = (s.target_cls, s.track) if aim else (None, None)
+            s.request = ViewRequest(s.next_view, s.side, target, track, X_WC)
             s.next_view += 1
 
     def _track(self, s: SkillState, el: float) -> bool:
@@ -520,54 +585,154 @@ class PandaSkillController(LeafSystem):
         """A view only for the record (the observation the controller reads next)."""
 
     def _on_target(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
-        crop = obs.target
-        heights = self.scenario.grasp.view_heights
-        if crop is None:
-            if s.views_done == 0:
+        """The first view of an attempt (the look pose): find the target, make the first
+        prediction, start the descent."""
+        if obs.target is None:
+            if s.attempt == 1:
                 return self._finish(
                     s, t, Status.FAILURE, f"no {s.target_cls} in W^{s.side}", "object_not_found"
                 )
-            return self._retry(
-                s, t, f"lost the {s.target_cls} during the descent", "object_not_found"
-            )
+            return self._retry(s, t, f"no {s.target_cls} in W^{s.side}", "object_not_found")
+        self._see(s, t, obs, self.kin.camera_pose(q_meas[:7]))
+        s.view_done_t = t
+        s.steps = (Step("descend"),)
+
+    def _see(self, s: SkillState, t: float, obs: Observation, X_WC: RigidTransform) -> None:
+        """One view of the pick (``X_WC``: the camera when it was rendered): where the target
+        is, its best grasp (clear first, then seated, then quality: `GraspPlanner.
+        candidates`), the fused grasp over the window, commit when confident."""
+        d = self.scenario.grasp.descent
+        crop = obs.target
+        s.views_done += 1
+        if crop is None:
+            s.lost += 1
+            centre = s.target_xy or (0.0, 0.0)
+            s.window = (*s.window, ViewGrasp(None, centre))[-d.window :]
+            s.log.append((t, f"view {s.views_done}: no {s.target_cls} in view"))
+            return
+        s.lost = 0
         det = crop.detection
         s.track = det.label
-        X_WC = self.kin.camera_pose(q_meas[:7])
         p = backproject(det.u, det.v, det.depth, self.planner.intrinsics, X_WC)
         s.target_xy = (float(p[0]), float(p[1]))
         s.target_top = max(float(p[2]), 0.0)  # median depth of its pixels: about its top
         s.target_radius = reach_of(crop, self.planner.intrinsics, X_WC, s.target_xy)
+        s.others = tuple(
+            (float(q[0]), float(q[1]))
+            for o in obs.detections
+            if o.label != det.label
+            for q in [backproject(o.u, o.v, o.depth, self.planner.intrinsics, X_WC)]
+        )
         height = float(X_WC.translation()[2]) - s.target_top  # camera above the target
         cands = [
             c
             for c in self.planner.candidates(crop, X_WC.GetAsMatrix4(), height)
             if not any(near_grasp(c, m) for m in s.missed)
         ]
-        if cands:
-            s.candidates = (*s.candidates, cands[0])
+        best = cands[0] if cands else None
+        s.window = (*s.window, ViewGrasp(best, s.target_xy))[-d.window :]
+        s.fused = fuse(s.window, s.target_xy)
+        f = s.fused
+        sure = confident(f, Thresholds.of(d))
         s.log.append(
             (
                 t,
                 f"view {s.views_done} at {height:.2f} m: {s.target_cls} at "
-                f"({p[0]:.3f}, {p[1]:.3f}), best q={cands[0].quality:.2f}"
-                if cands
-                else f"view {s.views_done} at {height:.2f} m: no grasp on the {s.target_cls}",
+                f"({p[0]:.3f}, {p[1]:.3f}), "
+                + (f"best q={best.quality:.2f}" if best else "no grasp on it")
+                + (
+                    f"; fused over {f.views}: spread {f.spread * 1000:.1f} mm, "
+                    f"{math.degrees(f.angle_spread):.0f} deg, q={f.quality:.2f}"
+                    if f
+                    else ""
+                )
+                + ("; confident" if sure else ""),
             )
         )
-        s.views_done += 1
-        if s.views_done <= len(heights):
-            h = heights[s.views_done - 1]
-            s.steps = (
-                self._move(self.look_pose(s.side, h + s.target_top, s.target_xy)),
-                Step("settle"),
-                Step("view", handler="target"),
-                *s.steps,
+        if sure:
+            s.sure = (f, s.target_xy)
+        if sure and not s.committed:
+            s.committed = True
+            s.log.append((t, f"commit after {s.views_done} views at {height:.2f} m"))
+
+    def _descend(self, s: SkillState, t: float, el: float, q_meas, obs: Observation) -> None:
+        """One control period of the descent (module docstring)."""
+        d = self.scenario.grasp.descent
+        s.recent_q = (*s.recent_q[-9:], (t, np.array(q_meas[:7], float)))
+        if s.view_asked is not None and obs.id == s.request.id:
+            q_view = next((q for tq, q in s.recent_q if abs(tq - obs.time) < 1e-6), q_meas[:7])
+            s.view_asked = None
+            s.view_done_t = t
+            self._see(s, t, obs, self.kin.camera_pose(q_view))
+            if not s.committed and s.fused is not None:
+                s.explored += 1
+            if s.lost >= LOST_VIEWS:
+                why = f"lost the {s.target_cls} during the descent"
+                return self._fail_descent(s, t, why)
+        if s.view_asked is None and t - s.view_done_t >= d.view_period - 1e-9:
+            self._ask_view(s, t)
+        p_set, v_set, yaw = s.servo
+        ox, oy = (0.0, 0.0)
+        if not s.committed:
+            ox, oy = explore_offset(s.target_xy, s.others, s.explored, d.explore_shift)
+        cx, cy = s.target_xy
+        X_goal = RigidTransform(down(yaw), [cx + ox, cy + oy, s.target_top + d.preset_height])
+        goal = self.kin.tcp_for_camera(X_goal).translation()
+        speed = d.commit_speed if s.committed else d.explore_speed
+        v_new = approach_velocity(p_set, goal, v_set, speed, d.accel, self.dt)
+        p_new = p_set + v_new * self.dt
+        s.servo = (p_new, v_new, yaw)
+        X_des = RigidTransform(down(yaw), p_new)
+        V = pose_error(self.kin.tcp_pose(s.q), X_des) / self.dt
+        v, _ = self.kin.step(s.q, s.v, V)
+        if not np.all(np.isfinite(v)):
+            v = self.kin.brake(s.v)
+        s.q, s.v = s.q + v * self.dt, v
+        low = abs(p_new[2] - goal[2]) < 0.003
+        if low and s.bottom_t is None:
+            s.bottom_t = t
+        settled = (
+            low
+            and float(np.linalg.norm(goal - p_new)) < 0.003
+            and float(np.linalg.norm(v_new)) < 0.02
+            and bool(np.all(np.abs(v) <= self.kin.amax * self.dt))
+        )
+        if settled and s.sure is not None:
+            s.steps, s.step_t0, s.servo = s.steps[1:], None, None
+            s.v = np.zeros(7)
+            f, (x0, y0) = s.sure  # moved with the target since that view
+            g = f.grasp
+            return self._grasp(s, t, replace(g, x=g.x + cx - x0, y=g.y + cy - y0))
+        hovered = s.bottom_t is not None and t - s.bottom_t > d.hover
+        if hovered or el > DESCENT_TIMEOUT:
+            f = s.fused
+            why = f"no confident grasp on the {s.target_cls} at the lowest point" + (
+                f" (spread {f.spread * 1000:.0f} mm, {math.degrees(f.angle_spread):.0f} deg, "
+                f"q={f.quality:.2f} over {f.views} views)"
+                if f
+                else " (no grasp on it)"
             )
-            return
-        if not s.candidates:
-            return self._retry(s, t, f"no grasp found on the {s.target_cls}", "object_not_found")
-        # clear of other objects first (the jaws take nothing else), then seated, then quality
-        g = max(s.candidates, key=lambda c: (c.clear, c.seated, c.quality))
+            return self._fail_descent(s, t, why)
+
+    def _fail_descent(self, s: SkillState, t: float, why: str) -> None:
+        """End the descent as a failed attempt: brake to rest, then `_retry`."""
+        s.steps, s.step_t0, s.servo = s.steps[1:], None, None
+        self._retry(s, t, why, "object_not_found")
+        if s.steps:
+            s.steps = (Step("brake"), *s.steps)
+
+    def _ask_view(self, s: SkillState, t: float) -> None:
+        """Ask perception for a view while moving; the pose it gets is the camera's at its
+        next update (rendered then), from the commanded motion."""
+        period = self.scenario.control.perception_period
+        ahead = (math.floor(t / period + 1e-6) + 1) * period - t
+        X_WC = self.kin.camera_pose(s.q + s.v * max(ahead - self.dt, 0.0))
+        s.request = ViewRequest(s.next_view, s.side, s.target_cls, s.track, X_WC)
+        s.next_view += 1
+        s.view_asked = t
+
+    def _grasp(self, s: SkillState, t: float, g: GraspCandidate) -> None:
+        """Execute grasp ``g`` (the fused one): approach, close, lift, look."""
         s.chosen = g
         z = max(g.z - GRASP_DEPTH, MIN_GRASP_Z)
         yaw = hand_yaw_for_closing(g.yaw, toward=self.kin.wrist_centred_yaw(s.q))
@@ -637,7 +802,8 @@ class PandaSkillController(LeafSystem):
             return self._finish(s, t, Status.FAILURE, f"{why} ({s.attempt} attempts)", cause)
         s.attempt += 1
         x, y, z, _ = self.kin_pose(s)
-        s.candidates, s.chosen, s.views_done = (), None, 0
+        self._reset_descent(s)
+        s.chosen = None
         s.steps = (
             Step("grip", width=OPEN),
             self._move((x, y, max(z, LIFT_Z), 0.0)),

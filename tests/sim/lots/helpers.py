@@ -12,7 +12,7 @@ BASE = {
     "plant": {"time_step": 0.004, "contact_model": "hydroelastic_with_fallback"},
     "camera": {"width": 320, "height": 180, "fov_y_deg": 42.5},
     "control": {"period": 0.01, "perception_period": 0.02, "speed": 0.4, "look_height": 0.47},
-    "grasp": {"network": "hrgnet", "view_heights": [0.34, 0.27, 0.2], "attempts": 2},
+    "grasp": {"network": "hrgnet", "attempts": 2},
     "workspaces": {
         "A": {"center": [0.5, 0.25], "size": [0.34, 0.34]},
         "B": {"center": [0.5, -0.25], "size": [0.34, 0.34]},

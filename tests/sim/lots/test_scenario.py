@@ -64,7 +64,8 @@ def test_packaged_model_building_loads():
             "objects[1]",
         ),
         ([], {"camera": {"width": 8}}, "camera.width"),
-        ([], {"grasp": {"view_heights": [0.2, 0.3]}}, "grasp.view_heights"),
+        ([], {"grasp": {"descent": {"window": 2, "min_views": 3}}}, "grasp.descent.min_views"),
+        ([], {"grasp": {"predictor": "yolo"}}, "grasp.predictor"),
         ([], {"grasp": {"network": "yolo"}}, "grasp.network"),
         ([], {"waste_basket": [0.5, 0.05]}, "waste_basket"),
         ([], {"waste_basket": [2.0, 0.0]}, "waste_basket"),
@@ -78,7 +79,11 @@ def test_packaged_model_building_loads():
         ),
         ([], {"control": {"perception_period": 0.005}}, "control.perception_period"),
         ([], {"safety": {"check_period": 0.015}}, "safety.check_period"),
-        ([], {"grasp": {"view_heights": [0.5, 0.2]}}, "grasp.view_heights[0]"),
+        (
+            [],
+            {"grasp": {"descent": {"explore_speed": 0.2, "commit_speed": 0.1}}},
+            "grasp.descent.commit_speed",
+        ),
         (
             [],
             {

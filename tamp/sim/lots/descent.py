@@ -1,0 +1,180 @@
+"""The closed-loop descent's decisions (Zhou et al., IEEE T-ASE 2023, §IV-B, Fig. 6): fusing
+grasp predictions over views, judging confidence, choosing where to look while uncertain,
+and the hand's speed profile. Pure functions on small dataclasses (no Drake); the skill
+controller (`tamp.sim.lots.skills`) calls them once per view and once per control tick.
+
+**Fusion.** Each view contributes its best grasp on the target (`ViewGrasp`), stored
+relative to the target's detected centre in that view (world frame, table plane), so that a
+target that moves between views carries its grasps along. The last ``window`` views are fused
+(`fuse`): views without a grasp on the target count as views but add nothing; the estimate
+is the quality-weighted mean of the grasp centres' offsets and of the closing angles
+(doubled, as a parallel gripper is symmetric under a half turn); its spread is the weighted
+RMS distance of the centres from the mean (m) and the circular standard deviation of the
+closing angles (rad). The grasp executed is the window's member nearest the estimate (a real
+prediction, with its own post-processing flags), moved with the target's centre to where
+the latest view saw it.
+
+**Confidence** (`confident`): at least ``min_views`` grasps in the window, spread within
+``max_spread`` and ``max_angle_spread``, mean quality at least ``min_quality``. The paper
+lets the arm "explore until it is confident enough" and fails the grasp when it reaches the
+lowest point without one; it names the entropy of the predictions as the usual measure; the
+spread of the fused grasp is ours, as the network's quality map is read only at its peaks.
+
+**Exploration** (`explore_offset`): while uncertain the camera aims beside the target,
+``shift`` away from the nearest other object in view (to reduce clutter in the crop), or,
+with none near, at successive quarter turns round the target (new view directions).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from tamp.grasp.rect import angle_difference, wrap_angle
+from tamp.sim.lots.grasping import GraspCandidate
+
+#: other objects within this distance (m, table plane) of the target count as clutter that
+#: the exploring camera moves away from
+CLUTTER_RADIUS = 0.15
+
+
+@dataclass(frozen=True)
+class ViewGrasp:
+    """One view's best grasp on the target (None: the view had none) and the target's centre
+    (world x, y) in that view."""
+
+    grasp: GraspCandidate | None
+    centre: tuple[float, float]
+
+    @property
+    def offset(self) -> tuple[float, float]:
+        g = self.grasp
+        return (g.x - self.centre[0], g.y - self.centre[1])
+
+
+@dataclass(frozen=True)
+class FusedGrasp:
+    """The fused estimate over a window of views: the grasp to execute (the member nearest
+    the mean, moved with the target), the mean offset from the target centre and closing
+    angle, their spreads, the mean quality, and how many views had a grasp / none."""
+
+    grasp: GraspCandidate
+    offset: tuple[float, float]
+    angle: float
+    spread: float
+    angle_spread: float
+    quality: float
+    views: int
+    misses: int
+
+
+@dataclass(frozen=True)
+class Thresholds:
+    """What `confident` requires (the scenario's ``grasp.descent`` fields)."""
+
+    min_views: int
+    max_spread: float  # m
+    max_angle_spread: float  # rad
+    min_quality: float
+
+    @staticmethod
+    def of(descent) -> Thresholds:
+        """From a `tamp.sim.lots.scenario.DescentSettings` (angles there in degrees)."""
+        return Thresholds(
+            descent.min_views,
+            descent.max_spread,
+            math.radians(descent.max_angle_spread),
+            descent.min_quality,
+        )
+
+
+def fuse(window: Sequence[ViewGrasp], centre: tuple[float, float]) -> FusedGrasp | None:
+    """Fuse the views of ``window`` (module docstring); the executed grasp is placed on the
+    target's present ``centre``. None when no view of the window has a grasp."""
+    members = [v for v in window if v.grasp is not None]
+    if not members:
+        return None
+    w = np.array([max(v.grasp.quality, 1e-3) for v in members])
+    off = np.array([v.offset for v in members])
+    mean = (w[:, None] * off).sum(axis=0) / w.sum()
+    two = np.array([2.0 * v.grasp.yaw for v in members])
+    c, s = float((w * np.cos(two)).sum() / w.sum()), float((w * np.sin(two)).sum() / w.sum())
+    r = min(math.hypot(c, s), 1.0)
+    angle = wrap_angle(math.atan2(s, c) / 2.0)
+    angle_spread = math.sqrt(-2.0 * math.log(r)) / 2.0 if r > 1e-12 else math.pi / 2
+    spread = float(math.sqrt((w * ((off - mean) ** 2).sum(axis=1)).sum() / w.sum()))
+    quality = float((w * [v.grasp.quality for v in members]).sum() / w.sum())
+
+    def distance(v: ViewGrasp) -> float:
+        dx, dy = np.subtract(v.offset, mean)
+        return math.hypot(dx, dy) / 0.01 + angle_difference(v.grasp.yaw, angle) / 0.2
+
+    best = min(members, key=distance)
+    dx, dy = best.offset
+    grasp = replace(best.grasp, x=centre[0] + dx, y=centre[1] + dy)
+    return FusedGrasp(
+        grasp,
+        (float(mean[0]), float(mean[1])),
+        angle,
+        spread,
+        float(angle_spread),
+        quality,
+        len(members),
+        len(window) - len(members),
+    )
+
+
+def confident(fused: FusedGrasp | None, th: Thresholds) -> bool:
+    """Whether the fused grasp is good enough to commit to (module docstring)."""
+    return (
+        fused is not None
+        and fused.views >= th.min_views
+        and fused.spread <= th.max_spread
+        and fused.angle_spread <= th.max_angle_spread
+        and fused.quality >= th.min_quality
+    )
+
+
+def explore_offset(
+    target: tuple[float, float],
+    others: Sequence[tuple[float, float]],
+    k: int,
+    shift: float,
+) -> tuple[float, float]:
+    """Where the exploring camera aims relative to the target (x, y offset, m): ``shift`` away
+    from the nearest of ``others`` within `CLUTTER_RADIUS`, else a quarter turn further round
+    the target at each exploring view ``k`` (0, 1, ...)."""
+    if shift <= 0.0:
+        return (0.0, 0.0)
+    near = [o for o in others if 1e-6 < math.dist(o, target) < CLUTTER_RADIUS]
+    if near:
+        o = min(near, key=lambda p: math.dist(p, target))
+        d = np.subtract(target, o)
+        d = d / np.linalg.norm(d)
+        return (float(shift * d[0]), float(shift * d[1]))
+    a = math.pi / 4 + k * math.pi / 2
+    return (shift * math.cos(a), shift * math.sin(a))
+
+
+def approach_velocity(
+    p: np.ndarray, goal: np.ndarray, v: np.ndarray, speed: float, accel: float, dt: float
+) -> np.ndarray:
+    """The next TCP velocity (m/s) from ``p`` towards ``goal``: at most ``speed``, slow enough
+    to stop at the goal within ``accel`` (the braking curve sqrt(2 a d)), changed by at most
+    ``accel * dt`` from the present velocity ``v`` (a continuous move, no stops)."""
+    d = np.asarray(goal, float) - np.asarray(p, float)
+    dist = float(np.linalg.norm(d))
+    if dist < 1e-9:
+        want = np.zeros(3)
+    else:
+        # the braking curve, less one step's worth so the velocity reaches zero at the goal
+        mag = min(speed, max(math.sqrt(2.0 * accel * dist) - accel * dt, 0.0), dist / dt)
+        want = d / dist * mag
+    dv = want - np.asarray(v, float)
+    n = float(np.linalg.norm(dv))
+    if n > accel * dt:
+        dv *= accel * dt / n
+    return np.asarray(v, float) + dv
