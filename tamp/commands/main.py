@@ -33,6 +33,7 @@ COMMANDS = (
     "simulate",
     "refine",
     "grasp",
+    "detect",
     "campaign",
     "serve",
     "schema",

@@ -16,6 +16,11 @@ Layout (Jacquard): ``OUT/scene_NNNNN/V_scene_NNNNN_{RGB.png,perfect_depth.tiff,
 grasps.txt,camera.json}``; one folder per scene, so the object-wise split keeps all views of
 a scene together. ``camera.json`` (extra, ignored by the Jacquard loader) holds the
 intrinsics and the camera pose X_WC for world-frame checks.
+
+The same `SceneRenderer` renders the detector's training scenes (`tamp.sim.core.segdata`):
+there it is also given whole bodies of primitive visuals (`VisualBody`: the catalogue's
+objects read from their SDF files, the wrist camera's gripper, the person's hand), the
+image's width and height, and the lights of the scene.
 """
 
 from __future__ import annotations
@@ -80,6 +85,27 @@ def sample_mat(rng: np.random.Generator, placements: list[Placement]) -> Mat | N
     r, g, b = colorsys.hsv_to_rgb(rng.uniform(0, 1), rng.uniform(0.2, 0.6), rng.uniform(0.45, 0.85))
     size = (float(rng.uniform(0.25, 0.6)), float(rng.uniform(0.25, 0.6)))
     return Mat(size, (cx, cy), float(rng.uniform(-math.pi, math.pi)), (r, g, b, 1.0))
+
+
+@dataclass(frozen=True, slots=True)
+class Visual:
+    """One primitive visual of a `VisualBody`: ``shape`` box (``size`` = x, y, z), cylinder
+    (radius, length, along the visual's z) or sphere (radius), its pose ``X_BG`` (4x4) in the
+    body and its colour."""
+
+    shape: str
+    size: tuple[float, ...]
+    X_BG: np.ndarray
+    rgba: tuple[float, float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class VisualBody:
+    """A rigid body made of primitive visuals, welded at ``X_WB`` (4x4) in the scene."""
+
+    name: str
+    X_WB: np.ndarray
+    visuals: tuple[Visual, ...]
 
 
 @dataclass(frozen=True, slots=True)
@@ -150,7 +176,13 @@ class SceneRenderer:
 
     def __init__(self, placements: list[Placement], cameras: list[np.ndarray], cfg: SynthConfig,
                  table_rgba: tuple[float, float, float, float],
-                 mat: Mat | None = None):  # fmt: skip
+                 mat: Mat | None = None, *, bodies: tuple[VisualBody, ...] = (),
+                 image: tuple[int, int] | None = None, lights: tuple = (),
+                 near: float = 0.02):  # fmt: skip
+        """``bodies``: more bodies welded in the scene (their body indices, the label image's
+        values for them, are ``self.body_of_extra``); ``image``: (width, height) instead of
+        the square ``cfg.size``; ``lights``: Drake ``LightParameter``s (none: VTK's default
+        head light); ``near``: the nearest rendered depth (m)."""
         from pydrake.geometry import (
             Box,
             ClippingRange,
@@ -161,6 +193,7 @@ class SceneRenderer:
             MakeRenderEngineVtk,
             RenderCameraCore,
             RenderEngineVtkParams,
+            Sphere,
         )
         from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
         from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
@@ -170,9 +203,12 @@ class SceneRenderer:
 
         builder = DiagramBuilder()
         plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step=0.0)
-        scene_graph.AddRenderer("vtk", MakeRenderEngineVtk(RenderEngineVtkParams()))
+        scene_graph.AddRenderer(
+            "vtk", MakeRenderEngineVtk(RenderEngineVtkParams(lights=list(lights)))
+        )
         inertia = SpatialInertia.SolidBoxWithMass(0.1, 0.05, 0.05, 0.05)
         table = plant.AddRigidBody("table", inertia)
+        self.table_body = int(table.index())
         plant.WeldFrames(plant.world_frame(), table.body_frame(),
                          RigidTransform([0.0, 0.0, TABLE_TOP - 0.025]))  # fmt: skip
         plant.RegisterVisualGeometry(table, RigidTransform(), Box(1.5, 1.5, 0.05), "table",
@@ -197,9 +233,19 @@ class SceneRenderer:
                         R = R @ RotationMatrix.MakeYRotation(math.pi / 2)
                 plant.RegisterVisualGeometry(body, RigidTransform(R, list(part.xyz)), shape,
                                              f"obj{k}_part{j}", np.array(part.rgba))  # fmt: skip
+        self.body_of_extra: list[int] = []
+        for extra in bodies:
+            body = plant.AddRigidBody(extra.name, inertia)
+            self.body_of_extra.append(int(body.index()))
+            plant.WeldFrames(plant.world_frame(), body.body_frame(), RigidTransform(extra.X_WB))
+            for j, vis in enumerate(extra.visuals):
+                shape = {"box": Box, "cylinder": Cylinder, "sphere": Sphere}[vis.shape](*vis.size)
+                plant.RegisterVisualGeometry(body, RigidTransform(vis.X_BG), shape,
+                                             f"{extra.name}_v{j}", np.array(vis.rgba))  # fmt: skip
         plant.Finalize()
-        info = CameraInfo(cfg.size, cfg.size, math.radians(cfg.fov_y_deg))
-        core = RenderCameraCore("vtk", info, ClippingRange(0.01, 3.0), RigidTransform())
+        width, height = image if image is not None else (cfg.size, cfg.size)
+        info = CameraInfo(width, height, math.radians(cfg.fov_y_deg))
+        core = RenderCameraCore("vtk", info, ClippingRange(min(0.01, near), 3.0), RigidTransform())
         self.K = info.intrinsic_matrix()
         self.sensors = []
         for X_WC in cameras:
@@ -208,7 +254,7 @@ class SceneRenderer:
                     scene_graph.world_frame_id(),
                     RigidTransform(X_WC),
                     ColorRenderCamera(core, False),
-                    DepthRenderCamera(core, DepthRange(0.02, 2.5)),
+                    DepthRenderCamera(core, DepthRange(near, 2.5)),
                 )
             )
             builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
