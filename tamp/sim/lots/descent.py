@@ -160,21 +160,37 @@ def explore_offset(
 
 
 def approach_velocity(
-    p: np.ndarray, goal: np.ndarray, v: np.ndarray, speed: float, accel: float, dt: float
+    p: np.ndarray,
+    goal: np.ndarray,
+    v: np.ndarray,
+    speed: float,
+    accel: float,
+    dt: float,
+    lateral: float | None = None,
 ) -> np.ndarray:
-    """The next TCP velocity (m/s) from ``p`` towards ``goal``: at most ``speed``, slow enough
-    to stop at the goal within ``accel`` (the braking curve sqrt(2 a d)), changed by at most
-    ``accel * dt`` from the present velocity ``v`` (a continuous move, no stops)."""
-    d = np.asarray(goal, float) - np.asarray(p, float)
+    """The next TCP velocity (m/s) from ``p`` towards ``goal``: vertically at most ``speed``,
+    horizontally at most ``lateral`` (default ``speed``: the exploring hand descends slowly
+    but still moves sideways to its new viewpoint), each slow enough to stop at the goal
+    within ``accel`` (the braking curve sqrt(2 a d)) and changed by at most ``accel * dt``
+    from the present velocity ``v`` (a continuous move, no stops)."""
+    p, goal, v = (np.asarray(a, float) for a in (p, goal, v))
+    out = np.zeros(3)
+    for axes, top in ((slice(0, 2), speed if lateral is None else lateral), (slice(2, 3), speed)):
+        out[axes] = _toward(p[axes], goal[axes], v[axes], top, accel, dt)
+    return out
+
+
+def _toward(p, goal, v, speed: float, accel: float, dt: float) -> np.ndarray:
+    d = goal - p
     dist = float(np.linalg.norm(d))
     if dist < 1e-9:
-        want = np.zeros(3)
+        want = np.zeros_like(d)
     else:
         # the braking curve, less one step's worth so the velocity reaches zero at the goal
         mag = min(speed, max(math.sqrt(2.0 * accel * dist) - accel * dt, 0.0), dist / dt)
         want = d / dist * mag
-    dv = want - np.asarray(v, float)
+    dv = want - v
     n = float(np.linalg.norm(dv))
     if n > accel * dt:
-        dv *= accel * dt / n
-    return np.asarray(v, float) + dv
+        dv = dv * (accel * dt / n)
+    return v + dv

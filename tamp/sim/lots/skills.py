@@ -679,7 +679,7 @@ class PandaSkillController(LeafSystem):
         X_goal = RigidTransform(down(yaw), [cx + ox, cy + oy, s.target_top + d.preset_height])
         goal = self.kin.tcp_for_camera(X_goal).translation()
         speed = d.commit_speed if s.committed else d.explore_speed
-        v_new = approach_velocity(p_set, goal, v_set, speed, d.accel, self.dt)
+        v_new = approach_velocity(p_set, goal, v_set, speed, d.accel, self.dt, d.commit_speed)
         p_new = p_set + v_new * self.dt
         s.servo = (p_new, v_new, yaw)
         X_des = RigidTransform(down(yaw), p_new)

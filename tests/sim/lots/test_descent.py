@@ -129,21 +129,24 @@ def test_exploring_moves_away_from_the_nearest_clutter():
 vec = st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3), st.floats(-0.3, 0.3))
 
 
-@given(vec, vec, st.floats(0.01, 0.5), st.floats(0.1, 3.0))
+@given(vec, vec, st.floats(0.05, 0.5), st.floats(0.05, 0.5), st.floats(0.1, 3.0))
 @settings(max_examples=60, deadline=None)
-def test_the_servo_keeps_its_bounds_and_stops_at_the_goal(p0, goal, speed, accel):
-    """Never faster than ``speed``, never accelerating more than ``accel``, and it comes to
-    rest at the goal without overshooting it by more than a step."""
+def test_the_servo_keeps_its_bounds_and_stops_at_the_goal(p0, goal, speed, lateral, accel):
+    """Never faster than ``speed`` down or ``lateral`` sideways, never accelerating more than
+    ``accel`` (per direction), and it comes to rest at the goal without overshooting it by
+    more than a step."""
     dt = 0.01
     p, v = np.array(p0), np.zeros(3)
     goal = np.array(goal)
-    dist0 = float(np.linalg.norm(goal - p))
-    for _ in range(4000):
-        nv = approach_velocity(p, goal, v, speed, accel, dt)
-        assert np.linalg.norm(nv) <= speed + 1e-9
-        assert np.linalg.norm(nv - v) <= accel * dt + 1e-9
+    dist0 = np.abs(goal - p)
+    budget = np.linalg.norm(dist0[:2]) / lateral + dist0[2] / speed + 2 * (speed + lateral) / accel
+    for _ in range(int(budget / dt) + 100):
+        nv = approach_velocity(p, goal, v, speed, accel, dt, lateral)
+        assert np.linalg.norm(nv[:2]) <= lateral + 1e-9 and abs(nv[2]) <= speed + 1e-9
+        assert np.linalg.norm(nv[:2] - v[:2]) <= accel * dt + 1e-9
+        assert abs(nv[2] - v[2]) <= accel * dt + 1e-9
         p, v = p + nv * dt, nv
-        assert np.linalg.norm(goal - p) <= dist0 + speed * dt + 1e-9
+        assert abs(goal[2] - p[2]) <= dist0[2] + speed * dt + 1e-9
         if np.linalg.norm(goal - p) < 1e-4 and np.linalg.norm(v) < 1e-3:
             break
     assert np.linalg.norm(goal - p) < 1e-3 and np.linalg.norm(v) < 0.02
