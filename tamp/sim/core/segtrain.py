@@ -139,7 +139,7 @@ def train(
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
-        running = 0.98 * running + 0.02 * float(loss) if step else float(loss)
+        running = 0.98 * running + 0.02 * loss.item() if step else loss.item()
         if log and (step + 1) % 100 == 0:
             log(f"step {step + 1}/{settings.steps}: loss {running:.3f}, lr {lr:.2e}")
     seconds = time.perf_counter() - t0

@@ -1,0 +1,205 @@
+"""The object detector on held-out rendered scenes: what it counts, how well its masks fit,
+what it confuses, what it invents, and what a frame costs on one CPU thread.
+
+Data: a set rendered by ``tamp detect render`` (its test scenes: object-wise split, unknown
+shapes never seen in training). Weights: the shipped ``tamp/models/weights`` file by default.
+Per view the detector (`tamp.sim.core.detector.Detector`) segments colour + depth and
+extracts instances; `tamp.sim.core.segtrain.score_view` scores them against the label
+image's instances. Rows:
+
+- per class: counting accuracy over the views where the class is present or predicted (the
+  per-view count is what LOTS consumes), pixel IoU;
+- totals: views with every count right, mask IoU of matched instances, false positives per
+  view, unknown objects reported as a task class, the instance confusion matrix (JSON);
+- touching clutter: counting accuracy of a class in the views where two of its instances
+  touch (masks within one pixel), the case no depth jump may separate;
+- the seeded noisy detector (`tamp.sim.core.detection_noise`, levels ``low`` and ``high``)
+  applied to the same detections: views with every count right, false positives per view;
+- CPU time per frame on one thread (process time; network + instances) at the network's
+  resolution (160 x 90) and for the LOTS wrist camera's 320 x 180 images (subsampled for
+  the network, masks and points at full resolution).
+
+Prints the tables and one JSON line; ``--out FILE`` writes the JSON there
+(``benchmarks/results/detector.json`` is the committed run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+from scipy import ndimage  # noqa: E402
+
+from tamp.sim.core.detection_noise import perturb  # noqa: E402
+from tamp.sim.core.detector import Detector  # noqa: E402
+from tamp.sim.core.instances import extract  # noqa: E402
+from tamp.sim.core.segdata import read_info, read_scene, scene_file  # noqa: E402
+from tamp.sim.core.segnet import WEIGHTS_FILE  # noqa: E402
+from tamp.sim.core.segtrain import Tally, report, score_view, true_instances  # noqa: E402
+
+
+def touching_classes(truth) -> set[int]:
+    """Classes with two instances whose masks touch (within one pixel) in this view."""
+    out = set()
+    for i, (c, m) in enumerate(truth):
+        grown = ndimage.binary_dilation(m, iterations=2)
+        for c2, m2 in truth[i + 1 :]:
+            if c2 == c and (grown & m2).any():
+                out.add(c)
+    return out
+
+
+def run(data: Path, weights: Path | None, max_views: int, seed: int) -> dict:
+    torch.set_num_threads(1)
+    info = read_info(data)
+    det = Detector.load(weights)
+    names = list(det.classes)
+    tally = Tally(names)
+    noisy = {level: Tally(names) for level in ("low", "high")}
+    touch = {}
+    times, times_full = [], []
+    views = 0
+    for s in info.test:
+        scene = read_scene(scene_file(data, s))
+        K = scene["K"]
+        intr = (K[0, 0], K[1, 1], K[0, 2], K[1, 2])
+        for v in range(len(scene["rgb"])):
+            if max_views and views >= max_views:
+                break
+            rgb, depth, X_WC = scene["rgb"][v], scene["depth"][v], scene["X_WC"][v]
+            t0 = time.process_time()
+            probs = det.probabilities(rgb, depth)
+            found = extract(probs, depth, names, tally.objects, intr, X_WC,
+                            jump=det.jump, min_pixels=det.min_pixels,
+                            unknown_below=det.unknown_below)  # fmt: skip
+            times.append(time.process_time() - t0)
+            if views % 4 == 0:  # the wrist camera's full size: every fourth view
+                big_rgb = rgb.repeat(2, 0).repeat(2, 1)
+                big_depth = depth.repeat(2, 0).repeat(2, 1)
+                big_intr = (2 * intr[0], 2 * intr[1], 2 * intr[2] + 0.5, 2 * intr[3] + 0.5)
+                t0 = time.process_time()
+                det.detect(big_rgb, big_depth, big_intr, X_WC)
+                times_full.append(time.process_time() - t0)
+            truth, small = true_instances(scene["inst"][v], scene["inst_cls"][v], det.min_pixels)
+            score_view(tally, found, truth, small, scene["cls"][v], probs.argmax(0))
+            for level, t in noisy.items():
+                out = perturb(found, seed=seed, frame=views, level=level, classes=names[2:],
+                              depth=depth, intrinsics=intr, X_WC=X_WC)  # fmt: skip
+                score_view(t, out, truth, small)
+            pred = [d.cls for d in found]
+            for c in touching_classes(truth):
+                n_true = sum(1 for k, _ in truth if k == c)
+                ok, total = touch.get(names[c], (0, 0))
+                touch[names[c]] = (ok + int(pred.count(names[c]) == n_true), total + 1)
+            views += 1
+        if max_views and views >= max_views:
+            break
+    doc = {
+        "benchmark": "detector",
+        "weights": str(weights) if weights else f"tamp/models/weights/{WEIGHTS_FILE}",
+        "data": str(data),
+        "test_scenes": len(info.test),
+        "resolution": list(det.size),
+        "parameters": det.meta.get("parameters"),
+        "split": det.meta.get("split"),
+        **report(tally),
+        "touching_same_class": {
+            k: {"correct": a, "views": b, "accuracy": round(a / b, 4)}
+            for k, (a, b) in sorted(touch.items())
+        },
+        "noisy": {
+            level: {
+                "views_all_counts_right": report(t)["views_all_counts_right"],
+                "false_positives_per_view": report(t)["false_positives_per_view"],
+                "counting_accuracy": {
+                    k: c["accuracy"] for k, c in report(t)["counting_accuracy"].items()
+                },
+            }
+            for level, t in noisy.items()
+        },
+        "cpu_ms_per_frame_1_thread": {
+            "160x90": {
+                "median": round(1000 * float(np.median(times)), 2),
+                "p90": round(1000 * float(np.percentile(times, 90)), 2),
+                "frames": len(times),
+            },
+            "320x180": {
+                "median": round(1000 * float(np.median(times_full)), 2),
+                "p90": round(1000 * float(np.percentile(times_full, 90)), 2),
+                "frames": len(times_full),
+            },
+        },
+        "machine": f"{os.cpu_count()} cores; process time of this process on one torch thread",
+    }
+    return doc
+
+
+def table(doc: dict) -> str:
+    lines = [
+        f"detector on {doc['views']} held-out views ({doc['test_scenes']} scenes, "
+        f"network {doc['resolution'][0]}x{doc['resolution'][1]}, {doc['parameters']} parameters)",
+        f"{'class':<12} {'count acc':>9} {'views':>6} {'pixel IoU':>9} {'low noise':>9} "
+        f"{'high noise':>10}",
+    ]
+    for k, c in doc["counting_accuracy"].items():
+        acc = "-" if c["accuracy"] is None else f"{100 * c['accuracy']:.1f} %"
+        iou = doc["pixel_iou"].get(k)
+        low = doc["noisy"]["low"]["counting_accuracy"].get(k)
+        high = doc["noisy"]["high"]["counting_accuracy"].get(k)
+        lines.append(
+            f"{k:<12} {acc:>9} {c['views']:>6} {'-' if iou is None else f'{iou:.3f}':>9} "
+            f"{'-' if low is None else f'{100 * low:.1f} %':>9} "
+            f"{'-' if high is None else f'{100 * high:.1f} %':>10}"
+        )
+    t = doc["cpu_ms_per_frame_1_thread"]
+    lines += [
+        f"views with every count right: {100 * doc['views_all_counts_right']:.1f} % "
+        f"(noisy low {100 * doc['noisy']['low']['views_all_counts_right']:.1f} %, "
+        f"high {100 * doc['noisy']['high']['views_all_counts_right']:.1f} %)",
+        f"mask IoU of matched instances: {doc['mask_iou_matched']} "
+        f"({doc['matched_instances']} instances)",
+        f"false positives per view: {doc['false_positives_per_view']} (task classes "
+        f"{doc['task_class_false_positives_per_view']}; noisy low "
+        f"{doc['noisy']['low']['false_positives_per_view']}, high "
+        f"{doc['noisy']['high']['false_positives_per_view']})",
+        f"unknown objects reported as a task class: {doc['unknown_reported_as_task_class']} "
+        f"of {doc['unknown_objects']}",
+        "touching instances of one class, count right: "
+        + ", ".join(
+            f"{k} {c['correct']}/{c['views']}" for k, c in doc["touching_same_class"].items()
+        ),
+        f"CPU per frame (one thread): 160x90 median {t['160x90']['median']} ms "
+        f"(p90 {t['160x90']['p90']}), 320x180 median {t['320x180']['median']} ms "
+        f"(p90 {t['320x180']['p90']})",
+    ]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("data", type=Path, help="a set written by `tamp detect render`")
+    parser.add_argument("--weights", type=Path, help="weights file (default: the shipped one)")
+    parser.add_argument("--max-views", type=int, default=0, help="score at most N views")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the noisy detector")
+    parser.add_argument("--out", type=Path, help="also write the JSON to this file")
+    args = parser.parse_args(argv)
+    doc = run(args.data, args.weights, args.max_views, args.seed)
+    print(table(doc))
+    text = json.dumps(doc)
+    print(text)
+    if args.out:
+        args.out.write_text(json.dumps(doc, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
