@@ -243,7 +243,7 @@ def _print_text(result, args: argparse.Namespace) -> None:
     if result.speed_undone:
         print(f"  speed change undone ({result.speed_undone})")
     found = ", ".join(f"{k} {v:g} Hz" for k, v in result.rates_found.items()) or "none"
-    print(f"  rates found (per trigger sensor): {found}")
+    print(f"  rates found (Fig. 5, {result.rate_source}): {found}")
     if result.behavior_rates:
         kept = ", ".join(f"{k} {v:g}" for k, v in result.behavior_rates.items())
         print(f"  rates kept per behavior (Hz; Step 3 scales the {result.scale} speed): {kept}")

@@ -58,11 +58,14 @@ X, Y, YAW, ARM, OPENING = range(5)
 @dataclass(frozen=True)
 class Command:
     """The ``number``-th command of a robot (0: none yet), created at ``created``: absolute
-    setpoints of its joints (`JOINTS` order, each finger at half the opening)."""
+    setpoints of its joints (`JOINTS` order, each finger at half the opening) and the
+    ``sections`` its running behaviors move (its load on the network,
+    `tamp.refine.architecture.Architecture.command_stream`)."""
 
     number: int = 0
     created: float = 0.0
     setpoints: tuple[float, ...] = ()
+    sections: tuple[str, ...] = ()
 
     def __deepcopy__(self, memo: dict) -> Command:
         return self  # immutable: a Drake state copy costs nothing
@@ -218,7 +221,8 @@ class Machine:
             else:
                 sp[OPENING] = min(max(sp[OPENING] + delta, 0.0), OPENING_START)
         setpoints = tuple(sp)
-        command = Command(s.command.number + 1, t, self.joint_setpoints(setpoints))
+        sections = tuple(dict.fromkeys(b.section for b in self.running(s)))
+        command = Command(s.command.number + 1, t, self.joint_setpoints(setpoints), sections)
         next_due = max(s.next_due + 1.0 / rate, t)
         return replace(
             s, setpoints=setpoints, issued=issued, command=command, next_due=next_due, rate=rate

@@ -119,6 +119,8 @@ class Run:
     # the rate searches of a tuning run, keyed ``ROBOT.SENSOR`` (or ``ROBOT``: one per robot)
     searches: dict[str, RateSearch | None] = field(default_factory=dict)
     max_wait: dict[str, float] = field(default_factory=dict)  # robot -> longest sensor wait
+    # ``ROBOT.SENSOR`` -> the longest wait of that trigger sensor's samples (s)
+    sensor_waits: dict[str, float] = field(default_factory=dict)
     sim_time: float = 0.0
     wall_time: float = 0.0
     cpu_time: float = 0.0
@@ -170,6 +172,11 @@ class Measure(Protocol):
     ``searches`` hold the result). ``max_sim_time``: stop there (default: the measuring
     function's own limit). ``record``: write an animation of the run to this file (the
     `Run`'s ``recording``).
+
+    A measuring function that already knows Fig. 5's result (a log's rates,
+    `tamp.refine.predict.Predicting`) may also have ``rate_searches(program,
+    architecture) -> dict[str, RateSearch]``; the refinement uses it instead of the
+    architecture's queue model.
     """
 
     def __call__(

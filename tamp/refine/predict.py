@@ -14,15 +14,16 @@ same steps on it and the phases it returns are *predictions*:
   triggered by another robot's fires when that one does;
 - the goal and collisions are not predicted (every phase is accepted; the simulation
   confirms);
-- the tuning run's rates are the log's (``rates``, ``ROBOT.SENSOR`` -> Hz) or, if the log
-  has none, the architecture's queue model's (`Architecture.probe_wait`, Fig. 5 offline).
+- the rates of Fig. 5 are the log's (``rates``, ``ROBOT.BEHAVIOR`` or ``ROBOT.SENSOR`` ->
+  Hz; `Predicting.rate_searches`) or, if the log has none, the architecture's queue
+  model's (`tamp.refine.architecture.behavior_searches`).
 
 Log file (JSON or CSV; ``tamp refine --json`` writes the JSON form: its first phase is
 the run of the program as given)::
 
     {"program": "task4",
      "timeline": [{"event": "R1.lower_arm", "start": 0.0, "end": 53.1}, ...],
-     "rates": {"R1.imu": 23, ...},                  # optional
+     "rates": {"R1.lower_arm": 23, ...},            # optional (or "R1.imu": 23)
      "touches": {"R1": [63.2, "folding_chair.latch_plate"], ...}}   # optional
 
     event,start,end          # CSV: one row per behavior, seconds
@@ -37,11 +38,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from tamp.errors import InputError
-from tamp.refine.architecture import Architecture
+from tamp.refine.architecture import Architecture, behavior_searches
 from tamp.refine.measure import Run
 from tamp.refine.order import direct_predecessors
 from tamp.refine.program import Program, event_id
-from tamp.refine.steps import RateSearch, refine_rate
+from tamp.refine.steps import RateSearch
 from tamp.refine.timeline import BehaviorRecord, Timeline
 
 
@@ -178,35 +179,23 @@ class Predicting:
         timeline = predicted_timeline(program, self.logged, self.log)
         run = Run(program, timeline, touches=dict(self.log.touches))
         if tune:
-            run.searches = self._searches(program, architecture)
+            run.searches = dict(self.rate_searches(program, architecture))
         return run
 
-    def _searches(
+    def rate_searches(
         self, program: Program, architecture: Architecture
     ) -> dict[str, RateSearch | None]:
-        c = program.communication
+        """Fig. 5's result: the log's rates (keyed as the log keys them: ``ROBOT.BEHAVIOR``
+        or ``ROBOT.SENSOR``) or, when it has none, the queue model's search per behavior
+        (`tamp.refine.architecture.behavior_searches`)."""
+        if not self.log.rates:
+            return dict(behavior_searches(program, architecture))
         out: dict[str, RateSearch | None] = {}
-        for r in program.robots:
-            current = program.rate(r.behaviors[0])
-            sensors = sorted({b.event.sensor for b in r.behaviors if b.event.sensor}) or ["force"]
-            for s in sensors:
-                key = f"{r.name}.{s}"
-                search = architecture.search(c.category, current, c.sensor_rate_hz, watched=(s,))
-                if key in self.log.rates:
-                    out[key] = RateSearch(
-                        current,
-                        search.step,
-                        search.threshold,
-                        search.limit,
-                        found=self.log.rates[key],
-                    )
-                else:
-                    out[key] = refine_rate(
-                        search,
-                        lambda rate, s=s: architecture.probe_wait(
-                            c.category, c.sensor_rate_hz, rate, watched=(s,)
-                        ),
-                    )
+        for key, rate in self.log.rates.items():
+            robot = key.partition(".")[0]
+            current = program.rate(program.robot(robot).behaviors[0])
+            step = architecture.rate_step_hz
+            out[key] = RateSearch(current, step, 0.0, max(rate, current), found=rate)
         return out
 
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 import heapq
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 
@@ -114,34 +114,37 @@ class Network:
         pending = list(state.pending)
         seq = state.next_seq
         made = []
+        routes, now = self.routes, state.now - 1e-12
         for stream, created, value in items:
-            if stream not in self.routes:
+            if stream not in routes:
                 raise KeyError(f"no route for stream {stream!r}")
-            if created < state.now - 1e-12:
+            if created < now:
                 raise ValueError(f"message created at {created} before the queue time {state.now}")
             m = Message(stream, float(created), seq, value)
             seq += 1
             made.append(m)
             heapq.heappush(pending, (m.created, m.seq, 0, m, 0.0))
-        return replace(state, pending=tuple(pending), next_seq=seq), made
+        return QueueState(tuple(pending), state.free_at, seq, state.now), made
 
     def advance(self, state: QueueState, until: float) -> tuple[QueueState, list[Delivery]]:
         """Process every arrival up to ``until``; returns the new state and the deliveries."""
-        pending = list(state.pending)
-        heapq.heapify(pending)
+        pending = list(state.pending)  # a heap already: tuples keep the list's order
         free = dict(state.free_at)
         out: list[Delivery] = []
+        routes = self.routes
+        pop, push = heapq.heappop, heapq.heappush
         while pending and pending[0][0] <= until:
-            t, seq, hop, m, wait = heapq.heappop(pending)
-            route = self.routes[m.stream]
+            t, seq, hop, m, wait = pop(pending)
+            route = routes[m.stream]
             if hop == len(route):
                 out.append(Delivery(m, t, wait))
                 continue
-            h = route[hop]
-            start = max(t, free[h.server])
-            done = start + h.service
-            free[h.server] = done
-            heapq.heappush(pending, (done, seq, hop + 1, m, wait + (start - t)))
+            server, service = route[hop].server, route[hop].service
+            free_at = free[server]
+            start = t if t > free_at else free_at
+            done = start + service
+            free[server] = done
+            push(pending, (done, seq, hop + 1, m, wait + (start - t)))
         new = QueueState(
             pending=tuple(pending),
             free_at=tuple(free.items()),

@@ -22,14 +22,19 @@ did not have (`accept`). Phases:
 3. **speed-adjusted** (Fig. 6(c)): `adjust_base_speed` on the parallelized run's
    durations; a run that is not accepted undoes the change (the phase keeps the
    parallelized program and run, ``speed_undone`` says why).
-4. **rate-refined** (Fig. 5): a tuning run of the speed-adjusted program searches the rate
-   online per robot and trigger sensor; each behavior gets the rate of the sensor that
-   triggers its event (`behavior_rates`; parallel behaviors share their group's lowest)
-   and `apply_rate` writes it (Step 3: the base's speed by the same ratio, or every
-   section's with ``scale="all"``). A run that is not accepted backs every rate off one
-   search step at a time until the task holds (our addition: the paper stops at the last
-   rate without sensor delay and does not say what to do when the task fails there); at
-   the starting rates nothing is kept.
+4. **rate-refined** (Fig. 5): for each behavior of the speed-adjusted program, P rises
+   on the architecture's queue model while the sensor that triggers its event delivers
+   without delay under the behavior's command load (`behavior_searches`: the model the
+   simulation's Channel runs, so no run is spent probing); with ``tune_online`` a tuning
+   run searches online instead, per robot and trigger sensor. Each behavior gets its rate
+   (`behavior_rates`; parallel behaviors share their group's lowest) and `apply_rate`
+   writes it (Step 3: the base's speed by the same ratio, or every section's with
+   ``scale="all"``). The run of the refined program confirms the rates: a trigger
+   sensor's samples delayed past the threshold in it (`delayed`) make it not accepted,
+   like a missed goal. A run that is not accepted backs every rate off one search step at
+   a time until the task holds (our addition: the paper stops at the last rate without
+   sensor delay and does not say what to do when the task fails there); at the starting
+   rates nothing is kept.
 
 Every attempt (program tried, measured task time, goal, new collisions, accepted or why
 not) is kept in ``attempts`` in the order it ran, so the JSON lists what each phase tried,
@@ -48,13 +53,14 @@ from pathlib import Path
 from typing import Protocol
 
 from tamp.errors import InfeasibleError
-from tamp.refine.architecture import Architecture
+from tamp.refine.architecture import Architecture, behavior_loads, behavior_searches
 from tamp.refine.measure import Measure, Run
 from tamp.refine.order import check_can_finish
 from tamp.refine.program import Program
 from tamp.refine.steps import (
     Boundary,
     Parallelization,
+    RateSearch,
     Relaxation,
     SpeedChange,
     adjust_base_speed,
@@ -118,6 +124,25 @@ def accept(run: Run, reference: Run) -> str | None:
     return None
 
 
+def delayed(run: Run, program: Program, architecture: Architecture) -> str | None:
+    """Why the rates of ``program`` are not confirmed by its ``run`` (None: they are): a
+    trigger sensor whose samples waited longer in the run's Channel than the architecture's
+    threshold (Fig. 5: "arrive without delay"; the threshold of the heaviest command load
+    the robot sends, `Architecture.wait_threshold`). A run that measured no waits (a
+    prediction) confirms nothing and refuses nothing."""
+    category = program.communication.category
+    for key, wait in sorted(run.sensor_waits.items()):
+        robot, _, sensor = key.partition(".")
+        loads = set(behavior_loads(program, robot).values())
+        threshold = max(architecture.wait_threshold(category, sensor, load=ld) for ld in loads)
+        if wait > threshold:
+            return (
+                f"sensor samples delayed: {key} waited {1e3 * wait:.1f} ms "
+                f"(> {1e3 * threshold:.1f} ms)"
+            )
+    return None
+
+
 @dataclass
 class Attempt:
     """One executed program of a phase: what it tried, the run, and why it was not
@@ -176,14 +201,22 @@ class Refinement:
     )
     speed_changes: list[SpeedChange] = field(default_factory=list)
     speed_undone: str | None = None
-    tuning: Run | None = None
-    rates_found: dict[str, float] = field(default_factory=dict)  # ROBOT.SENSOR -> Hz
+    tuning: Run | None = None  # the online search's run (``tune_online``)
+    # Fig. 5's searches: per behavior (``ROBOT.BEHAVIOR``, on the queue model) or, online,
+    # per robot and trigger sensor (``ROBOT.SENSOR``)
+    searches: dict[str, RateSearch | None] = field(default_factory=dict)
+    rates_found: dict[str, float] = field(default_factory=dict)  # search key -> Hz
     rate_hz: float = 0.0  # the lowest rate kept (0: none)
     behavior_rates: dict[str, float] = field(default_factory=dict)  # event id -> Hz kept
     rates_tried: list[float] = field(default_factory=list)
     scale: str = "base"
     failure: str | None = None  # why no accepted program meets the goal
     verified: bool = True
+
+    @property
+    def rate_source(self) -> str:
+        """Where the rates were searched: online in a tuning run, or on the queue model."""
+        return "online" if self.tuning is not None else "queue model"
 
     @property
     def goal_met(self) -> bool:
@@ -243,9 +276,10 @@ class Refinement:
             "behavior_rates": dict(self.behavior_rates),
             "rates_tried": list(self.rates_tried),
             "scale": self.scale,
+            "rate_search": self.rate_source,
             "probes": {
                 n: [[r, round(w, 5)] for r, w in s.probes]
-                for n, s in (self.tuning.searches.items() if self.tuning else [])
+                for n, s in self.searches.items()
                 if s is not None
             },
             "reduction": round(self.reduction, 4),
@@ -280,6 +314,7 @@ def refine(
     category: str | None = None,
     scale: str = "base",
     record: str | Path | None = None,
+    tune_online: bool = False,
     progress: Callable[[str], None] = lambda _: None,
 ) -> Refinement:
     """The four phases of ``program`` (module docstring), each run measured by ``measure``.
@@ -289,7 +324,9 @@ def refine(
     order; ``category`` replaces the program's architecture category; ``scale``: Step 3
     scales the base's speed (``"base"``, the paper's) or every section's (``"all"``);
     ``record`` asks each rate-refined run for an animation (the last one written is the
-    last rate tried)."""
+    last rate tried); ``tune_online``: Fig. 5 probes the rates in a tuning run of the
+    speed-adjusted program (one more run; per robot and trigger sensor) instead of on the
+    architecture's queue model (`behavior_searches`, per behavior)."""
     if category is not None:
         program = program.with_category(category)
     check_can_finish(program)
@@ -314,9 +351,18 @@ def refine(
 
     out = Refinement([], verified=gate is not None, scale=scale)
 
-    def attempt(name: str, p: Program, tried: list[str], reference: Run | None, **kw):
+    def attempt(
+        name: str,
+        p: Program,
+        tried: list[str],
+        reference: Run | None,
+        architecture: Architecture | None = None,
+        **kw,
+    ):
         r = run(gated(p, name), name, **kw)
         why = accept(r, reference or r)
+        if why is None and architecture is not None:
+            why = delayed(r, p, architecture)
         new = new_collisions(r, reference) if reference is not None else []
         out.attempts.append(Attempt(name, tried, r, why, new))
         if why is not None:
@@ -377,16 +423,27 @@ def refine(
             out.speed_undone = why
     out.phases.append(phase("speed-adjusted", p2, r2, [c.describe() for c in out.speed_changes]))
 
-    # 4. rate-refined (Fig. 5): tuning run, then back off one step while not accepted
-    progress("tuning the command rate (Fig. 5) ...")
-    tuning = measure(p2, architecture, tune=True)
-    out.tuning = tuning
-    out.rates_found = tuning.sensor_rates()
+    # 4. rate-refined (Fig. 5): the search per behavior, then back off one step while the
+    # run of the refined program is not accepted
+    if tune_online:
+        progress("tuning the command rate online (Fig. 5) ...")
+        tuning = measure(p2, architecture, tune=True)
+        out.tuning = tuning
+        out.searches = dict(tuning.searches)
+        searches_ended = len(tuning.found_rates()) == len(p2.robots)
+        if not searches_ended:
+            progress(f"  the rate search did not end within {tuning.sim_time:.0f} s of sim time")
+    else:  # the measure's own (a log's rates) or the queue model's
+        known = getattr(measure, "rate_searches", None)
+        searches = known(p2, architecture) if known else behavior_searches(p2, architecture)
+        out.searches = dict(searches)
+        searches_ended = True
+    out.rates_found = {
+        k: s.found for k, s in out.searches.items() if s is not None and s.found is not None
+    }
     p3, r3, rate_kept = p2, r2, []
-    if len(tuning.found_rates()) != len(p2.robots):
-        progress(f"  the rate search did not end within {tuning.sim_time:.0f} s of sim time")
-    else:
-        progress(f"  rates found per trigger sensor: {out.rates_found}")
+    if searches_ended:
+        progress(f"  rates found (Fig. 5, {out.rate_source}): {out.rates_found}")
         back_off = 0.0
         while rates := behavior_rates(p2, out.rates_found, back_off=back_off):
             trial = p2
@@ -397,7 +454,9 @@ def refine(
             span = f"{hi:g} Hz" if lo == hi else f"{lo:g}-{hi:g} Hz"
             words = f"{span} per behavior ({len(flat)} behaviors), {scale} speed scaled"
             out.rates_tried.append(hi)
-            r, why = attempt("rate-refined", trial, [words], original, record=record)
+            r, why = attempt(
+                "rate-refined", trial, [words], original, record=record, architecture=architecture
+            )
             if why is None:
                 p3, r3, out.rate_hz, out.behavior_rates = trial, r, lo, flat
                 rate_kept = [words]

@@ -385,10 +385,12 @@ def behavior_rates(
 ) -> dict[str, dict[str, float]]:
     """Fig. 5, Steps 2 and 4: each behavior's rate, robot -> behavior -> Hz.
 
-    ``found``: the rate found watching each sensor, keyed ``ROBOT.SENSOR`` (a key ``ROBOT``
-    stands for all of that robot's sensors). A behavior gets the rate of the sensor that
-    triggers its event; one triggered by another robot's event (no sensor of its own) gets
-    its robot's lowest found rate; behaviors that run in parallel share the lowest rate of
+    ``found``: the rates the searches found, keyed ``ROBOT.BEHAVIOR`` (the search of that
+    behavior: its trigger sensor under its command load, `Architecture.behavior_searches`)
+    or ``ROBOT.SENSOR`` (a search watching that sensor, e.g. online; a key ``ROBOT`` stands
+    for all of that robot's sensors). A behavior gets its own rate, else the rate of the
+    sensor that triggers its event; one with neither (triggered by another robot's event)
+    gets its robot's lowest found rate; behaviors that run in parallel share the lowest rate of
     their group (one command stream). ``back_off`` is subtracted from every rate, which
     never goes below the behavior's current one; behaviors left at their current rate are
     not named (nothing to apply)."""
@@ -398,7 +400,9 @@ def behavior_rates(
         if not own:
             continue
         lowest = min(own.values())
-        wanted = [own.get(b.event.sensor or "", own.get("", lowest)) for b in r.behaviors]
+        wanted = [
+            own.get(b.name, own.get(b.event.sensor or "", own.get("", lowest))) for b in r.behaviors
+        ]
         rates: dict[str, float] = {}
         for group in r.groups():
             rate = min(wanted[i] for i in group) - back_off

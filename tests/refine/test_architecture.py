@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+from dataclasses import replace
 
 import pytest
 import yaml
@@ -10,9 +11,21 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tamp.errors import InputError
-from tamp.refine.architecture import COMMAND, default_architecture, load_architecture
-from tamp.refine.steps import refine_rate
+from tamp.refine.architecture import (
+    COMMAND,
+    behavior_searches,
+    default_architecture,
+    load_architecture,
+)
+from tamp.refine.steps import (
+    Parallelization,
+    apply_rate,
+    behavior_rates,
+    join,
+    refine_rate,
+)
 from tamp.scenarios import path
+from tests.refine.helpers import task
 
 ARCH = default_architecture()
 
@@ -96,6 +109,17 @@ def _arch_dict():
         (lambda d: d["categories"]["II"]["main_cpu"].pop("command"), "main_cpu.command"),
         (lambda d: d.update(probe_window=0), "probe_window"),
         (lambda d: d.update(extra=1), "extra"),
+        (lambda d: d.update(sensor_rates_hz={"imu": 0}), "sensor_rates_hz.imu"),
+        (lambda d: d.update(sensor_rates_hz={"sonar": 10}), "sensor_rates_hz.sonar"),
+        (lambda d: d.update(max_command_rate_hz=-5), "max_command_rate_hz"),
+        (
+            lambda d: d["categories"]["II"]["channel"].update(sections={"wheel": 0.01}),
+            "II.channel.sections.wheel",
+        ),
+        (
+            lambda d: d["categories"]["II"]["channel"].update(sections={"base": -0.01}),
+            "II.channel.sections.base",
+        ),
     ],
 )
 def test_bad_architecture_files(tmp_path, edit, field):
@@ -105,4 +129,62 @@ def test_bad_architecture_files(tmp_path, edit, field):
     f.write_text(yaml.safe_dump(d))
     with pytest.raises(InputError) as exc:
         load_architecture(f)
-    assert field in exc.value.field
+    assert field in exc.value.field and exc.value.file == str(f)
+
+
+PER_SENSOR = load_architecture(path("refine/architecture_per_sensor.yaml"))
+
+
+def test_sensors_have_their_own_rates_and_commands_a_load_per_section():
+    """The per-sensor file: IMU 200 Hz, force 100 Hz, odometry 50 Hz; a base command costs
+    the channel 16 ms (12 ms otherwise). Unnamed sensors and sections take the defaults."""
+    a = PER_SENSOR
+    assert [a.sensor_rate(s, 123.0) for s in ("imu", "force", "odometry")] == [200, 100, 50]
+    assert ARCH.sensor_rate("imu", 123.0) == 123.0 and ARCH.sensor_rates_hz == {}
+    assert a.command_stream("II", "base") == "command.base"
+    assert a.command_stream("II", ("arm", "base")) == "command.base"  # the heaviest
+    assert a.command_stream("II", "arm") == COMMAND and a.command_stream("I", "base") == COMMAND
+    routes = a.network("II").routes
+    assert [h.service for h in routes["command.base"]] == [8.0e-3, 1.6e-2, 2.0e-3]
+    assert [h.service for h in routes[COMMAND]] == [8.0e-3, 1.2e-2, 2.0e-3]
+    rates = a.rates(200.0, 20.0, command="command.base")
+    assert rates == {"force": 100, "imu": 200, "odometry": 50, "command.base": 20.0}
+    # a heavier command ahead makes a longer unloaded wait
+    assert a.wait_threshold("II", "imu", load="base") == pytest.approx(
+        a.wait_threshold("II", "imu") + 4.0e-3
+    )
+    # P is bounded by the watched sensor's own rate and by the main CPU's loop
+    assert a.search("II", 10.0, 200.0, ("odometry",)).limit == 50.0
+    assert a.search("II", 10.0, 200.0, ("imu",)).limit == a.max_command_rate_hz == 50.0
+
+
+def test_each_behavior_finds_its_own_rate():
+    """Fig. 5 per behavior (Step 4): in Category II a behavior that drives the base loads the
+    channel more, so it finds a lower rate than one that moves the arm or the gripper; a
+    parallel group sends one command stream, so it takes its heaviest section's load. The
+    refined program carries the rate per behavior."""
+    program = task(4)
+    quick = replace(PER_SENSOR, rate_step_hz=3.0, probe_window=1.5)  # the tests' probes
+    found = {k: s.found for k, s in behavior_searches(program, quick).items()}
+    assert set(found) == set(program.events())
+    arm, base = found["R1.lower_arm"], found["R1.approach"]
+    assert found["R2.grip"] == found["R1.raise_arm"] == arm
+    assert found["R2.approach"] == found["R1.pull_out"] == base
+    assert 10.0 < base < arm
+    # each stops at the knee of its own load (the quick 1.5 s probes miss overloads of a
+    # few percent), and one step higher is past it
+    net = PER_SENSOR.network("II")
+    for rate, stream in ((base, "command.base"), (arm, COMMAND)):
+        rho = net.utilisation(PER_SENSOR.rates(200.0, rate, command=stream))
+        assert max(rho.values()) < 1.05
+        rho = net.utilisation(PER_SENSOR.rates(200.0, rate + 3.0, command=stream))
+        assert max(rho.values()) > 1.0
+    lowered = join(program, Parallelization("R1", "lower_arm", "approach"))
+    grouped = {k: s.found for k, s in behavior_searches(lowered, quick).items()}
+    assert grouped["R1.lower_arm"] == grouped["R1.approach"] == base
+    rates = behavior_rates(program, found)
+    refined = program
+    for robot, rs in rates.items():
+        refined = apply_rate(refined, robot, rs)
+    assert refined.behavior("R1.lower_arm").rate_hz == arm
+    assert refined.behavior("R1.approach").rate_hz == base

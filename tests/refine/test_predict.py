@@ -61,12 +61,10 @@ def test_the_phases_predicted_from_a_log():
     )
     times = [round(p.task_time, 1) for p in out.phases]
     assert times[:3] == [151.9, 98.6, 93.5]
-    assert out.rates_found == {
-        "R1.imu": 23.0,
-        "R1.odometry": 23.0,
-        "R2.force": 23.0,
-        "R2.odometry": 23.0,
-    }
+    # one search per behavior (its trigger sensor, its command load): all 23 Hz here, every
+    # sensor at 200 Hz and every command of one load
+    assert out.rates_found == {e: 23.0 for e in program.events()}
+    assert out.rate_source == "queue model" and out.tuning is None
     # R2: approach 28.0 / 2.3, grip 33.3 (gripper, not scaled): 45.5 s; R1's approach keeps
     # its speed (it runs with the lowering, which the rate does not speed up): 53.3 s; the
     # pull-out then, 28.8 / 2.3, the lift 3.4 s after it

@@ -139,6 +139,9 @@ class Gate:
 
 
 def refine(program: Program, measure: Model, gate=gate_program, **kw):
+    """The loop on the model; Fig. 5 searched online in a tuning run of the model (whose
+    ``found`` rates exercise every branch) unless ``tune_online=False``."""
+    kw.setdefault("tune_online", True)
     return refinement.refine(program, ARCH, measure, gate=gate, check_run=check_run, **kw)
 
 
@@ -311,6 +314,32 @@ def test_a_harmful_rate_is_backed_off_one_step_at_a_time_until_the_task_holds():
     rate_attempts = [a for a in out.attempts if a.phase == "rate-refined"]
     assert [a.rejected is None for a in rate_attempts] == [False, False, False, True]
     assert out.goal_met
+
+
+def test_the_rates_searched_on_the_queue_model_are_confirmed_by_the_run():
+    """Without ``tune_online`` no run is spent probing: Fig. 5 runs per behavior on the
+    architecture's queue model (23 Hz for each) and the run of the refined program confirms
+    it. Here its Channel delays the IMU's samples above 22 Hz (a wait past the threshold):
+    23 Hz is not accepted and backed off, 22 Hz kept."""
+    threshold = ARCH.wait_threshold("II", "imu")
+
+    class Delaying(Model):
+        def __call__(self, program, architecture, **kw):
+            run = super().__call__(program, architecture, **kw)
+            late = rate_of(program) > 22.0
+            run.sensor_waits = {"R1.imu": threshold + (0.01 if late else -0.01)}
+            return run
+
+    model = Delaying()
+    out = refine(task(4), model, tune_online=False)
+    assert [o["tune"] for _, o in model.calls] == [False] * 5  # no tuning run
+    assert out.tuning is None and out.rate_source == "queue model"
+    assert out.rates_found == {e: 23.0 for e in task(4).events()}
+    assert out.rates_tried == [23.0, 22.0] and out.rate_hz == 22.0
+    first = [a for a in out.attempts if a.phase == "rate-refined"][0]
+    assert first.rejected.startswith("sensor samples delayed: R1.imu waited")
+    assert out.to_json()["rate_search"] == "queue model"
+    assert set(out.to_json()["probes"]) == set(task(4).events())
 
 
 def test_a_rate_that_never_holds_keeps_the_speed_adjusted_program():

@@ -3,12 +3,13 @@
 The system holds the exact FIFO network of `tamp.refine.queues` in its abstract state and
 changes it only in its periodic update, once per plant step Δ (the workcell's tick):
 
-1. the sensors are sampled at their rate: every sample time k / rate in (t − Δ, t] gives
-   one message per sensor (force, IMU, odometry) created at that time, carrying the
-   reading of `SensorReadings` at that time (the plant's state is held between its steps,
-   so a sample between two steps carries the previous step's reading, kept in the state);
+1. each sensor (force, IMU, odometry) is sampled at its own rate: every sample time
+   k / rate in (t − Δ, t] gives one message created at that time, carrying the reading of
+   `SensorReadings` at that time (the plant's state is held between its steps, so a
+   sample between two steps carries the previous step's reading, kept in the state);
 2. the command the state machine published at its last tick enters the network at its
-   creation time;
+   creation time, on the stream of its load (the sections it moves,
+   `tamp.refine.architecture.Architecture.command_stream`);
 3. the network advances to now; what it delivers becomes visible: the latest delivered
    sample of each sensor (``delivered`` output, what the state machine reads) and the latest
    delivered command, whose setpoints the actuators' sub-CPU applies (``actuation``
@@ -21,6 +22,7 @@ of the delay: the delay is what the queues did.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -43,7 +45,7 @@ class ChannelState:
     latest: dict[str, Delivery] = field(default_factory=dict)
     recent: tuple[Delivery, ...] = ()
     injected: int = 0  # number of the last command put into the network
-    samples: int = 0  # sample times k / rate already taken (k < samples)
+    samples: tuple[int, ...] = ()  # per sensor (`SENSORS` order): sample times k / rate taken
     previous: Readings = Readings()  # the reading of the last tick
 
     def __deepcopy__(self, memo: dict) -> ChannelState:
@@ -57,13 +59,24 @@ class Channel(LeafSystem):
     """Sensor samples and commands of one robot through its FIFO network."""
 
     def __init__(
-        self, name: str, network: Network, sensor_rate: float, q_start: np.ndarray, tick: float
+        self,
+        name: str,
+        network: Network,
+        sensor_rates: Mapping[str, float],
+        q_start: np.ndarray,
+        tick: float,
+        command_stream: Callable[[tuple[str, ...]], str] = lambda _: COMMAND,
     ):
+        """``sensor_rates``: each sensor's sample rate (Hz); ``command_stream``: the stream
+        a command moving these sections takes (its load)."""
         super().__init__()
         self.set_name(f"channel_{name}")
         self._network = network
-        self._rate = sensor_rate
+        self._rates = tuple(float(sensor_rates[x]) for x in SENSORS)
+        self._stream_of = command_stream
+        self._streams: dict[tuple[str, ...], str] = {}
         self._actuation_start = np.concatenate([q_start, np.zeros_like(q_start)])
+        self._last: tuple[Delivery | None, np.ndarray] = (None, self._actuation_start)
         self.period = tick
         self.readings_port = self.DeclareAbstractInputPort(
             "readings", AbstractValue.Make(Readings())
@@ -94,32 +107,41 @@ class Channel(LeafSystem):
         d = self.state(context).latest.get(COMMAND)
         if d is None:
             output.SetFromVector(self._actuation_start)
-        else:
+            return
+        if d is not self._last[0]:  # the plant reads it every step; a command lasts many
             q = np.asarray(d.message.value.setpoints, dtype=float)
-            output.SetFromVector(np.concatenate([q, np.zeros_like(q)]))
+            self._last = (d, np.concatenate([q, np.zeros_like(q)]))
+        output.SetFromVector(self._last[1])
 
     def _update(self, context, state) -> EventStatus:
         s = self.state(context)
         t = context.get_time()
         r: Readings = self.readings_port.Eval(context)
         items = []
-        k = s.samples
-        while k / self._rate <= t + 1e-9:
-            created = k / self._rate
-            now = created >= t - 1e-9
-            items += [(x, created, (r if now else s.previous).value(x)) for x in SENSORS]
-            k += 1
+        taken = s.samples or (0,) * len(SENSORS)
+        samples = []
+        for x, rate, k in zip(SENSORS, self._rates, taken, strict=True):
+            while k / rate <= t + 1e-9:
+                created = k / rate
+                items.append((x, created, (r if created >= t - 1e-9 else s.previous).value(x)))
+                k += 1
+            samples.append(k)
+        items.sort(key=lambda item: item[1])  # one time order across the sensors
         cmd: Command = self.command_port.Eval(context)
         injected = s.injected
         if cmd.number > injected:
-            items.append((COMMAND, min(cmd.created, t), cmd))
+            stream = self._streams.get(cmd.sections)
+            if stream is None:
+                stream = self._streams[cmd.sections] = self._stream_of(cmd.sections)
+            items.append((stream, min(cmd.created, t), cmd))
             injected = cmd.number
         queue, _ = self._network.inject(s.queue, items)
         queue, out = self._network.advance(queue, t)
         latest = dict(s.latest)
         for d in out:
-            latest[d.message.stream] = d
-        recent = tuple(d for d in out if d.message.stream != COMMAND)
-        new = ChannelState(queue, latest, recent, injected, k, r)
+            stream = d.message.stream
+            latest[COMMAND if stream.startswith(COMMAND) else stream] = d
+        recent = tuple(d for d in out if not d.message.stream.startswith(COMMAND))
+        new = ChannelState(queue, latest, recent, injected, tuple(samples), r)
         state.get_mutable_abstract_state(self._state).set_value(new)
         return EventStatus.Succeeded()

@@ -29,6 +29,9 @@ Format (the fields, their defaults and bounds are stated once, in the dataclasse
         z: 0.0
         yaw: 0.0                      # rad about the vertical (default 0)
         fixed: false                  # true: welded to the world, scenery (default false)
+    time_step: 0.02                   # s, the coarsest plant step and systems' tick, for
+                                      # slow programs (default 0.01; at most 0.02, so P can
+                                      # reach 50 Hz; `tamp.sim.refine.station.time_step`)
     goals:                            # all must hold for the task to succeed (default none)
       - quantity: folding_chair.hinge # <object>.<revolute joint> (rad), <object>.tilt (rad
                                       # between its up axis and the world's), <object>.rise
@@ -108,6 +111,16 @@ class Scene:
     goals: tuple[Goal, ...] = spec(())
     name: str | None = spec(None, help="default: the file's stem")
     description: str = spec("")
+    time_step: float = spec(
+        0.01,
+        min=0.001,
+        max=0.02,
+        unit="s",
+        help="the coarsest plant step and tick of the channels, state machines and "
+        "supervisor, used for programs whose motions advance at most 1 mm (or 1 mrad) per "
+        "step (a command leaves on a tick: P is at most 1 / step); larger than 0.01 only "
+        "where the scene's objects stay put and the task's verdicts hold (docs/refinement.md)",
+    )
     file: str | None = None
 
     def object(self, name: str) -> SceneObject:

@@ -12,7 +12,8 @@ the `Channel` samples it at the sensor rate and queues the samples).
 
 from __future__ import annotations
 
-import numpy as np
+import math
+
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
@@ -50,8 +51,8 @@ class SensorReadings(LeafSystem):
 
     def _calc(self, context, output) -> None:
         x = self.state_port.Eval(context)
-        reaction = self.reaction_port.Eval(context)[self._mount]
-        mount = float(np.linalg.norm(reaction.translational()))
+        fx, fy, fz = self.reaction_port.Eval(context)[self._mount].translational()
+        mount = math.sqrt(fx * fx + fy * fy + fz * fz)
         tau = self.contact_port.Eval(context)
         squeeze = max(abs(float(tau[i])) for i in self._fingers)
         i, j, k = self._pose

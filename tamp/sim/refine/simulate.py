@@ -5,7 +5,7 @@ program in its scene and runs it to the end. The simulator advances in chunks
 (`tamp.sim.core.runner.run_in_chunks`) and stops when both state machines have fired every
 event, or, in a tuning run, when the supervisor's searches have ended. The collisions are
 the station's `ContactMonitor`'s (`tamp.sim.refine.contacts`: contacts judged at every
-plant step; a pair in contact for `MIN_CONTACT` s in all is a collision), each with its
+plant step; a pair in contact for `MIN_CONTACT_STEPS` steps in all is a collision), each with its
 first time. Nothing is computed
 from the program's numbers: start and end times are when the machines started behaviors
 and fired events in sim time. At the end it measures what the objects did
@@ -47,9 +47,9 @@ if TYPE_CHECKING:
     from tamp.sim.refine.station import RefineStation
 
 CHUNK = 0.05  # s of sim time between the run loop's checks
-#: s of accumulated contact after which a colliding pair is a collision of the run (two
-#: plant steps; `tamp.sim.refine.contacts`)
-MIN_CONTACT = 0.02
+#: plant steps of accumulated contact after which a colliding pair is a collision of the run
+#: (`tamp.sim.refine.contacts`: one step's graze is noise)
+MIN_CONTACT_STEPS = 2
 
 
 def time_limit(program: Program, architecture: Architecture, tune: bool) -> float:
@@ -119,7 +119,14 @@ def simulate(
         recording = save_recording(cell.visualizer, meshcat, record)
     outcome = measure(cell.plant, plant_ctx, cell.objects, heights, scene.goals)
     contacts = cell.monitor.log(cell.monitor.GetMyContextFromRoot(root))
-    run = _result(cell, root, chunked, contacts.collisions(MIN_CONTACT), recording, outcome)
+    run = _result(
+        cell,
+        root,
+        chunked,
+        contacts.collisions(MIN_CONTACT_STEPS * cell.time_step),
+        recording,
+        outcome,
+    )
     run.touches = dict(contacts.touches)
     run.diverged = diverged
     return run
@@ -141,6 +148,9 @@ def _result(cell: RefineStation, root, chunked, collisions, recording, outcome) 
         collisions=dict(collisions),
         searches=search_of(cell, root),
         max_wait={n: w.max_wait for n, w in sup.robots.items()},
+        sensor_waits={
+            f"{n}.{k}": v for n, w in sup.robots.items() for k, v in w.sensor_waits.items()
+        },
         sim_time=chunked.sim_time,
         wall_time=chunked.wall_time,
         cpu_time=chunked.cpu_time,

@@ -20,10 +20,14 @@ lever pitches (``arm_pitch``, up positive) and two prismatic paddles/fingers ope
 implicit; `GAINS`). The scene's objects (`tamp.sim.refine.scenario`) are added from their
 models, named as the scene names them, and welded to the world when fixed.
 
-The plant steps every `TIME_STEP`; the Channels, state machines and the supervisor update on the
-same tick (the Channels take every sensor sample in between at its own time, so sensors
-may be faster than the tick). A command leaves on a state machine's tick, so P is at most
-1 / `TIME_STEP` (100 Hz) here: the rate search stops there too. Gravity is off for the
+The plant steps every `time_step` (`FINE_STEP`, 10 ms, unless the scene allows a coarser
+step, `tamp.sim.refine.scenario.Scene.time_step`, and the program's motions are slow enough
+for it: no section's setpoint moves more than `MAX_TRAVEL` per step; Task 4 in the chair's
+scene runs at 20 ms); the Channels, state machines and the supervisor update on the same
+tick (the Channels take every sensor sample in
+between at its own time, so sensors may be faster than the tick). A command leaves on a
+state machine's tick, so P is at most 1 / time step (100 Hz, 50 Hz) here: the online rate
+search stops there too. Gravity is off for the
 robots (their drivers hold the lever), so the force sensor reads only what the gripper
 touches. Contact is hydroelastic where the models say so (the chair's frames, the
 objects), point contact otherwise.
@@ -32,6 +36,7 @@ objects), point contact otherwise.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -41,10 +46,10 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import BodyIndex, PdControllerGains, RevoluteJoint
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
-from tamp.errors import InputError
-from tamp.refine.architecture import Architecture
+from tamp.errors import InfeasibleError, InputError
+from tamp.refine.architecture import Architecture, trigger_sensors
 from tamp.refine.machine import FINGER_MAX, JOINTS, Machine
-from tamp.refine.program import Program
+from tamp.refine.program import SENSORS, Program
 from tamp.refine.steps import RateSearch
 from tamp.sim.core.models import model_url, sdf_path
 from tamp.sim.core.plant import add_sap_plant
@@ -55,7 +60,10 @@ from tamp.sim.refine.sensors import SensorReadings
 from tamp.sim.refine.skills import PioneerStateMachine
 from tamp.sim.refine.supervisor import RateTuningSupervisor
 
-TIME_STEP = 0.01  # s, the plant's discrete step and the systems' tick
+FINE_STEP = 0.01  # s, the plant's step unless a scene and a program allow a coarser one
+#: m (base, gripper) or rad (base turn, arm) a motion's setpoint may advance per step for a
+#: scene's coarser step to be used (`time_step`): slow programs only
+MAX_TRAVEL = 1.0e-3
 #: (kp, kd) of each joint's PD actuator
 GAINS = {
     "base_x": (6000.0, 1200.0),
@@ -92,6 +100,7 @@ class RefineStation:
 
     monitor: ContactMonitor | None = None
     movable: frozenset[int] = frozenset()  # bodies of the scene's free objects
+    time_step: float = FINE_STEP  # s, the plant's step and the systems' tick (`time_step`)
 
     def collision(self, a: int, b: int) -> tuple[str, str] | None:
         """The contact of bodies ``a`` and ``b`` as a collision ``(robot body, other)``, or
@@ -104,10 +113,16 @@ class RefineStation:
         )
 
 
-def watched_sensors(program: Program, robot: str) -> tuple[str, ...]:
-    """The sensors that trigger robot ``robot``'s events (Fig. 5, Step 2)."""
-    r = program.robot(robot)
-    return tuple(sorted({b.event.sensor for b in r.behaviors if b.event.sensor}))
+def time_step(program: Program, scene: Scene) -> float:
+    """The plant's step (and the systems' tick) for ``program`` in ``scene``: the scene's
+    ``time_step`` when every motion advances at most `MAX_TRAVEL` per step at it, else
+    `FINE_STEP` (a fast fork runs further past the latch between two coarse steps: at
+    20 ms the short Task 4 at 22 Hz left the chair less open than at 10 ms)."""
+    coarse = scene.time_step
+    if coarse <= FINE_STEP:
+        return coarse
+    fastest = max(b.motion.speed for _, _, b in program.behaviors())
+    return coarse if fastest * coarse <= MAX_TRAVEL + 1e-12 else FINE_STEP
 
 
 def _model_text(model: str, name: str) -> str:
@@ -125,10 +140,16 @@ def build_station(
     """The diagram of ``program`` in ``scene`` (the program's, `scenario.load_scene`);
     ``tune`` runs Fig. 5 in the supervisor."""
     comm = program.communication
-    period = TIME_STEP
+    period = time_step(program, scene)
+    for robot, _, b in program.behaviors():
+        if program.rate(b) > 1.0 / period + 1e-9:  # one command per tick at most
+            raise InfeasibleError(
+                f"{robot.name}.{b.name} commands at {program.rate(b):g} Hz; scene "
+                f"{scene.name}'s {1e3 * period:g} ms step sends at most {1.0 / period:g} Hz"
+            )
     builder = DiagramBuilder()
     plant, scene_graph, parser = add_sap_plant(
-        builder, time_step=TIME_STEP, contact_model="hydroelastic_with_fallback"
+        builder, time_step=period, contact_model="hydroelastic_with_fallback"
     )
     (floor,) = parser.AddModelsFromUrl(model_url("floor"))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("floor", floor))
@@ -210,9 +231,10 @@ def build_station(
             Channel(
                 r.name,
                 network,
-                comm.sensor_rate_hz,
+                {x: architecture.sensor_rate(x, comm.sensor_rate_hz) for x in SENSORS},
                 np.array(machine.joint_setpoints(machine.initial().setpoints)),
                 period,
+                partial(architecture.command_stream, comm.category),
             )
         )
         empty = ChannelState(network.initial())
@@ -237,21 +259,21 @@ def build_station(
     }
     contact_results = plant.get_contact_results_output_port()
     monitor = builder.AddSystem(
-        ContactMonitor(rule, geometry_body, contact_results.Allocate(), TIME_STEP)
+        ContactMonitor(rule, geometry_body, contact_results.Allocate(), period)
     )
     builder.Connect(contact_results, monitor.contact_port)
 
-    watched = {r.name: watched_sensors(program, r.name) for r in program.robots}
+    watched = {r.name: trigger_sensors(program, r.name) for r in program.robots}
     searches = None
     if tune:
         searches = {}
         for r in program.robots:
             current = program.rate(r.behaviors[0])
-            limit = min(comm.sensor_rate_hz, 1.0 / TIME_STEP)
-            searches[r.name] = {
-                sensor: architecture.search(comm.category, current, limit, watched=(sensor,))
-                for sensor in watched[r.name] or ("force",)
-            }
+            searches[r.name] = {}
+            for sensor in watched[r.name] or ("force",):
+                s = architecture.search(comm.category, current, comm.sensor_rate_hz, (sensor,))
+                limit = min(s.limit, 1.0 / period)  # a command leaves on a tick
+                searches[r.name][sensor] = RateSearch(current, s.step, s.threshold, limit)
     supervisor = builder.AddSystem(
         RateTuningSupervisor(watched, period, architecture.probe_window, empty, searches)
     )
@@ -292,6 +314,7 @@ def build_station(
         scenery,
         monitor,
         movable,
+        period,
     )
 
 

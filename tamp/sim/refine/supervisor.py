@@ -14,9 +14,9 @@ analysed; `tamp.refine.refinement.behavior_rates`). While the search runs each s
 moves one step per command, so it moves faster with P; what the refined program keeps is
 Step 3's (`tamp.refine.steps.apply_rate`).
 
-With ``tune=False`` the supervisor only watches: it records the longest wait per robot (the
-check that the refined program's rate really delivers without delay) and leaves the rates
-to the program.
+With ``tune=False`` the supervisor only watches: it records the longest wait per robot and
+per watched sensor (the check that the refined program's rates really deliver without
+delay, `tamp.refine.refinement.delayed`) and leaves the rates to the program.
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ class RobotWatch:
     probe_start: float = 0.0
     probe_waits: dict[str, float] = field(default_factory=dict)
     max_wait: float = 0.0
+    sensor_waits: dict[str, float] = field(default_factory=dict)  # longest per sensor
 
     def __deepcopy__(self, memo: dict) -> RobotWatch:
         return self
@@ -127,13 +128,16 @@ class RateTuningSupervisor(LeafSystem):
         for name, w in s.robots.items():
             ch: ChannelState = self.delivered_ports[name].Eval(context)
             waits = dict(w.probe_waits)
+            longest = w.sensor_waits
             worst = 0.0
             for d in ch.recent:
                 sensor = d.message.stream
                 if sensor in w.watched:
                     waits[sensor] = max(waits.get(sensor, 0.0), d.wait)
                     worst = max(worst, d.wait)
-            w = replace(w, probe_waits=waits, max_wait=max(w.max_wait, worst))
+                    if d.wait > longest.get(sensor, 0.0):
+                        longest = {**longest, sensor: d.wait}
+            w = replace(w, probe_waits=waits, max_wait=max(w.max_wait, worst), sensor_waits=longest)
             if w.searches and not w.done and t - w.probe_start >= self.window:
                 searches = {
                     k: v.observe(waits.get(k, 0.0)) if not v.done else v

@@ -6,9 +6,10 @@ from dataclasses import replace
 
 import pytest
 
-from tamp.refine.architecture import ServiceTimes, default_architecture
+from tamp.refine.architecture import ServiceTimes, default_architecture, load_architecture
 from tamp.refine.order import precedence
 from tamp.refine.steps import refine_rate
+from tamp.scenarios import path
 from tamp.sim.refine.simulate import simulate
 from tamp.verification.refine import check_run
 from tests.sim.refine.helpers import fast_architecture, short
@@ -102,3 +103,49 @@ def test_record_writes_a_meshcat_animation(tmp_path):
     assert run.recording == str(out)
     text = out.read_text()
     assert "<html" in text.lower() and len(text) > 100_000
+
+
+def test_sensors_sample_at_their_own_rates_and_commands_carry_their_load():
+    """The per-sensor architecture in the Channel: by the tick at 0.99 s (the last one an
+    advance to 1 s handles; the short program's fast motions run at the 10 ms step) the
+    force sensor gave 100 samples (100 Hz), the IMU 199, odometry 50; Robot 2's commands
+    while it drives travel as base commands, Robot 1's while it lowers its lever as plain
+    ones."""
+    from tamp.refine.architecture import COMMAND
+    from tamp.sim.core.runner import make_simulator
+    from tamp.sim.refine.scenario import load_scene
+    from tamp.sim.refine.station import build_station
+
+    arch = load_architecture(path("refine/architecture_per_sensor.yaml"))
+    program = short()
+    cell = build_station(program, arch, load_scene(program.scene))
+    sim = make_simulator(cell.diagram)
+    sim.AdvanceTo(1.0)
+    root = sim.get_context()
+    states = {n: c.state(c.GetMyContextFromRoot(root)) for n, c in cell.channels.items()}
+    assert cell.time_step == 0.01
+    assert states["R1"].samples == (100, 199, 50)  # SENSORS order: force, imu, odometry
+    assert program.robot("R2").behaviors[0].section == "base"
+    assert states["R2"].latest[COMMAND].message.stream == "command.base"
+    assert program.robot("R1").behaviors[0].section == "arm"
+    assert states["R1"].latest[COMMAND].message.stream == COMMAND
+
+
+def test_a_rate_faster_than_the_tick_is_refused():
+    """A command leaves on a tick: Task 4's slow motions run at the chair scene's 20 ms
+    step, where a behavior commanding at 60 Hz is refused before anything runs; the short
+    program's fast motions run at 10 ms (a coarse step only for slow programs)."""
+    from tamp.errors import InfeasibleError
+    from tamp.refine.loader import load_program
+    from tamp.refine.steps import apply_rate
+    from tamp.sim.refine.scenario import load_scene
+    from tamp.sim.refine.station import build_station, time_step
+
+    task4 = load_program("task4")
+    scene = load_scene(task4.scene)
+    assert time_step(task4, scene) == scene.time_step == 0.02
+    assert time_step(short(), scene) == 0.01
+    program = apply_rate(task4, "R1", {"lower_arm": 60.0})  # an arm: its speed stays
+    assert time_step(program, scene) == 0.02
+    with pytest.raises(InfeasibleError, match="at 60 Hz.*20 ms step sends at most 50 Hz"):
+        build_station(program, default_architecture(), scene)
