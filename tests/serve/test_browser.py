@@ -113,7 +113,13 @@ def test_page_drags_plans_and_executes_case2(browser, tmp_path):
         wait_for(lambda: (page_state(browser) or {}).get("steps") == 4, what="four steps")
         browser.find_element(By.ID, "plan").click()
         wait_for(lambda: server_phase(s) == "planned", timeout=15, what="planned")
-        plan = wait_for(lambda: (page_state(browser) or {}).get("plan"), what="plan on the page")
+
+        # the latched "not planned" result is on the page until the new one arrives
+        def planned_on_page():
+            plan = (page_state(browser) or {}).get("plan") or {}
+            return plan if plan.get("success") is True else None
+
+        plan = wait_for(planned_on_page, timeout=15, what="the plan on the page")
         assert plan["plan"]["order"] == ["G1", "G0", "G3", "G2"]
         browser.find_element(By.ID, "execute").click()
         wait_for(lambda: server_phase(s) == "done", timeout=15, what="done")
