@@ -13,6 +13,13 @@ the CPU figure is the refinement's own cost.
 
     python benchmarks/refine.py [--tasks 4 1 2 3] [--category II] [--scale base|all]
                                 [--before DIR] [--out result.json] [--rows rows.jsonl]
+                                [--profile SECONDS]
+
+``--profile`` runs, instead of the refinements, the first seconds of each task's original
+run on each checkout, timed and then under cProfile: sim seconds per CPU second, and the
+share of the profile spent in Drake's own step against the project's Python LeafSystems
+(the channels' queues, the state machines, the sensors, the supervisor, the contact
+monitor).
 
 Prints a table and writes (``--out``) one JSON document with every row, each with the
 whole refinement's JSON (every attempt: what it tried, measured, kept; also a log for
@@ -57,6 +64,46 @@ print(json.dumps({"wall": wall, "cpu": cpu, "refinement": out.to_json(),
 """
 
 
+#: The first seconds of a task's original run under cProfile, in a child process: where the
+#: CPU goes (Drake's C++ step, counted as the simulator's own time, against the Python
+#: LeafSystems' callbacks); prints one JSON line.
+PROFILE = """
+import cProfile, json, pstats, sys, time
+task, seconds = int(sys.argv[1]), float(sys.argv[2])
+from tamp.sim.refine.scenario import load_scenario
+from tamp.sim.refine.simulate import simulate
+s = load_scenario(f"task{task}")
+simulate(s.program, s.architecture, scene=s.scene, max_sim_time=0.1)  # imports, first build
+cpu0 = time.process_time()
+simulate(s.program, s.architecture, scene=s.scene, max_sim_time=seconds)
+cpu = time.process_time() - cpu0
+prof = cProfile.Profile()
+prof.enable()
+simulate(s.program, s.architecture, scene=s.scene, max_sim_time=seconds)
+prof.disable()
+st = pstats.Stats(prof)
+total = sum(v[2] for v in st.stats.values())
+def own(name):
+    return sum(v[2] for k, v in st.stats.items() if name in k[2])
+rows = sorted(((v[3], f"{k[0].rpartition('/')[2]}:{k[2]}") for k, v in st.stats.items()
+               if "tamp" in k[0]), reverse=True)
+top = [[name, round(t / total, 3)] for t, name in rows if "simulate" not in name][:8]
+print(json.dumps({"task": task, "sim_time": seconds, "cpu": cpu,
+                  "advance_own_share": round(own("AdvanceTo") / total, 3),
+                  "python_callbacks_cumulative_share": top}))
+"""
+
+
+def profile_task(n: int, seconds: float, tree: Path) -> dict:
+    """Where the CPU of ``seconds`` of Task ``n``'s original run goes (``PROFILE``)."""
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    cmd = [sys.executable, "-c", PROFILE, str(n), str(seconds)]
+    done = subprocess.run(cmd, env=env, cwd=tree, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise SystemExit(f"profile of task {n} on {tree} failed:\n{done.stderr[-2000:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 def run_task(n: int, category: str | None, scale: str, tree: Path) -> dict:
     """The whole refinement of Task ``n`` on the checkout ``tree``, in a child process."""
     env = dict(os.environ, PYTHONPATH=str(tree))
@@ -87,29 +134,8 @@ def run_task(n: int, category: str | None, scale: str, tree: Path) -> dict:
     }
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--tasks", type=int, nargs="+", default=[4, 1, 2, 3])
-    ap.add_argument("--category", choices=("I", "II", "III"))
-    ap.add_argument("--scale", choices=("base", "all"), default="base", help="Step 3")
-    ap.add_argument("--before", type=Path, help="another checkout to measure beside this one")
-    ap.add_argument("--out", help="write the whole result (JSON) to this file")
-    ap.add_argument("--rows", help="also append each row to this JSON-lines file")
-    args = ap.parse_args()
-    trees = [("before", args.before.resolve())] if args.before else []
-    trees.append(("after" if args.before else "this", HERE))
-    load0 = os.getloadavg()[0]
-    rows = []
-    for n in args.tasks:
-        for label, tree in trees:
-            row = {"label": label, **run_task(n, args.category, args.scale, tree)}
-            rows.append(row)
-            print(
-                f"task {n} {label}: {row['cpu_time']} s CPU, {row['wall_time']} s wall", flush=True
-            )
-            if args.rows:
-                with open(args.rows, "a") as f:
-                    f.write(json.dumps(row) + "\n")
+def table(rows: list[dict]) -> None:
+    """One line per task and checkout."""
     print(
         f"{'task':>4} {'code':>6} {'original':>9} {'parallel':>9} {'speed':>9} {'rate':>9} "
         f"{'Hz':>4} {'ours':>7} {'paper':>7} {'runs':>4} {'sim s':>6} {'CPU s':>6} "
@@ -124,7 +150,40 @@ def main() -> None:
             f" {r['runs']:4d} {r['sim_time']:6.0f} {r['cpu_time']:6.1f} {r['wall_time']:6.1f}"
             f" {r['cpu_realtime_factor']:7.1f}"
         )
-    if args.before:
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tasks", type=int, nargs="+", default=[4, 1, 2, 3])
+    ap.add_argument("--category", choices=("I", "II", "III"))
+    ap.add_argument("--scale", choices=("base", "all"), default="base", help="Step 3")
+    ap.add_argument("--before", type=Path, help="another checkout to measure beside this one")
+    ap.add_argument("--out", help="write the whole result (JSON) to this file")
+    ap.add_argument("--rows", help="also append each row to this JSON-lines file")
+    ap.add_argument(
+        "--profile",
+        type=float,
+        metavar="SECONDS",
+        help="instead: profile this many sim seconds of each task's original run (each tree)",
+    )
+    args = ap.parse_args()
+    trees = [("before", args.before.resolve())] if args.before else []
+    trees.append(("after" if args.before else "this", HERE))
+    load0 = os.getloadavg()[0]
+    rows = []
+    for n in args.tasks if not args.profile else []:
+        for label, tree in trees:
+            row = {"label": label, **run_task(n, args.category, args.scale, tree)}
+            rows.append(row)
+            print(
+                f"task {n} {label}: {row['cpu_time']} s CPU, {row['wall_time']} s wall", flush=True
+            )
+            if args.rows:
+                with open(args.rows, "a") as f:
+                    f.write(json.dumps(row) + "\n")
+    if rows:
+        table(rows)
+    if args.before and rows:
         for n in args.tasks:
             b, a = (
                 next(r for r in rows if r["task"] == n and r["label"] == x)
@@ -136,6 +195,18 @@ def main() -> None:
                 f"{a['wall_time']:.1f} s; phases {list(b['phases'].values())} -> "
                 f"{list(a['phases'].values())}"
             )
+    profiles = []
+    if args.profile:
+        for n in args.tasks:
+            for label, tree in trees:
+                prof = {"label": label, **profile_task(n, args.profile, tree)}
+                profiles.append(prof)
+                print(
+                    f"task {n} {label}: {prof['sim_time']:g} sim s of the original run in "
+                    f"{prof['cpu']:.1f} s CPU ({prof['sim_time'] / prof['cpu']:.1f} sim s/CPU s);"
+                    f" Drake's step (own time) {prof['advance_own_share']:.0%} of the profile;"
+                    f" Python callbacks (cumulative): {prof['python_callbacks_cumulative_share']}"
+                )
     doc = {
         "benchmark": "refine",
         "command": "python " + " ".join(sys.argv),
@@ -143,6 +214,7 @@ def main() -> None:
         "cpus": os.cpu_count(),
         "load_average": [round(load0, 2), round(os.getloadavg()[0], 2)],
         "rows": rows,
+        "profiles": profiles,
     }
     if args.out:
         Path(args.out).write_text(json.dumps(doc, indent=1) + "\n")

@@ -47,6 +47,25 @@ def test_bad_program_exits_2_naming_the_field(tmp_path, capsys):
     assert tamp_main(["refine", "task4", "--gantt", str(tmp_path)]) == 2  # a directory
 
 
+def test_a_bad_architecture_file_exits_2_naming_its_file_and_field(tmp_path, capsys):
+    """The program's architecture file is read by tamp.schema: a sensor rate that is not
+    positive is refused with the architecture file and the dotted field."""
+    import yaml
+
+    from tamp.scenarios import path
+
+    arch = yaml.safe_load(path("refine/architecture_per_sensor.yaml").read_text())
+    arch["sensor_rates_hz"]["odometry"] = 0
+    (tmp_path / "arch.yaml").write_text(yaml.safe_dump(arch))
+    data = task_dict(4)
+    data["architecture"] = "arch.yaml"
+    data["scene"] = str(path("refine/scenes/open_chair.yaml"))
+    assert tamp_main(["refine", str(write(tmp_path, data)), "--json"]) == 2
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["file"] == str(tmp_path / "arch.yaml")
+    assert doc["field"] == "sensor_rates_hz.odometry"
+
+
 def test_a_program_that_cannot_finish_exits_1(tmp_path, capsys):
     data = task_dict(4)
     data["robots"][0]["behaviors"][1]["event"] = {"sensor": "odometry", "reaches": 2.0}
