@@ -71,6 +71,7 @@ def register(subparsers) -> None:
     p.add_argument("--batch-size", type=int, default=16, help="views per step (default 16)")
     p.add_argument("--lr", type=float, default=3e-3, help="peak learning rate (default 3e-3)")
     p.add_argument("--width", type=int, default=16, help="channels of the first stage")
+    p.add_argument("--init", help="start from these weights (same classes and --width)")
     p.add_argument("--device", default="auto", help="auto (a GPU when present), cpu, cuda ...")
     p.add_argument("--threads", type=int, default=0, help="torch CPU threads (0: default)")
     p.add_argument("--seed", type=int, default=0, help="initialisation and batch seed")
@@ -126,6 +127,7 @@ def run_train(args) -> int:
         device=args.device,
         threads=args.threads,
         seed=args.seed,
+        init=args.init,
     )
     summary = train(
         args.data,

@@ -49,6 +49,8 @@ class TrainSettings:
     seed: int = 0
     warmup: int = 100
     weight_decay: float = 1e-4
+    #: a weights file to start from (its classes and width must be the data's and these)
+    init: str | None = None
     #: training crops (width, height) cut at random from each view: half the pixels of a
     #: 160 x 90 view per sample, twice the views per second (the network is convolutional)
     crop: tuple[int, int] = (112, 64)
@@ -122,7 +124,19 @@ def train(
     views = load_views(data, info.train)
     n = len(info.classes)
     weights = torch.tensor(class_weights(views["cls"], n), dtype=torch.float32, device=device)
-    model = SegNet(n, settings.width).to(device)
+    model = SegNet(n, settings.width)
+    if settings.init:
+        from tamp.errors import InputError
+        from tamp.sim.core.segnet import load
+
+        start, start_meta = load(settings.init)
+        if (
+            list(start_meta["classes"]) != list(info.classes)
+            or start_meta["width"] != settings.width
+        ):
+            raise InputError("--init: other classes or width than this run's", file=settings.init)
+        model.load_state_dict(start.state_dict())
+    model = model.to(device)
     opt = torch.optim.AdamW(model.parameters(), lr=settings.lr, weight_decay=settings.weight_decay)
     t0 = time.perf_counter()
     cpu0 = time.process_time()

@@ -25,7 +25,7 @@ def _view():
     probs = np.full((len(NAMES), 60, 80), 0.02, np.float32)
     for c in range(len(NAMES)):
         probs[c][cls_map == c] = 0.9
-    dets = extract(probs, depth, NAMES, [2, 3, 4, 5], INTR, np.eye(4))
+    dets = extract(probs, depth, NAMES, [2, 3, 4, 5], INTR, np.eye(4), min_pixels=8)
     return dets, depth
 
 

@@ -40,7 +40,7 @@ def _scene(second_height: float):
 
 
 def test_touching_objects_of_one_class_split_where_depth_jumps():
-    cls_map, depth = _scene(0.02)
+    cls_map, depth = _scene(0.03)
     found = extract(_probs(cls_map), depth, NAMES, [2, 3, 4], INTR, np.eye(4))
     assert sorted(d.pixels for d in found) == [400, 400]
     assert {d.cls for d in found} == {"block"}
@@ -57,19 +57,40 @@ def test_a_thin_strip_beyond_a_jump_goes_back_to_its_object():
     part of the box, not an instance of its own."""
     depth = np.full((60, 80), 0.5, np.float32)
     cls_map = np.ones((60, 80), int)
-    cls_map[20:40, 10:32] = 2
-    depth[20:40, 10:30] = 0.45
-    depth[20:40, 30:32] = 0.48  # the side: 2 px wide, 3 cm deeper
+    cls_map[20:32, 10:31] = 2
+    depth[20:32, 10:30] = 0.45
+    depth[20:32, 30] = 0.48  # the side: 1 px wide, 3 cm deeper (12 px: below the size rule)
     found = extract(_probs(cls_map), depth, NAMES, [2, 3, 4], INTR, np.eye(4))
-    assert [d.pixels for d in found] == [440]
+    assert [d.pixels for d in found] == [252]
 
 
 def test_low_scores_are_reported_unknown_and_small_blobs_dropped():
-    cls_map, depth = _scene(0.02)
+    cls_map, depth = _scene(0.03)
     probs = _probs(cls_map, p=0.3)
     cls_map[50:52, 60:62] = 2  # 4 px: below the size rule
     found = extract(probs, depth, NAMES, [2, 3, 4], INTR, np.eye(4), unknown_below=0.5)
     assert {d.cls for d in found} == {"unknown"} and len(found) == 2
+
+
+def test_touching_objects_of_two_classes_at_one_height_split_by_class():
+    cls_map, depth = _scene(0.0)
+    cls_map[20:40, 30:50] = 3  # the second patch is 'unknown'
+    found = extract(_probs(cls_map), depth, NAMES, [2, 3, 4], INTR, np.eye(4))
+    assert sorted((d.cls, d.pixels) for d in found) == [("block", 400), ("unknown", 400)]
+    cls_map[28:31, 38:41] = 2  # a flicker of 'block' inside the second object
+    found = extract(_probs(cls_map), depth, NAMES, [2, 3, 4], INTR, np.eye(4))
+    assert sorted(d.cls for d in found) == ["block", "unknown"]
+
+
+def test_a_class_flickering_inside_one_object_does_not_split_it():
+    depth = np.full((60, 80), 0.5, np.float32)
+    cls_map = np.ones((60, 80), int)
+    cls_map[20:40, 10:30] = 2
+    depth[20:40, 10:30] = 0.47
+    cls_map[25:28, 15:18] = 3  # 9 px of 'unknown' inside the block
+    probs = _probs(cls_map)
+    (d,) = extract(probs, depth, NAMES, [2, 3, 4], INTR, np.eye(4))
+    assert d.cls == "block" and d.pixels == 400
 
 
 def test_points_and_centroid_are_in_the_world_frame():
@@ -104,4 +125,4 @@ def test_depth_jumps_mark_both_sides():
     d[:, 2:] = 0.9
     e = depth_jumps(d, 0.01)
     assert e[:, 1].all() and e[:, 2].all() and not e[:, 0].any() and not e[:, 3].any()
-    assert len(split_at_jumps(np.ones((3, 4), bool), d, min_pixels=3)) == 2
+    assert len(split_at_jumps(np.ones((3, 4), bool), d, jump=0.01, min_pixels=3)) == 2

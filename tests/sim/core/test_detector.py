@@ -1,0 +1,162 @@
+"""The detector: a tiny model trains and is scored through the command line; the shipped
+weights are small, record their split, find the catalogue's objects in scenes rendered from a
+seed training never used, work at the wrist camera's full size, and never give a task class
+to an object they were not trained on."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from tamp.commands.detect import default_weights, workcell_catalogue
+from tamp.commands.main import main as tamp_main
+from tamp.sim.core import segdata as sd
+from tamp.sim.core.detector import Detector
+from tamp.sim.core.segtrain import Tally, report, score_view, true_instances
+
+UNKNOWN_SDF = Path(__file__).parent / "data" / "unknown_dumbbell.sdf"
+
+
+@pytest.fixture(scope="module")
+def catalogue():
+    return workcell_catalogue()
+
+
+@pytest.fixture(scope="module")
+def detector() -> Detector:
+    torch.set_num_threads(1)
+    return Detector.load()
+
+
+def test_a_tiny_model_trains_and_is_scored_through_the_command_line(tmp_path, capsys):
+    """render (3 scenes, 1 view) -> train (5 steps) -> eval, each with --json (schema 1)."""
+    data, run = tmp_path / "data", tmp_path / "run"
+    assert tamp_main(["detect", "render", str(data), "--scenes", "3", "--views", "1",
+                      "--seed", "4", "--json"]) == 0  # fmt: skip
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["schema"] == 1 and doc["views"] == 3
+    assert tamp_main(["detect", "train", str(data), "--out", str(run), "--steps", "5",
+                      "--batch-size", "2", "--width", "4", "--threads", "1", "--quiet",
+                      "--json"]) == 0  # fmt: skip
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["schema"] == 1 and doc["steps"] == 5 and doc["device"] in ("cpu", "cuda")
+    assert doc["split"]["kind"] == "object" and doc["split"]["scenes"] == 3
+    weights = run / "final.pt"
+    meta = torch.load(weights, weights_only=True)["meta"]
+    assert meta["classes"] == list(sd.class_names(workcell_catalogue()[0]))
+    assert meta["size"] == [160, 90] and meta["width"] == 4
+    # score on the training scenes too (the test part of 3 scenes may be empty)
+    info = sd.read_info(data)
+    assert len(info.train) + len(info.test) == 3
+    assert tamp_main(["detect", "eval", str(weights), str(data), "--out", str(tmp_path),
+                      "--json"]) == 0  # fmt: skip
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["schema"] == 1 and doc["views"] == len(info.test)
+    assert (tmp_path / "detector_eval.json").is_file()
+
+
+def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
+    assert tamp_main(["detect", "train", str(tmp_path), "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert "dataset.json" in err and "Traceback" not in err
+    assert tamp_main(["detect", "render", str(tmp_path), "--scenes", "0"]) == 2
+    junk = tmp_path / "junk.pt"
+    junk.write_bytes(b"not torch")
+    sd_dir = tmp_path / "d"
+    sd_dir.mkdir()
+    (sd_dir / sd.DATASET_FILE).write_text("{}")
+    assert tamp_main(["detect", "eval", str(junk), str(sd_dir)]) == 2
+
+
+def test_the_shipped_weights_are_small_and_record_their_split(detector, catalogue):
+    path = default_weights()
+    assert path.stat().st_size < 2_000_000
+    meta = detector.meta
+    assert list(meta["classes"]) == list(sd.class_names(catalogue[0]))
+    split = meta["split"]
+    assert split["kind"] == "object" and split["test_scenes"] > 0
+    assert split["unknown_test_kinds"] == list(sd.UNKNOWN_TEST_KINDS)
+    assert meta["parameters"] < 500_000
+
+
+def _views(scene, catalogue, cfg: sd.DataConfig):
+    classes, fixtures = catalogue
+    return sd.render_scene(scene, classes, fixtures, cfg)
+
+
+def test_the_shipped_weights_count_scenes_from_an_unseen_seed(detector, catalogue):
+    """Eight scenes of seed 99 (training used seed 0): the instances found with their class,
+    how well their masks fit, and how few are invented."""
+    classes, _ = catalogue
+    cfg = sd.DataConfig(views=2)
+    tally = Tally(list(detector.classes))
+    for s in range(8):
+        scene = sd.sample_scene(np.random.default_rng((99, s)), classes, cfg, "test")
+        for v in _views(scene, catalogue, cfg):
+            K = v.K
+            found = detector.detect(v.rgb, v.depth, (K[0, 0], K[1, 1], K[0, 2], K[1, 2]), v.X_WC)
+            truth, small = true_instances(v.inst, v.inst_cls, detector.min_pixels)
+            score_view(tally, found, truth, small)
+    r = report(tally)
+    assert r["views"] == 16
+    true_instances_total = sum(sum(row) for row in r["confusion"]["matrix"][:-1])
+    # found with their own class and a mask IoU >= 0.5 (the benchmark's figure on the
+    # held-out test scenes is the reference; this guards against a broken detector)
+    assert r["matched_instances"] >= 0.4 * true_instances_total
+    assert r["mask_iou_matched"] > 0.7
+    assert r["false_positives_per_view"] < 2.0
+
+
+def test_full_size_images_give_full_size_masks_and_world_points(detector, catalogue):
+    """A 320 x 180 image (the LOTS wrist camera) is subsampled for the network; masks come
+    back at 320 x 180 and points lie where the 160 x 90 detection puts them."""
+    classes, _ = catalogue
+    scene = sd.sample_scene(np.random.default_rng((98, 0)), classes, sd.DataConfig(views=1), "test")
+    (v,) = _views(scene, catalogue, sd.DataConfig(views=1))
+    K = v.K
+    intr = (K[0, 0], K[1, 1], K[0, 2], K[1, 2])
+    small = detector.detect(v.rgb, v.depth, intr, v.X_WC)
+    big = detector.detect(
+        v.rgb.repeat(2, 0).repeat(2, 1),
+        v.depth.repeat(2, 0).repeat(2, 1),
+        (2 * intr[0], 2 * intr[1], 2 * intr[2] + 0.5, 2 * intr[3] + 0.5),
+        v.X_WC,
+    )
+    assert small and len(big) == len(small)
+    for a, b in zip(sorted(small, key=lambda d: d.u), sorted(big, key=lambda d: d.u), strict=True):
+        assert b.mask.shape == (180, 320) and b.cls == a.cls
+        assert b.pixels == 4 * a.pixels
+        assert np.allclose(a.centroid, b.centroid, atol=0.005)
+
+
+def test_an_object_the_detector_never_saw_is_unknown_or_ignored(detector, catalogue):
+    """A test-only shape (a dumbbell, ``tests/sim/core/data/unknown_dumbbell.sdf``) beside
+    catalogue objects, in twelve views: no detection of a task class lies mostly on it."""
+    classes, fixtures = catalogue
+    dumbbell = sd.object_class("dumbbell", UNKNOWN_SDF)
+    cfg = sd.DataConfig(views=3)
+    names = list(detector.classes)
+    reported = []
+    for s in range(4):
+        scene = sd.sample_scene(np.random.default_rng((97, s)), classes, cfg, "test")
+        items = [i for i in scene.items if i.cls != sd.UNKNOWN][:2]
+        thing = sd.Item(sd.UNKNOWN, dumbbell.visuals, 0.0, 0.0, 0.3 * s)
+        for i, it in enumerate(items):  # make room at the origin
+            items[i] = sd.Item(it.cls, it.visuals, 0.18 * (1 if i else -1), 0.1, it.yaw)
+        cams = sd.sample_cameras(np.random.default_rng(s), [thing], cfg, 0.05)
+        scene = sd.Scene(tuple([thing, *items]), (), scene.table_rgba, scene.lights, None,
+                         tuple(cams))  # fmt: skip
+        for v in sd.render_scene(scene, classes, fixtures, cfg):
+            ids = [k for k in np.unique(v.inst)[1:] if names[v.inst_cls[k]] == sd.UNKNOWN]
+            if not ids:
+                continue
+            mask = v.inst == ids[0]
+            K = v.K
+            for d in detector.detect(v.rgb, v.depth, (K[0, 0], K[1, 1], K[0, 2], K[1, 2]), v.X_WC):
+                if (d.mask & mask).sum() > 0.5 * d.mask.sum():
+                    reported.append(d.cls)
+    assert all(c in (sd.UNKNOWN, sd.HAND) for c in reported), reported
