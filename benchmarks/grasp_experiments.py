@@ -10,7 +10,8 @@ Sets (one pick per scene, seeded; every method sees the same scenes):
 - ``moving``: the ``random`` scene whose target is carried across the table during the
   descent: from 1.5 s to 4.5 s after the pick starts it moves at 2 cm/s in a direction
   drawn by ``default_rng((3, s))`` that keeps it inside W^A and clear of the distractor (the
-  benchmark sets its pose and velocity on the plant every 20 ms: a conveyor, not a hand).
+  benchmark sets its pose and velocity on the plant every 20 ms: a conveyor, not a hand),
+  and stops early when the fingers come within 12 cm of the table (`RELEASE_Z`).
 
 Methods: ``hrgnet``, ``grconvnet``, ``ggcnn`` (the shipped weights, post-processing on: the
 cell's default), and the controls ``mask_axis`` (no network: grasps across the target
@@ -66,6 +67,8 @@ REFERENCE = "hrgnet"
 #: the moving target: when it moves (s after the pick starts), how fast (m/s), how often
 #: its pose is set (s)
 MOVE_FROM, MOVE_TO, MOVE_SPEED, MOVE_TICK = 1.5, 4.5, 0.02, 0.02
+#: ... and it stops early when the fingers come lower than this over the table (m)
+RELEASE_Z = 0.12
 #: clutter: how many objects, how far apart their footprints at least and at most (m)
 CLUTTER_COUNT = (5, 8)
 TOUCH_GAP = (0.003, 0.008)
@@ -178,12 +181,9 @@ def make(set_name: str, base, seed: int, bench):
 # ---- one pick -----------------------------------------------------------------------------
 def run_pick(scene, target: str, uid: str, method: str, velocity, timeout: float) -> dict:
     """One ``Pick(target)`` with ``method`` (module docstring); what happened and its cost."""
-    from pydrake.math import RigidTransform
-    from pydrake.multibody.math import SpatialVelocity
 
     from tamp.sim.lots.driver import CellDriver
     from tamp.sim.lots.station import build_station
-    from tamp.world.interface import Status
 
     predictor, network, post = METHODS[method]
     grasp = dataclasses.replace(
@@ -194,28 +194,31 @@ def run_pick(scene, target: str, uid: str, method: str, velocity, timeout: float
     plant, body = cell.plant, cell.cell.bodies[uid]
     w0, c0, t0 = time.perf_counter(), time.process_time(), driver.context.get_time()
     h = driver.start(f"Pick({target})")
-    origin = None
-    while driver.poll(h) is Status.RUNNING:
-        el = driver.context.get_time() - t0
-        if el > timeout:
-            driver.cancel(h)
-            break
-        if velocity and MOVE_FROM <= el <= MOVE_TO:
-            ctx = driver.plant_context()
-            X = plant.EvalBodyPoseInWorld(ctx, body)
-            if origin is None:
-                origin = X.translation().copy()
-            p = origin + (el - MOVE_FROM) * np.array([velocity[0], velocity[1], 0.0])
-            p[2] = X.translation()[2]
-            plant.SetFreeBodyPose(ctx, body, RigidTransform(X.rotation(), p))
-            moving = el < MOVE_TO - MOVE_TICK  # at rest after the last tick
-            v = np.array([velocity[0], velocity[1], 0.0]) if moving else np.zeros(3)
-            plant.SetFreeBodySpatialVelocity(ctx, body, SpatialVelocity(np.zeros(3), v))
+    crash = None
+    try:
+        _poll(driver, h, t0, timeout, velocity, plant, body, cell)
+    except RuntimeError as exc:  # the contact solver failed (a NaN): a failed pick, recorded
+        crash = str(exc).split(". ")[0]
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0
     status = driver.status()
     sim = driver.context.get_time() - t0
-    z = float(plant.EvalBodyPoseInWorld(driver.plant_context(), body).translation()[2])
     s = driver.skill_state()
+    if crash is not None:
+        return {
+            "success": False,
+            "status": "CRASH",
+            "detail": f"{crash} (at {sim:.2f} s, step {s.steps[0].kind if s.steps else None})",
+            "cause": "crash",
+            "target_z": None,
+            "sim_time": timeout,  # counted as a pick that timed out
+            "attempts": s.grasp_attempts,
+            "views": cell.planner.calls,
+            "first_commit": None,
+            "commits": 0,
+            "cpu_time": round(cpu, 2),
+            "wall_time": round(wall, 2),
+        }
+    z = float(plant.EvalBodyPoseInWorld(driver.plant_context(), body).translation()[2])
     commits = [t - t0 for t, m in s.log if m.startswith("commit after")]
     return {
         "success": status.status.value == "SUCCESS" and z > LIFTED,
@@ -231,6 +234,39 @@ def run_pick(scene, target: str, uid: str, method: str, velocity, timeout: float
         "cpu_time": round(cpu, 2),
         "wall_time": round(wall, 2),
     }
+
+
+def _poll(driver, h, t0, timeout, velocity, plant, body, cell) -> None:
+    """Poll the pick to its end (or ``timeout``), carrying the moving target (module
+    docstring) when ``velocity`` is given."""
+    from pydrake.math import RigidTransform
+    from pydrake.multibody.math import SpatialVelocity
+
+    from tamp.world.interface import Status
+
+    origin = None
+    while driver.poll(h) is Status.RUNNING:
+        el = driver.context.get_time() - t0
+        if el > timeout:
+            driver.cancel(h)
+            break
+        if velocity and MOVE_FROM <= el <= MOVE_TO and origin is not False:
+            ctx = driver.plant_context()
+            if cell.skills.kin.tcp_pose(driver.skill_state().q).translation()[2] < RELEASE_Z:
+                # the fingers are coming down on it: the conveyor lets go (a pose set into
+                # the closing fingers makes the contact solver fail, not the grasp)
+                plant.SetFreeBodySpatialVelocity(ctx, body, SpatialVelocity.Zero())
+                origin = False
+                continue
+            X = plant.EvalBodyPoseInWorld(ctx, body)
+            if origin is None:
+                origin = X.translation().copy()
+            p = origin + (el - MOVE_FROM) * np.array([velocity[0], velocity[1], 0.0])
+            p[2] = X.translation()[2]
+            plant.SetFreeBodyPose(ctx, body, RigidTransform(X.rotation(), p))
+            moving = el < MOVE_TO - MOVE_TICK  # at rest after the last tick
+            v = np.array([velocity[0], velocity[1], 0.0]) if moving else np.zeros(3)
+            plant.SetFreeBodySpatialVelocity(ctx, body, SpatialVelocity(np.zeros(3), v))
 
 
 LIFTED = 0.05  # m above the table: the plant's verdict that the target was picked
@@ -312,7 +348,9 @@ def markdown(rows: list[dict]) -> str:
             ds = dt = "—"
             if "success_diff" in r:
                 m, a, b = r["success_diff"]
-                ds = f"{m * 100:+.0f} pp ({a * 100:+.0f}, {b * 100:+.0f})"
+                ds = f"{m * 100:+.0f} pp ({a * 100:+.0f}, {b * 100:+.0f})" + (
+                    "" if r["success_diff_significant"] else " n.s."
+                )
                 m, a, b = r["time_diff"]
                 dt = f"{m:+.2f} ({a:+.2f}, {b:+.2f})" + (
                     "" if r["time_diff_significant"] else " n.s."
@@ -348,6 +386,7 @@ def main() -> int:
     ap.add_argument("--pick-timeout", type=float, default=60.0, help="sim seconds per pick")
     ap.add_argument("--tables-only", action="store_true", help="print --out's tables; run nothing")
     ap.add_argument("--threads", type=int, default=1, help="torch threads")
+    ap.add_argument("--note", default="", help="stored in --out (e.g. the commit the run used)")
     args = ap.parse_args()
     if args.scenes < 1:
         ap.error("--scenes: expected at least 1")
@@ -377,6 +416,7 @@ def main() -> int:
             f"--{k.replace('_', '-')} {' '.join(map(str, v)) if isinstance(v, list) else v}"
             for k, v in (("scenes", args.scenes), ("sets", args.sets), ("methods", args.methods))
         ),
+        "note": args.note,
         "cell": "tower",
         "descent": dataclasses.asdict(base.grasp.descent),
         "machine": f"{platform.machine()} {os.cpu_count()} cpus (shared)",
@@ -388,13 +428,7 @@ def main() -> int:
             for method in args.methods:
                 if (set_name, method, s) in done:
                     continue
-                try:
-                    p = run_pick(scene, target, uid, method, velocity, args.pick_timeout)
-                except RuntimeError as exc:  # a physics blow-up: a failed pick, recorded
-                    p = {"success": False, "status": "CRASH", "detail": str(exc)[:200]}
-                    p |= dict.fromkeys(("cause", "target_z", "first_commit"), None)
-                    p |= {"sim_time": args.pick_timeout, "attempts": 0, "views": 0}
-                    p |= {"commits": 0, "cpu_time": 0.0, "wall_time": 0.0}
+                p = run_pick(scene, target, uid, method, velocity, args.pick_timeout)
                 p |= {
                     "set": set_name,
                     "scene": s,
