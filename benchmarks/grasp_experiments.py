@@ -26,7 +26,7 @@ start to end, retries included (failed picks count with their time). Tables: suc
 (Wilson 95 % interval), mean sim time per pick, and per method the paired per-scene
 difference to HRG-Net (success in percentage points, time in seconds) with a bootstrap 95 %
 interval over scenes (10 000 resamples, seed 0); an interval that holds zero is "no
-significant difference".
+significant difference", and below 10 paired scenes no claim is made either way.
 
     python benchmarks/grasp_experiments.py [--scenes 30] [--sets clutter random moving]
         [--methods hrgnet ...] [--out benchmarks/results/grasp_experiments.json] [--resume]
@@ -73,6 +73,9 @@ RELEASE_Z = 0.12
 CLUTTER_COUNT = (5, 8)
 TOUCH_GAP = (0.003, 0.008)
 BOOTSTRAP = 10_000
+#: fewer paired scenes than this make no claim either way: a percentile bootstrap over a
+#: handful of scenes gives intervals that are too narrow (a single scene: a point)
+MIN_PAIRS = 10
 OUT = Path(__file__).with_name("results") / "grasp_experiments.json"
 
 
@@ -314,6 +317,8 @@ def tables(picks: list[dict]) -> list[dict]:
                 "committed_share": round(
                     float(np.mean([p["first_commit"] is not None for p in mine])), 3
                 ),
+                "mean_first_commit": _mean([p["first_commit"] for p in mine]),
+                "crashes": sum(p["status"] == "CRASH" for p in mine),
             }
             pairs = [(p, by.get((set_name, REFERENCE, p["scene"]))) for p in mine]
             pairs = [(p, r) for p, r in pairs if r is not None]
@@ -323,10 +328,25 @@ def tables(picks: list[dict]) -> list[dict]:
                 row["paired_scenes"] = len(pairs)
                 row["success_diff"] = [round(v, 3) for v in ds]
                 row["time_diff"] = [round(v, 2) for v in dt]
-                row["time_diff_significant"] = not (dt[1] <= 0.0 <= dt[2])
-                row["success_diff_significant"] = not (ds[1] <= 0.0 <= ds[2])
+                enough = len(pairs) >= MIN_PAIRS
+                row["time_diff_significant"] = enough and not (dt[1] <= 0.0 <= dt[2])
+                row["success_diff_significant"] = enough and not (ds[1] <= 0.0 <= ds[2])
             rows.append(row)
     return rows
+
+
+def _claim(row: dict, what: str) -> str:
+    """What a difference's interval allows: nothing below `MIN_PAIRS` scenes, "n.s." when it
+    holds zero, else nothing added (significant)."""
+    if row["paired_scenes"] < MIN_PAIRS:
+        return f" (n = {row['paired_scenes']} < {MIN_PAIRS}: no claim)"
+    return "" if row[f"{what}_diff_significant"] else " n.s."
+
+
+def _mean(values) -> float | None:
+    """Mean of the values that are not None (rounded), None when there are none."""
+    xs = [v for v in values if v is not None]
+    return round(float(np.mean(xs)), 2) if xs else None
 
 
 def markdown(rows: list[dict]) -> str:
@@ -338,26 +358,25 @@ def markdown(rows: list[dict]) -> str:
             continue
         out.append(f"\n**{set_name}**\n")
         out.append(
-            "| method | scenes | success (95 % CI) | s per pick | views per pick | "
+            "| method | scenes | success (95 % CI) | s per pick | views per pick | commit at s | "
             f"Δ success vs {REFERENCE} (95 % CI) | Δ s per pick vs {REFERENCE} (95 % CI) |"
         )
-        out.append("|---|---:|---|---:|---:|---|---|")
+        out.append("|---|---:|---|---:|---:|---:|---|---|")
         for r in mine:
             lo, hi = r["success_ci"]
             s = f"{r['successes']}/{r['scenes']} ({lo * 100:.0f}–{hi * 100:.0f} %)"
+            if r["crashes"]:
+                s += f", {r['crashes']} crashed"
+            commit = "—" if r["mean_first_commit"] is None else f"{r['mean_first_commit']:.2f}"
             ds = dt = "—"
             if "success_diff" in r:
                 m, a, b = r["success_diff"]
-                ds = f"{m * 100:+.0f} pp ({a * 100:+.0f}, {b * 100:+.0f})" + (
-                    "" if r["success_diff_significant"] else " n.s."
-                )
+                ds = f"{m * 100:+.0f} pp ({a * 100:+.0f}, {b * 100:+.0f})" + _claim(r, "success")
                 m, a, b = r["time_diff"]
-                dt = f"{m:+.2f} ({a:+.2f}, {b:+.2f})" + (
-                    "" if r["time_diff_significant"] else " n.s."
-                )
+                dt = f"{m:+.2f} ({a:+.2f}, {b:+.2f})" + _claim(r, "time")
             out.append(
                 f"| {r['method']} | {r['scenes']} | {s} | {r['mean_pick_time']:.2f} | "
-                f"{r['mean_views']:.1f} | {ds} | {dt} |"
+                f"{r['mean_views']:.1f} | {commit} | {ds} | {dt} |"
             )
     return "\n".join(out)
 
@@ -384,7 +403,9 @@ def main() -> int:
     ap.add_argument("--out", type=Path, default=OUT, help="the per-scene JSON (and tables)")
     ap.add_argument("--resume", action="store_true", help="keep --out's picks; run the rest")
     ap.add_argument("--pick-timeout", type=float, default=60.0, help="sim seconds per pick")
-    ap.add_argument("--tables-only", action="store_true", help="print --out's tables; run nothing")
+    ap.add_argument(
+        "--tables-only", action="store_true", help="recompute and print --out's tables; run nothing"
+    )
     ap.add_argument("--threads", type=int, default=1, help="torch threads")
     ap.add_argument("--note", default="", help="stored in --out (e.g. the commit the run used)")
     args = ap.parse_args()
@@ -393,11 +414,14 @@ def main() -> int:
     picks: list[dict] = []
     if (args.resume or args.tables_only) and args.out.is_file():
         try:
-            picks = json.loads(args.out.read_text())["picks"]
+            doc = json.loads(args.out.read_text())
+            picks = doc["picks"]
         except (ValueError, KeyError) as exc:
             print(f"{args.out}: picks: not a grasp_experiments result ({exc})")
             return 2
-    if args.tables_only:
+    if args.tables_only:  # the tables again from the picks (rewritten into --out)
+        if picks:
+            write(args.out, picks, {k: v for k, v in doc.items() if k not in ("rows", "picks")})
         print(markdown(tables(picks)))
         return 0
 

@@ -81,20 +81,27 @@ def test_paired_bootstrap(bench):
 
 def test_tables_pair_scenes_with_the_reference(bench):
     def pick(method, scene, ok, t):
-        return {"set": "random", "method": method, "scene": scene, "success": ok,
+        return {"set": "random", "method": method, "scene": scene, "success": ok, "status": "",
                 "sim_time": t, "views": 5, "first_commit": 2.0}  # fmt: skip
 
-    picks = [pick("hrgnet", s, True, 10.0 + s) for s in range(4)]
-    picks += [pick("ggcnn", s, s != 0, 12.0 + s) for s in range(4)]
-    picks += [pick("mask_axis", s, True, 10.0 + s + (0.5 if s % 2 else -0.5)) for s in range(4)]
+    n = bench.MIN_PAIRS
+    picks = [pick("hrgnet", s, True, 10.0 + s) for s in range(n)]
+    picks += [pick("ggcnn", s, s != 0, 12.0 + s) for s in range(n)]
+    picks += [pick("mask_axis", s, True, 10.0 + s + (0.5 if s % 2 else -0.5)) for s in range(n)]
     rows = {r["method"]: r for r in bench.tables(picks)}
     assert "success_diff" not in rows["hrgnet"]
     g = rows["ggcnn"]
-    assert g["successes"] == 3 and g["paired_scenes"] == 4
+    assert g["successes"] == n - 1 and g["paired_scenes"] == n
     assert g["time_diff"][0] == pytest.approx(2.0) and g["time_diff_significant"]
-    assert g["success_diff"][0] == pytest.approx(-0.25)
+    assert g["success_diff"][0] == pytest.approx(-1 / n)
     assert not rows["mask_axis"]["time_diff_significant"]
     assert "n.s." in bench.markdown(list(rows.values()))
+    # fewer paired scenes: no claim, even for a constant difference
+    few = [p for p in picks if p["scene"] < 3]
+    rows = {r["method"]: r for r in bench.tables(few)}
+    assert rows["ggcnn"]["time_diff"] == [2.0, 2.0, 2.0]
+    assert not rows["ggcnn"]["time_diff_significant"]
+    assert "no claim" in bench.markdown(list(rows.values()))
 
 
 def test_the_committed_results_hold_their_tables(bench):
