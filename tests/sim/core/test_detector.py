@@ -49,6 +49,14 @@ def test_a_tiny_model_trains_and_is_scored_through_the_command_line(tmp_path, ca
     meta = torch.load(weights, weights_only=True)["meta"]
     assert meta["classes"] == list(sd.class_names(workcell_catalogue()[0]))
     assert meta["size"] == [160, 90] and meta["width"] == 4
+    # more steps from those weights (--init); another width is refused naming the file
+    assert tamp_main(["detect", "train", str(data), "--out", str(tmp_path / "more"), "--steps",
+                      "2", "--batch-size", "2", "--width", "4", "--init", str(weights),
+                      "--threads", "1", "--quiet"]) == 0  # fmt: skip
+    capsys.readouterr()
+    assert tamp_main(["detect", "train", str(data), "--out", str(tmp_path / "bad"), "--steps",
+                      "2", "--width", "8", "--init", str(weights), "--quiet"]) == 2  # fmt: skip
+    assert "final.pt: --init" in capsys.readouterr().err
     # score on the training scenes too (the test part of 3 scenes may be empty)
     info = sd.read_info(data)
     assert len(info.train) + len(info.test) == 3
