@@ -9,14 +9,15 @@ arm's kinematics. Its output per view is a list of `ObjectDetection` (class or `
 score, mask, pixel centroid, 3-D centroid and world-frame points).
 
 Resolution: the network runs at the resolution it was trained at (the weights record it:
-160 x 90, half the LOTS wrist camera's 320 x 180, which keeps one frame under 20 ms of one
+160 x 90, half the LOTS wrist camera's 320 x 180, which keeps one frame near 20 ms of one
 CPU core). A larger image whose size is an integer multiple of it is subsampled for the
-network, and the class map is scaled back up (nearest), so masks, centroids and points are at
-the image's own resolution and depth.
+network and the instance extraction; the masks are scaled back up (nearest), and points,
+centroids and depths are taken from the image's own depth at its own resolution.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -28,6 +29,7 @@ from tamp.sim.core.instances import (
     MIN_PIXELS,
     UNKNOWN_BELOW,
     ObjectDetection,
+    backproject_mask,
     extract,
 )
 from tamp.sim.core.segdata import STUFF
@@ -77,12 +79,16 @@ class Detector:
         return 1
 
     @torch.no_grad()
+    def _network(self, rgb: np.ndarray, depth: np.ndarray, k: int) -> np.ndarray:
+        """Class probabilities (C x H/k x W/k) of the image subsampled by ``k``."""
+        x = prepare(rgb[::k, ::k], depth[::k, ::k])
+        logits = self.model(torch.from_numpy(x)[None].to(self.device))[0]
+        return torch.softmax(logits, dim=0).cpu().numpy()
+
     def probabilities(self, rgb: np.ndarray, depth: np.ndarray) -> np.ndarray:
         """Class probabilities (C x H x W) at the image's resolution."""
         k = self._factor(depth.shape)
-        x = prepare(rgb[::k, ::k], depth[::k, ::k])
-        logits = self.model(torch.from_numpy(x)[None].to(self.device))[0]
-        probs = torch.softmax(logits, dim=0).cpu().numpy()
+        probs = self._network(rgb, depth, k)
         if k > 1:
             probs = probs.repeat(k, axis=1).repeat(k, axis=2)
         return probs
@@ -92,17 +98,46 @@ class Detector:
     ) -> list[ObjectDetection]:
         """The objects in one view: ``rgb`` (H x W x 3 or 4, uint8), ``depth`` (H x W,
         metres), ``intrinsics`` (fx, fy, cx, cy) of this image, ``X_WC`` the camera pose
-        (4 x 4 or a Drake ``RigidTransform``) from the arm's kinematics."""
-        probs = self.probabilities(rgb, depth)
+        (4 x 4 or a Drake ``RigidTransform``) from the arm's kinematics.
+
+        An image ``k`` times the network's size is segmented and split into instances at the
+        network's size (on the subsampled depth); each mask is then scaled up ``k`` times and
+        its points and centroid are taken from the full-size depth."""
         k = self._factor(depth.shape)
-        return extract(
+        probs = self._network(rgb, depth, k)
+        fx, fy, cx, cy = intrinsics
+        found = extract(
             probs,
-            depth,
+            depth[::k, ::k],
             self.classes,
             self.objects,
-            intrinsics,
+            (fx / k, fy / k, cx / k, cy / k),
             X_WC,
             jump=self.jump,
-            min_pixels=self.min_pixels * k * k,
+            min_pixels=self.min_pixels,
             unknown_below=self.unknown_below,
         )
+        if k == 1:
+            return found
+        h, w = depth.shape
+        depth = np.where(np.isfinite(depth), depth, 0.0)
+        out = []
+        for d in found:
+            mask = d.mask.repeat(k, axis=0).repeat(k, axis=1)[:h, :w]
+            points = backproject_mask(mask, depth, intrinsics, X_WC)
+            if points.shape[1] == 0:
+                continue
+            vs, us = np.nonzero(mask)
+            valid = depth[mask]
+            out.append(
+                dataclasses.replace(
+                    d,
+                    mask=mask,
+                    points=points,
+                    centroid=tuple(float(x) for x in np.median(points, axis=1)),
+                    u=float(us.mean()),
+                    v=float(vs.mean()),
+                    depth=float(np.median(valid[valid > 0])),
+                )
+            )
+        return out
