@@ -13,13 +13,17 @@ the CPU figure is the refinement's own cost.
 
     python benchmarks/refine.py [--tasks 4 1 2 3] [--category II] [--scale base|all]
                                 [--before DIR] [--out result.json] [--rows rows.jsonl]
-                                [--profile SECONDS]
+                                [--profile SECONDS] [--rates ARCHITECTURE]
 
 ``--profile`` runs, instead of the refinements, the first seconds of each task's original
 run on each checkout, timed and then under cProfile: sim seconds per CPU second, and the
 share of the profile spent in Drake's own step against the project's Python LeafSystems
 (the channels' queues, the state machines, the sensors, the supervisor, the contact
 monitor).
+
+``--rates FILE`` prints, instead, Fig. 5's rate per behavior of each task's program in every
+category under the architecture file (`tamp.refine.architecture.behavior_searches`: the
+queue model, no simulation): what that modelled architecture predicts.
 
 Prints a table and writes (``--out``) one JSON document with every row, each with the
 whole refinement's JSON (every attempt: what it tried, measured, kept; also a log for
@@ -134,6 +138,20 @@ def run_task(n: int, category: str | None, scale: str, tree: Path) -> dict:
     }
 
 
+def print_rates(tasks: list[int], file: Path) -> None:
+    """Fig. 5 per behavior on the queue model of ``file``, per task and category."""
+    from tamp.refine.architecture import behavior_searches, load_architecture
+    from tamp.refine.loader import load_program
+
+    arch = load_architecture(file)
+    for n in tasks:
+        program = load_program(f"task{n}")
+        for cat in ("I", "II", "III"):
+            found = behavior_searches(program.with_category(cat), arch)
+            rates = ", ".join(f"{k} {s.found:g}" for k, s in found.items())
+            print(f"task {n} Category {cat} ({arch.name}): {rates} Hz")
+
+
 def table(rows: list[dict]) -> None:
     """One line per task and checkout."""
     print(
@@ -166,7 +184,10 @@ def main() -> None:
         metavar="SECONDS",
         help="instead: profile this many sim seconds of each task's original run (each tree)",
     )
+    ap.add_argument("--rates", type=Path, help="instead: each behavior's rate under this file")
     args = ap.parse_args()
+    if args.rates:
+        return print_rates(args.tasks, args.rates)
     trees = [("before", args.before.resolve())] if args.before else []
     trees.append(("after" if args.before else "this", HERE))
     load0 = os.getloadavg()[0]
