@@ -36,6 +36,7 @@ def workcell_catalogue():
         hand_link=ARM.hand_body,
         finger_links=ARM.finger_bodies,
         camera_frame=ARM.camera_frame,
+        tcp_frame=ARM.tcp_frame,
         person_link=PERSON.hand_body,
     )
     return classes, fixtures

@@ -198,11 +198,13 @@ def object_class(
 @dataclass(frozen=True)
 class Fixtures:
     """What the scenes show besides objects: the gripper's visuals in the camera frame (the
-    hand's and fingers' links posed by the camera mount, fingers open ``opening`` each), and
-    the person's hand visuals in its own frame."""
+    hand's and fingers' links posed by the camera mount, fingers open ``opening`` each), the
+    pose ``X_CT`` (4x4) of the gripper's TCP frame in the camera frame (where a held object
+    hangs), and the person's hand visuals in its own frame."""
 
     gripper: tuple[Visual, ...] = ()
     hand: tuple[Visual, ...] = ()
+    X_CT: np.ndarray = field(default_factory=lambda: np.eye(4))
 
 
 def read_fixtures(
@@ -212,6 +214,7 @@ def read_fixtures(
     hand_link: str = "hand",
     finger_links: tuple[str, ...] = ("finger_left", "finger_right"),
     camera_frame: str = "camera",
+    tcp_frame: str = "tcp",
     person_link: str = "person_hand",
     opening: float = 0.03,
 ) -> Fixtures:
@@ -234,7 +237,8 @@ def read_fixtures(
         X_HF[:3, 3] += opening * np.array(axes.get(name, [0.0, 0.0, 0.0]))
         visuals += link_visuals(links[name], X_CH @ X_HF)
     person = link_visuals(_links(hand_sdf)[person_link])
-    return Fixtures(tuple(visuals), tuple(person))
+    X_HT = _pose(frames[tcp_frame].findtext("pose"))
+    return Fixtures(tuple(visuals), tuple(person), X_CH @ X_HT)
 
 
 # --- scenes -----------------------------------------------------------------------------
@@ -550,16 +554,16 @@ def render_scene(
     groups = []
     if first_special:
         X_WC = cams[0]
-        # the held object between the fingers: 3 cm under the TCP (the hand frame's z 0.1034),
-        # its length along the hand's x (towards the camera side), as a top grasp holds it
-        X_CH = np.linalg.inv(_pose("0.065 0 0.048 0 0 0"))
+        # the held object between the fingers, upright (its z against the TCP's approach
+        # axis), its middle 1 cm beyond the TCP, its length along the hand's x (towards the
+        # camera's side), as a top grasp holds it
         lo, hi = footprint(scene.held.visuals)
-        X_HO = np.eye(4)
-        X_HO[:3, :3] = np.diag([1.0, -1.0, -1.0])  # object z up = hand z down
-        X_HO[:3, 3] = [0.0, 0.0, 0.1034 + 0.03 + (hi[2] - lo[2]) / 2 - 0.02]
+        X_TO = np.eye(4)
+        X_TO[:3, :3] = np.diag([1.0, -1.0, -1.0])
+        X_TO[:3, 3] = [0.0, 0.0, 0.01 + (hi[2] - lo[2]) / 2]
         extra = [
             VisualBody("gripper", X_WC, fixtures.gripper),
-            VisualBody("held", X_WC @ X_CH @ X_HO, scene.held.visuals),
+            VisualBody("held", X_WC @ fixtures.X_CT @ X_TO, scene.held.visuals),
         ]
         groups.append(([X_WC], extra, [0, index[scene.held.cls]]))
         cams = cams[1:]

@@ -33,6 +33,9 @@ def test_the_catalogue_is_both_cells_classes_with_their_palettes(catalogue):
     assert sd.class_names(classes)[:2] == ("background", "table")
     assert sd.class_names(classes)[-2:] == ("unknown", "hand")
     assert fixtures.gripper and fixtures.hand
+    # the TCP seen from the camera: lots_arm.sdf's tcp (0, 0, 0.1034) and camera
+    # (0.065, 0, 0.048) frames on the hand
+    assert np.allclose(fixtures.X_CT[:3, 3], [-0.065, 0.0, 0.0554])
 
 
 def test_the_wrist_camera_does_not_see_the_gripper(catalogue):
