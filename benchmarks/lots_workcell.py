@@ -20,15 +20,24 @@ the skill's sim time from start to end, including the retries.
 Timing: sim time, wall time, process CPU time (all threads), and the non-overlapping parts
 of `tamp.sim.lots.station.cell_parts` (render, perception, network, skills); the rest is the
 plant's step (contact, SAP) and the framework. ``--task tower`` also runs the full LOTS task
-(`simulate_lots`) once per ``--time-steps`` value for the workcell's real-time factor. On a
-machine shared with other jobs the wall figures depend on the load (printed); the CPU
-figures are what the workcell itself costs.
+(`simulate_lots`, camera, friction grasps and safety monitor on, verification gate off) once
+per ``--time-steps`` value for the workcell's real-time factor; ``--interference SCRIPT``
+adds that person (e.g. ``tower_interference``, Fig. 10). On a machine shared with other jobs
+the wall figures depend on the load (printed); the CPU figures (``rtf_cpu``: sim seconds per
+CPU second) are what the workcell itself costs.
+
+``--baseline DIR``: also run the task with the ``tamp`` package in DIR (e.g. a ``git worktree``
+of an earlier commit), in a fresh process before this one's, and print both: before/after in
+one run. The task row keeps the run's verdict, the robot's actions and the safety stops, so
+that a speed change that changes what happens shows.
 
     python benchmarks/lots_workcell.py [--scenes 30] [--networks NET ...]
-        [--task tower] [--time-steps 0.004 0.01] [--pick-timeout 60] [--threads 2]
-        [--weights NET=PATH ...]
+        [--task tower] [--interference SCRIPT] [--time-steps 0.004 0.01] [--pick-timeout 60]
+        [--threads 2] [--weights NET=PATH ...] [--baseline DIR] [--out FILE]
+    python benchmarks/lots_workcell.py --scenes 0 --task tower \
+        --interference tower_interference --baseline /tmp/before --out FILE
 
-Prints a table and one JSON line.
+Prints a table and one JSON line (``--out FILE`` also writes it there).
 """
 
 from __future__ import annotations
@@ -39,6 +48,8 @@ import json
 import math
 import os
 import platform
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -138,10 +149,11 @@ def run_pick(
     }
 
 
-def run_task(task_name: str, time_step: float) -> dict:
-    """The full LOTS task in the workcell (camera running) at plant step ``time_step``."""
+def run_task(task_name: str, time_step: float, interference: str | None = None) -> dict:
+    """The full LOTS task in the workcell (camera running) at plant step ``time_step``, with
+    the person of the script ``interference`` (None: no person)."""
     from tamp.lots.controller import LotsController
-    from tamp.lots.task import load_task
+    from tamp.lots.task import load_events, load_task
     from tamp.sim.core.timing import Stopwatch, breakdown
     from tamp.sim.lots import simulate
     from tamp.sim.lots.scenario import load_cell_scenario
@@ -166,28 +178,64 @@ def run_task(task_name: str, time_step: float) -> dict:
     base = load_cell_scenario(task_name)
     plant = dataclasses.replace(base.plant, time_step=time_step)
     scenario = dataclasses.replace(base, plant=plant)
+    task = load_task(task_name)
+    events = tuple(load_events(interference, task)) if interference else ()
     LotsController.tick, simulate.build_lots_diagram = timed_tick, keep
     try:
         c0 = time.process_time()
-        res = simulate.simulate_lots(LotsScenario(load_task(task_name), scenario), verify=False)
+        res = simulate.simulate_lots(LotsScenario(task, scenario, events), verify=False)
         cpu = time.process_time() - c0
     finally:
         LotsController.tick, simulate.build_lots_diagram = tick, build
     parts = cell_parts(built["d"].cell) | {"lots_controller": ticks}
     return {
         "task": task_name,
+        "interference": interference,
         "time_step": time_step,
         "status": res.status,
         "satisfied": res.satisfied,
         "grasps": res.grasps,
         "frames": res.frames_rendered,
+        "robot_actions": [a.text() for a in res.robot_actions],
+        "safety_stops": [f"{s.time:.2f} {s.cause}" for s in res.safety_stops],
         "sim_time": round(res.sim_time, 2),
         "wall_time": round(res.wall_time, 2),
         "cpu_time": round(cpu, 2),
         "rtf_wall": round(res.realtime_factor, 3),
         "rtf_cpu": round(res.sim_time / cpu, 3) if cpu > 0 else None,
+        "load_avg": round(os.getloadavg()[0], 2),
         "parts": breakdown(res.wall_time, cpu, parts),
     }
+
+
+def source(root: str) -> dict:
+    """Where a ``tamp`` package came from: its folder and, in a git checkout, the commit and
+    whether its files differ from it."""
+    out = {"path": os.path.abspath(root)}
+    try:
+        git = ["git", "-C", root]
+        head = subprocess.run(
+            [*git, "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+        )
+        dirty = subprocess.run(
+            [*git, "status", "--porcelain", "tamp"], capture_output=True, text=True
+        )
+    except OSError:
+        return out
+    if head.returncode == 0:
+        out |= {"commit": head.stdout.strip(), "modified": bool(dirty.stdout.strip())}
+    return out
+
+
+def baseline_tasks(src: str, task: str, interference: str | None, steps: list[float]) -> list:
+    """`run_task` rows of the ``tamp`` package in ``src``, in a fresh process."""
+    argv = [sys.executable, os.path.abspath(__file__), "--scenes", "0", "--task", task]
+    argv += ["--time-steps", *map(str, steps), "--quiet"]
+    if interference:
+        argv += ["--interference", interference]
+    env = {**os.environ, "PYTHONPATH": os.path.abspath(src)}
+    out = subprocess.run(argv, env=env, capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.splitlines()[-1])["tasks"]
 
 
 def summarise(network: str, picks: list[dict]) -> dict:
@@ -241,6 +289,10 @@ def main() -> int:
     ap.add_argument("--pick-timeout", type=float, default=60.0, help="sim seconds per pick")
     ap.add_argument("--task", default=None, help="also run this LOTS task (e.g. tower)")
     ap.add_argument("--time-steps", type=float, nargs="+", default=None)
+    ap.add_argument("--interference", default=None, help="the task run's person (a script)")
+    ap.add_argument("--baseline", metavar="DIR", help="also run --task with the tamp in DIR")
+    ap.add_argument("--out", metavar="FILE", help="also write the JSON document to FILE")
+    ap.add_argument("--quiet", action="store_true", help="print the JSON line only")
     ap.add_argument("--threads", type=int, default=None, help="torch threads (default: torch's)")
     ap.add_argument(
         "--weights",
@@ -250,6 +302,8 @@ def main() -> int:
         help="a weights file instead of NET's shipped one (e.g. a network trained on other data)",
     )
     args = ap.parse_args()
+    if args.baseline and not args.task:
+        ap.error("--baseline needs --task")
     weights = {}
     for item in args.weights:
         net, sep, path = item.partition("=")
@@ -282,10 +336,18 @@ def main() -> int:
             )
         per_scene += [{k: v for k, v in p.items() if k != "parts"} for p in picks]
         rows.append(summarise(net, picks) | {"weights": weights.get(net, "shipped")})
-    tasks = []
+    tasks, before = [], []
+    steps = args.time_steps or [base.plant.time_step]
+    if args.task and args.baseline:
+        before = baseline_tasks(args.baseline, args.task, args.interference, steps)
+        if not args.quiet:  # kept in the output should this package's run fail
+            print(json.dumps({"baseline": {"src": args.baseline, "tasks": before}}), flush=True)
     if args.task:
-        for step in args.time_steps or [base.plant.time_step]:
-            tasks.append(run_task(args.task, step))
+        for step in steps:
+            tasks.append(run_task(args.task, step, args.interference))
+    if args.quiet:
+        print(json.dumps({"benchmark": "lots_workcell", "tasks": tasks}))
+        return 0
 
     print(
         f"\n{'network':>9} {'scenes':>6} {'success':>8} {'attempts':>8} {'s/pick':>7} "
@@ -319,11 +381,24 @@ def main() -> int:
             f"{k} {v['cpu_share'] * 100:.0f}%" for k, v in r["parts"].items() if v["cpu"] > 0
         )
         print(f"  CPU time of {label}: {shares}")
-    for t in tasks:
+    for label, rows_ in (("before", before), ("after", tasks) if before else ("", tasks)):
+        for t in rows_:
+            print(
+                f"  {label + ' ' if label else ''}task {t['task']}"
+                f"{' + ' + t['interference'] if t.get('interference') else ''} "
+                f"@ {t['time_step'] * 1000:g} ms: {t['status']} "
+                f"satisfied={t['satisfied']} sim {t['sim_time']} s, wall {t['wall_time']} s, "
+                f"cpu {t['cpu_time']} s: RTF wall {t['rtf_wall']}, RTF cpu {t['rtf_cpu']}"
+            )
+    for b, a in zip(before, tasks, strict=False):
+        same = (b["status"], b["satisfied"], b.get("robot_actions")) == (
+            a["status"],
+            a["satisfied"],
+            a["robot_actions"],
+        )
         print(
-            f"  task {t['task']} @ {t['time_step'] * 1000:g} ms: {t['status']} "
-            f"satisfied={t['satisfied']} sim {t['sim_time']} s, wall {t['wall_time']} s, "
-            f"cpu {t['cpu_time']} s: RTF wall {t['rtf_wall']}, RTF cpu {t['rtf_cpu']}"
+            f"  @ {a['time_step'] * 1000:g} ms: RTF cpu {b['rtf_cpu']} -> {a['rtf_cpu']} "
+            f"({a['rtf_cpu'] / b['rtf_cpu']:.2f}x), same verdict and robot actions: {same}"
         )
     summary = {
         "benchmark": "lots_workcell",
@@ -335,7 +410,16 @@ def main() -> int:
         "tasks": tasks,
         "picks": per_scene,
     }
+    import tamp
+
+    summary["tamp"] = source(os.path.dirname(os.path.dirname(tamp.__file__)))
+    if before:
+        summary["baseline"] = {"src": source(args.baseline), "tasks": before}
     print(json.dumps(summary))
+    if args.out:
+        with open(args.out, "w") as fh:
+            json.dump(summary, fh, indent=1)
+            fh.write("\n")
     return 0
 
 
