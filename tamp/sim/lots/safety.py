@@ -1,12 +1,16 @@
 """The workcell's safety monitor (Zhou et al. §IV-C, pre-collision measures) as a LeafSystem
 between the arm command stream and the plant.
 
-- Hand near: the wrist camera's label image marks a person's hand (labels ``hand_labels``,
-  standing in for the paper's human detection in the RGB-D image); its pixels become 3-D
-  points through the depth image, the intrinsics and the camera pose (the arm's own
-  kinematics at the measured joint angles), and their distance to the end effector (the
-  hand's and fingers' collision boxes) is measured. Below ``hand_distance`` (0.05 m) the
-  arm holds position; it resumes when an image shows the hand farther away or gone.
+- Something near (class-agnostic, `tamp.sim.lots.depth_safety`): the monitor's own
+  low-resolution depth camera on the wrist gives points in the world through the intrinsics
+  and the camera pose (the arm's own kinematics at the measured joint angles); every point
+  that is not the table, the gripper, the held object or the static scene learnt while no
+  person was in the cell is foreign, and its distance to the end effector's collision boxes
+  and the held object's box is measured. Below ``hand_distance`` (0.05 m) the arm holds
+  position; it resumes when a frame shows nothing foreign that near. No label image, body
+  index or pose of anything but the arm reaches the monitor. The rate (``image_period``,
+  10 ms) and the resolution (80 x 45) follow from the arm's stopping distance and the
+  person's speed: see `tamp.sim.lots.depth_safety`.
 - Joint speed and acceleration limits (Franka's published values, `catalogue.ARM`): the
   measured joint speeds (plant state) and the commanded speeds and accelerations (the 1 kHz
   command, accelerations over one check period) are checked every ``check_period``; a breach
@@ -21,12 +25,12 @@ which freezes its step clock meanwhile (so the task takes longer by the stop's d
 An emergency stop lasts at least ``recovery`` seconds and until its cause has cleared.
 Every stop is logged (`SafetyStop`: sim time, cause, duration).
 
-Rendering is the budget: the monitor never asks for a frame of its own while no hand can be
-near. At perception's ticks it reads the label and depth images exactly when perception
-renders them (same update pass, so the sensor's cached images are shared, not rendered
-twice); it renders on its own only every ``image_period`` while a hand was in the last image,
-while stopped for a hand, or while the optional ``person_present`` input (a light curtain at
-the workcell's edge) says a person is inside. Own renders are counted in ``frames``.
+Rendering is the budget: at perception's ticks while perception renders (the arm at a view),
+the monitor takes a frame and, while no person is in the cell (the optional
+``person_present`` input: a light curtain at the workcell's edge), learns the static scene
+from it (objects resting where the robot works are not intruders). While a person is
+present, or while stopped for something near, it takes a frame every ``image_period``.
+Frames are counted in ``frames`` (own period) and ``shared`` (at perception's ticks).
 """
 
 from __future__ import annotations
@@ -43,14 +47,17 @@ from pydrake.geometry import Box, SceneGraph
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
-from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I
+from pydrake.systems.sensors import ImageDepth32F
 
-from tamp.sim.core.camera import backproject
 from tamp.sim.core.messages import Observation, ViewRequest
 from tamp.sim.core.parsing import make_parser
-from tamp.sim.lots.catalogue import (
-    ARM,
-    HAND_LABEL,  # the person's hand's render label
+from tamp.sim.lots.catalogue import ARM, CLASSES
+from tamp.sim.lots.depth_safety import (
+    Boxes,
+    Scene,
+    depth_points,
+    learn_background,
+    separation,
 )
 from tamp.sim.lots.scenario import SafetySettings
 
@@ -87,7 +94,8 @@ class SafetyState:
     hold: np.ndarray | None = None  # the held desired positions (actuator order)
     until: float = 0.0  # an emergency stop lasts at least until then
     stops: tuple[SafetyStop, ...] = ()  # finished stops
-    hand_distance: float = math.inf  # from the last image (inf: no hand in it)
+    hand_distance: float = math.inf  # nearest foreign point in the last frame (inf: none)
+    background: np.ndarray | None = None  # voxel keys of the static scene (depth_safety)
     image_time: float | None = None
     last_own_image: float = -math.inf
     frames: int = 0  # images rendered for the monitor alone
@@ -144,6 +152,7 @@ class GripperModel:
         self.boxes = tuple(boxes)
         self._bodies = {name: self.plant.GetBodyByName(name, model) for name in EE_BODIES}
         self.camera = self.plant.GetFrameByName(ARM.camera_frame, model)
+        self.tcp = self.plant.GetFrameByName(ARM.tcp_frame, model)
         self.context = self.plant.CreateDefaultContext()
 
     def set(self, q9: np.ndarray) -> None:
@@ -153,7 +162,10 @@ class GripperModel:
     def camera_pose(self) -> RigidTransform:
         return self.camera.CalcPoseInWorld(self.context)
 
-    def boxes_in_world(self) -> list[tuple[RigidTransform, np.ndarray]]:
+    def tcp_pose(self) -> RigidTransform:
+        return self.tcp.CalcPoseInWorld(self.context)
+
+    def boxes_in_world(self) -> Boxes:
         out = []
         for b in self.boxes:
             X_WB = self.plant.EvalBodyPoseInWorld(self.context, self._bodies[b.body])
@@ -161,38 +173,23 @@ class GripperModel:
         return out
 
 
-def hand_points(
-    label: np.ndarray,
-    depth: np.ndarray,
-    hand_labels: frozenset[int],
-    intrinsics: tuple[float, float, float, float],
-    X_WC: RigidTransform,
-) -> tuple[np.ndarray, int]:
-    """World points (N x 3) of the hand pixels with a valid depth, and how many hand pixels
-    lie nearer than the camera's near plane (depth 0: closer than any point can be measured)."""
-    mask = np.isin(label, list(hand_labels))
-    if not mask.any():
-        return np.zeros((0, 3)), 0
-    z = depth[mask]
-    vs, us = np.nonzero(mask)
-    too_close = int(np.count_nonzero(z == 0))
-    ok = np.isfinite(z) & (z > 0)
-    z, us, vs = z[ok], us[ok], vs[ok]
-    if z.size == 0:
-        return np.zeros((0, 3)), too_close
-    return backproject(us, vs, z, intrinsics, X_WC).T, too_close
+def held_box(X_WT: RigidTransform, opening: float) -> tuple[RigidTransform, np.ndarray]:
+    """The held object's box in the world: in the TCP frame (z along the approach, y across
+    the pads), the catalogue's largest object between pads ``opening`` apart, from the pads'
+    tops down to the largest object's height below the pads' tips."""
+    reach = max(max(abs(v) for v in (f.xmin, f.xmax, f.ymin, f.ymax)) for f in _FOOTPRINTS)
+    tallest = max(f.top for f in _FOOTPRINTS)
+    z0, z1 = -HELD_ABOVE, PAD_BELOW + tallest
+    half = np.array([reach, opening / 2, (z1 - z0) / 2])
+    return X_WT @ RigidTransform([0.0, 0.0, (z0 + z1) / 2]), half
 
 
-def distance_to_boxes(points: np.ndarray, boxes: list[tuple[RigidTransform, np.ndarray]]) -> float:
-    """The smallest distance from ``points`` (N x 3, world) to the boxes (0 inside one)."""
-    if len(points) == 0:
-        return math.inf
-    best = math.inf
-    for X_WG, half in boxes:
-        local = (points - X_WG.translation()) @ X_WG.rotation().matrix()
-        d = np.linalg.norm(np.maximum(np.abs(local) - half, 0.0), axis=1)
-        best = min(best, float(d.min()))
-    return best
+_FOOTPRINTS = tuple(c.footprint for c in CLASSES.values())
+#: the pads reach this far below the TCP, and their tops this far above it (m)
+PAD_BELOW = 0.015
+HELD_ABOVE = 0.015
+#: the fingers hold something when commanded this much closer than they are (m)
+GRIP_GAP = 0.002
 
 
 # ---- the stop logic (pure) -------------------------------------------------------------------
@@ -240,7 +237,7 @@ def next_stop(
     if s.stop is None:
         cause = None
         if new_image and near:
-            cause = ("hand_near", f"hand {s.hand_distance:.3f} m from the end effector")
+            cause = ("hand_near", f"something {s.hand_distance:.3f} m from the end effector")
         elif rate_low:
             cause = ("command_rate", f"{checks.rate:.0f} Hz")
         elif checks.breaches:
@@ -277,9 +274,11 @@ class SafetyMonitor(LeafSystem):
     """Passes the arm command to the plant, or holds the arm (see the module docstring).
 
     Inputs: ``command`` (18: desired state, actuator order), ``command_count`` (1),
-    ``arm_state`` (18: the plant's arm positions and velocities, joint order), the camera's
-    ``label_image`` and ``depth_image``, ``view_request`` and ``observation`` (to know when
-    perception renders), ``person_present`` (optional, 1: a person is in the workcell).
+    ``arm_state`` (18: the plant's arm positions and velocities, joint order), the safety
+    camera's ``depth_image`` (``width`` x ``height``, ``intrinsics``, at the arm's camera
+    frame), ``view_request`` and ``observation`` (to know when perception renders),
+    ``person_present`` (optional, 1: a person is in the workcell). ``table_z``: the height of
+    the table's top (m), the one plane the monitor knows.
     Outputs: ``desired_state`` (18, to the plant), ``stopped`` (1: 1.0 while stopped).
     """
 
@@ -292,24 +291,23 @@ class SafetyMonitor(LeafSystem):
         height: int,
         perception_period: float,
         actuator_order: list[int],
-        hand_labels: frozenset[int] = frozenset({HAND_LABEL}),
+        table_z: float = 0.0,
     ):
         super().__init__()
         self.set_name("safety")
         self.settings = settings
-        self.hand_labels = frozenset(int(v) for v in hand_labels)
+        self.table_z = table_z
+        self.size = (width, height)  # the depth image's, px
         self.intrinsics = intrinsics
         self.perception_period = perception_period
         self._order = np.asarray(actuator_order)
         self._arm_k = np.flatnonzero(self._order < 7)  # actuator slots of arm joints
         self._joint_of = self._order[self._arm_k]  # their joint indices
+        self._finger_k = np.flatnonzero(self._order >= 7)  # actuator slots of the fingers
         self.gripper = GripperModel()
         self.command_port = self.DeclareVectorInputPort("command", 18)
         self.count_port = self.DeclareVectorInputPort("command_count", 1)
         self.arm_state_port = self.DeclareVectorInputPort("arm_state", 18)
-        self.label_port = self.DeclareAbstractInputPort(
-            "label_image", AbstractValue.Make(ImageLabel16I(width, height))
-        )
         self.depth_port = self.DeclareAbstractInputPort(
             "depth_image", AbstractValue.Make(ImageDepth32F(width, height))
         )
@@ -330,10 +328,9 @@ class SafetyMonitor(LeafSystem):
             {ticket, self.command_port.ticket()},
         )
         self.stopped_port = self.DeclareVectorOutputPort("stopped", 1, self._calc_stopped, {ticket})
-        #: (sim time, own render?, CPU seconds of reading label + depth) of every look: a
-        #: shared look finds perception's images in the sensor's cache and costs no render
-        #: (measurement only, not simulation state; CPU time, so that other jobs on the
-        #: machine do not count)
+        #: (sim time, own period?, CPU seconds of rendering and judging the depth frame) of
+        #: every look (measurement only, not simulation state; CPU time, so that other jobs
+        #: on the machine do not count)
         self.looks: list[tuple[float, bool, float]] = []
 
     def state(self, context) -> SafetyState:
@@ -375,43 +372,51 @@ class SafetyMonitor(LeafSystem):
             command_rate=rate,
             min_rate=min(s.min_rate, rate) if s.stop is None else s.min_rate,
         )
-        s, new_image = self._look(context, s, t, q_meas)
+        s, new_image = self._look(context, s, t, q_meas, command)
         hold = command[:9].copy()
         hold[self._arm_k] = q_meas[self._joint_of]
         s = next_stop(s, t, self.settings, Checks(rate, tuple(breaches)), new_image, hold)
         state.get_mutable_abstract_state(self._state).set_value(s)
         return EventStatus.Succeeded()
 
-    def _look(self, context, s: SafetyState, t: float, q_meas) -> tuple[SafetyState, bool]:
-        """Read the camera when perception renders now (shared), or render on the slow
-        period while a hand may be near; the hand's distance to the end effector."""
-        if not self.hand_labels or not on_grid(t, self.perception_period):
-            return s, False
-        req: ViewRequest = self.request_port.Eval(context)
-        obs: Observation = self.observation_port.Eval(context)
-        perception_renders = req.id != 0 and req.id != obs.id
+    def _look(self, context, s: SafetyState, t: float, q_meas, command) -> tuple[SafetyState, bool]:
+        """Take a frame at perception's renders, and every ``image_period`` while a person is
+        present or the arm is stopped for something near; learn the static scene while no
+        person is present, else measure the nearest foreign point's distance."""
         present = self.present_port.HasValue(context) and self.present_port.Eval(context)[0] > 0.5
-        watch = (
-            present
-            or math.isfinite(s.hand_distance)
-            or (s.stop is not None and s.stop.cause == "hand_near")
-        )
-        own = not perception_renders and watch
-        if own and t - s.last_own_image < self.settings.image_period - 1e-9:
-            return s, False
-        if not (perception_renders or own):
+        shared = False
+        if on_grid(t, self.perception_period) and self.request_port.HasValue(context):
+            req: ViewRequest = self.request_port.Eval(context)
+            obs: Observation = self.observation_port.Eval(context)
+            shared = req.id != 0 and req.id != obs.id
+        watch = present or (s.stop is not None and s.stop.cause == "hand_near")
+        own = watch and t - s.last_own_image >= self.settings.image_period - 1e-9
+        if not (shared or own):
             return s, False
         t0 = time.process_time()
-        label = self.label_port.Eval(context).data[..., 0]
         depth = self.depth_port.Eval(context).data[..., 0]
-        self.looks.append((t, own, time.process_time() - t0))
         self.gripper.set(q_meas)
-        points, too_close = hand_points(
-            label, depth, self.hand_labels, self.intrinsics, self.gripper.camera_pose()
-        )
-        d = 0.0 if too_close else distance_to_boxes(points, self.gripper.boxes_in_world())
+        points, too_close = depth_points(depth, self.intrinsics, self.gripper.camera_pose())
+        scene = Scene(self.table_z, self.gripper.boxes_in_world(), self._held(q_meas, command))
+        background = s.background if s.background is not None else np.zeros(0, np.int64)
+        if present:
+            scene = dataclasses.replace(scene, background=background)
+            d = separation(points, scene, too_close)
+        else:  # nobody in the cell: what the camera sees is the static scene
+            background = learn_background(background, points, scene)
+            d = math.inf
+        self.looks.append((t, own, time.process_time() - t0))
         if own:
             s = _replace(s, frames=s.frames + 1, last_own_image=t)
         else:
             s = _replace(s, shared=s.shared + 1)
-        return _replace(s, hand_distance=d, image_time=t), True
+        return _replace(s, hand_distance=d, image_time=t, background=background), True
+
+    def _held(self, q_meas, command) -> Boxes:
+        """The held object's box while the fingers are commanded closer than they are (they
+        hold something), else none."""
+        want = command[:9][self._finger_k]
+        have = q_meas[self._order[self._finger_k]]
+        if len(want) == 0 or not np.all(want < have - GRIP_GAP):
+            return []
+        return [held_box(self.gripper.tcp_pose(), float(np.sum(have)))]

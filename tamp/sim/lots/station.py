@@ -38,8 +38,9 @@ from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config
 from tamp.sim.core.perception import Perception
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.core.timing import Stopwatch
-from tamp.sim.lots.catalogue import ARM, HAND_LABEL
+from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.command import ArmCommandStream
+from tamp.sim.lots.depth_safety import safety_camera_config
 from tamp.sim.lots.grasping import GraspPlanner
 from tamp.sim.lots.kinematics import ArmKinematics
 from tamp.sim.lots.person import add_person, staged_objects
@@ -122,13 +123,11 @@ def build_station(
     *,
     meshcat: Any = None,
     person: Sequence[Event] | None = None,
-    hand_labels=frozenset({HAND_LABEL}),
 ) -> LotsStation:
     """The named Diagram of ``scenario``; drive it through ``skill_command`` (see `CellDriver`).
 
     ``person``: the events of an interference script: a scripted person's hand carries them
-    out (`tamp.sim.lots.person`); None: no person in the cell. ``hand_labels``: the render
-    labels the safety monitor takes for a person's hand.
+    out (`tamp.sim.lots.person`); None: no person in the cell.
     """
     builder = DiagramBuilder()
     staged = None if person is None else staged_objects(person, scenario)
@@ -159,9 +158,7 @@ def build_station(
     builder.Connect(plant.get_state_output_port(cell.arm), skills.arm_state_port)
     builder.Connect(perception.observation_port, skills.observation_port)
     builder.Connect(skills.view_request_port, perception.request_port)
-    command, safety = _add_safety(
-        builder, scenario, cell, camera, depth, perception, skills, intrinsics, hand_labels
-    )
+    command, safety = _add_safety(builder, scenario, cell, perception, skills)
 
     builder.ExportInput(skills.command_port, "skill_command")
     person_system = None
@@ -201,12 +198,11 @@ def build_station(
     )
 
 
-def _add_safety(
-    builder, scenario, cell, camera, depth, perception, skills, intrinsics, hand_labels
-):
+def _add_safety(builder, scenario, cell, perception, skills):
     """The arm command path: skills ─► 1 kHz command stream ─► safety monitor ─► plant
     (`tamp.sim.lots.command`, `tamp.sim.lots.safety`); without the monitor when the
-    scenario's ``safety.enabled`` is false."""
+    scenario's ``safety.enabled`` is false. The monitor sees through its own low-resolution
+    depth camera at the wrist camera's frame (`tamp.sim.lots.depth_safety`)."""
     plant = cell.plant
     arm_slots = [k < len(ARM.arm_joints) for k in cell.actuator_order]
     q0_actuators = cell.q0[cell.actuator_order]
@@ -219,22 +215,23 @@ def _add_safety(
     if not scenario.safety.enabled:
         builder.Connect(command.desired_state_port, plant.get_desired_state_input_port(cell.arm))
         return command, None
+    cam = scenario.camera
+    config = safety_camera_config(cam.width, cam.height, cam.fov_y_deg, cam.near, cam.far)
+    camera, intrinsics = add_wrist_camera(builder, plant, cell.scene_graph, cell.arm, config)
     safety = builder.AddSystem(
         SafetyMonitor(
             scenario.safety,
             intrinsics=intrinsics,
-            width=scenario.camera.width,
-            height=scenario.camera.height,
+            width=config.width,
+            height=config.height,
             perception_period=scenario.control.perception_period,
             actuator_order=cell.actuator_order,
-            hand_labels=hand_labels,
         )
     )
     builder.Connect(command.desired_state_port, safety.command_port)
     builder.Connect(command.count_port, safety.count_port)
     builder.Connect(plant.get_state_output_port(cell.arm), safety.arm_state_port)
-    builder.Connect(camera.label_image_output_port(), safety.label_port)
-    builder.Connect(depth, safety.depth_port)
+    builder.Connect(camera.depth_image_32F_output_port(), safety.depth_port)
     builder.Connect(skills.view_request_port, safety.request_port)
     builder.Connect(perception.observation_port, safety.observation_port)
     builder.Connect(safety.desired_state_port, plant.get_desired_state_input_port(cell.arm))

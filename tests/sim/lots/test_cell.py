@@ -60,6 +60,7 @@ def test_controller_side_never_reads_object_poses(building):
         ("safety", "stopped"),
         ("arm_command", "desired_state"),
         ("arm_command", "count"),
+        ("safety_camera", building.camera.depth_image_32F_output_port().get_name()),
     }
     consumers = {
         building.skills.get_name(),
@@ -72,9 +73,16 @@ def test_controller_side_never_reads_object_poses(building):
         if sys_in.get_name() in consumers:
             fed.append((sys_out.get_name(), sys_out.get_output_port(out_index).get_name()))
     assert fed and set(fed) <= allowed
-    # the camera's images go to perception and the safety monitor only
+    # the wrist camera's images go to perception only
     cams = [k for k, v in building.diagram.connection_map().items() if v[0] is building.camera]
-    assert {k[0].get_name() for k in cams} == {"perception", "safety"}
+    assert {k[0].get_name() for k in cams} == {"perception"}
+    # the safety monitor sees only its own depth camera's depth (class-agnostic: no labels)
+    (safety_in,) = [
+        (v[0].get_name(), v[0].get_output_port(v[1]).get_name())
+        for k, v in building.diagram.connection_map().items()
+        if k[0] is building.safety and v[0].get_name() == "safety_camera"
+    ]
+    assert safety_in == ("safety_camera", "depth_image_32f")
     # the arm's PD actuators get their targets through the safety monitor
     desired = plant.get_desired_state_input_port(building.cell.arm)
     src, _ = building.diagram.connection_map()[(plant, desired.get_index())]

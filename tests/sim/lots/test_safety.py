@@ -1,5 +1,6 @@
-"""The safety monitor's parts without a workcell: hand points and distances, the limit checks,
-the stop decisions, and the monitor with the 1 kHz command stream in a small diagram."""
+"""The safety monitor's parts without a workcell: depth points and distances, the limit checks,
+the stop decisions, and the monitor with the 1 kHz command stream in a small diagram (the
+point subtraction: test_safety_depth.py)."""
 
 from __future__ import annotations
 
@@ -14,42 +15,36 @@ from pydrake.systems.framework import DiagramBuilder
 
 from tamp.sim.lots.catalogue import ARM, READY
 from tamp.sim.lots.command import ArmCommandStream
+from tamp.sim.lots.depth_safety import depth_points, distance_to_boxes
 from tamp.sim.lots.safety import (
-    HAND_LABEL,
     Checks,
     GripperModel,
     SafetyMonitor,
     SafetyState,
     check_limits,
-    distance_to_boxes,
-    hand_points,
     next_stop,
 )
 from tamp.sim.lots.scenario import SafetySettings
 
-EMPTY = 32766
 K = (100.0, 100.0, 39.5, 29.5)  # fx, fy, cx, cy of an 80 x 60 image
 Q9 = np.r_[READY, ARM.finger_max, ARM.finger_max]
 ORDER = list(range(9))
 
 
-def test_hand_pixels_become_world_points_through_depth_and_pose():
-    label = np.full((60, 80), EMPTY, np.int16)
-    depth = np.full((60, 80), 0.5, np.float32)
-    label[29, 39] = HAND_LABEL  # near the principal point
-    label[0, 0] = HAND_LABEL
+def test_depth_pixels_become_world_points_through_depth_and_pose():
+    depth = np.full((60, 80), np.inf, np.float32)  # nothing in range
+    depth[29, 39] = 0.5  # near the principal point
     depth[0, 0] = 0.2
-    label[5, 5] = 7  # an object: not a hand
     X_WC = RigidTransform(RotationMatrix.MakeXRotation(math.pi), [0.1, 0.2, 0.6])
-    pts, too_close = hand_points(label, depth, frozenset({HAND_LABEL}), K, X_WC)
+    pts, too_close = depth_points(depth, K, X_WC)
     assert too_close == 0 and pts.shape == (2, 3)
     p_C = np.array([(0 - 39.5) * 0.2 / 100, (0 - 29.5) * 0.2 / 100, 0.2])
     assert pts[0] == pytest.approx(X_WC @ p_C)
     # the camera looks down from 0.6 m: a point 0.5 m ahead lies at z = 0.1
     assert pts[1][2] == pytest.approx(0.1)
-    depth[29, 39] = 0.0  # nearer than the near plane
-    assert hand_points(label, depth, frozenset({HAND_LABEL}), K, X_WC)[1] == 1
-    assert len(hand_points(label, depth, frozenset({99}), K, X_WC)[0]) == 0
+    depth[5, 5] = 0.0  # nearer than the near plane
+    assert depth_points(depth, K, X_WC)[1] == 1
+    assert len(depth_points(np.full((60, 80), np.inf), K, X_WC)[0]) == 0
 
 
 def test_distance_to_boxes_outside_inside_and_rotated():
@@ -128,7 +123,8 @@ def test_emergency_stops_last_the_recovery_time_and_until_cleared():
 
 
 def _stream_and_monitor(command_period: float, target: np.ndarray, v_meas=None):
-    """The stream (setpoints every 10 ms) feeding a monitor without hand labels."""
+    """The stream (setpoints every 10 ms) feeding a monitor (its camera input left open: no
+    person is present, so it never looks)."""
     b = DiagramBuilder()
     stream = b.AddSystem(ArmCommandStream(command_period, 0.01, [True] * 7 + [False] * 2, Q9))
     monitor = b.AddSystem(
@@ -139,7 +135,6 @@ def _stream_and_monitor(command_period: float, target: np.ndarray, v_meas=None):
             height=60,
             perception_period=0.02,
             actuator_order=ORDER,
-            hand_labels=frozenset(),
         )
     )
     b.Connect(stream.desired_state_port, monitor.command_port)

@@ -1,6 +1,7 @@
-"""The hand's distance from the wrist camera's label and depth images against SceneGraph's
-signed distance between the hand and the gripper's collision geometry (a sphere standing in
-for the person's hand, labelled `HAND_LABEL`, in front of the arm at Franka's ready pose)."""
+"""The distance of the nearest foreign depth point (class-agnostic: no label image) against
+SceneGraph's signed distance between a sphere standing in for the person's hand and the
+gripper's collision geometry, in front of the arm at Franka's ready pose; at the monitor's
+resolution (`tamp.sim.lots.depth_safety.safety_camera_config`)."""
 
 from __future__ import annotations
 
@@ -24,16 +25,17 @@ from pydrake.systems.framework import DiagramBuilder
 from tamp.sim.core.camera import RENDERER
 from tamp.sim.core.parsing import make_parser
 from tamp.sim.lots.catalogue import ARM, HAND_LABEL, READY
-from tamp.sim.lots.safety import EE_BODIES, GripperModel, distance_to_boxes, hand_points
+from tamp.sim.lots.depth_safety import Scene, depth_points, safety_camera_config, separation
+from tamp.sim.lots.safety import EE_BODIES, GripperModel
 from tamp.sim.lots.scenario import load_cell_scenario
-from tamp.sim.lots.station import add_wrist_camera, wrist_camera_config
+from tamp.sim.lots.station import add_wrist_camera
 
 pytestmark = pytest.mark.slow  # renders images
 RADIUS = 0.03
 SKIN = Rgba(0.9, 0.7, 0.6, 1.0)
 
 
-class Scene:
+class CameraScene:
     """Arm at the ready pose (fingers open), a free sphere labelled as a hand, the camera."""
 
     def __init__(self):
@@ -59,7 +61,8 @@ class Scene:
         plant.RegisterVisualGeometry(hand, visual)
         plant.Finalize()
         sg.AddRenderer(RENDERER, MakeRenderEngineVtk(RenderEngineVtkParams(backend="EGL")))
-        config = wrist_camera_config(load_cell_scenario("tower"))
+        cam = load_cell_scenario("tower").camera
+        config = safety_camera_config(cam.width, cam.height, cam.fov_y_deg, cam.near, cam.far)
         self.camera, self.intrinsics = add_wrist_camera(b, plant, sg, arm, config)
         self.diagram = b.Build()
         self.context = self.diagram.CreateDefaultContext()
@@ -91,18 +94,16 @@ class Scene:
 
     def image_distance(self) -> float:
         cam = self.camera.GetMyContextFromRoot(self.context)
-        label = self.camera.label_image_output_port().Eval(cam).data[..., 0]
         depth = self.camera.depth_image_32F_output_port().Eval(cam).data[..., 0]
-        points, too_close = hand_points(
-            label, depth, frozenset({HAND_LABEL}), self.intrinsics, self.gripper.camera_pose()
-        )
+        points, too_close = depth_points(depth, self.intrinsics, self.gripper.camera_pose())
         assert too_close == 0
-        return distance_to_boxes(points, self.gripper.boxes_in_world())
+        # no table in this scene: its plane far below
+        return separation(points, Scene(-10.0, self.gripper.boxes_in_world()))
 
 
 @pytest.fixture(scope="module")
 def scene():
-    return Scene()
+    return CameraScene()
 
 
 # sphere centres relative to the TCP (world frame; the gripper points down)
@@ -127,8 +128,15 @@ def test_image_distance_matches_scene_graph(scene, offset):
     assert (seen < 0.05) == (truth < 0.05)
 
 
+def test_the_arm_alone_shows_nothing_foreign(scene):
+    """The gripper's own pixels (fingers in view) are subtracted by its collision boxes; the
+    nearest thing left is the arm's base far below (no table here), 0.44 m away."""
+    scene.place((0.0, 0.0, 5.0))  # far out of view
+    assert scene.image_distance() > 0.4
+
+
 def test_a_hand_beside_the_fingers_is_out_of_view(scene):
     """The wrist camera's blind spot: 1.2 cm beside the pads, outside the field of view."""
     scene.place((0.0, 0.09, -0.02))
     assert scene.signed_distance() < 0.05
-    assert scene.image_distance() == np.inf
+    assert scene.image_distance() > 0.4  # the hand is not seen
