@@ -82,7 +82,9 @@ def test_task4_setting_finds_23_hz_and_categories_are_ordered():
 @given(sensor_rate=st.sampled_from([120.0, 160.0, 200.0]), start=st.integers(5, 15))
 def test_categories_ordered_and_found_rate_below_the_knee(sensor_rate, start):
     """I >= II >= III for any setting, and the search stops at the knee: every server
-    below saturation at the found rate, some server past it one step higher."""
+    below saturation at the found rate, some server past it one step higher, unless the
+    search reached its limit first (the main CPU's loop, 50 Hz: Category I's knee at
+    120 Hz sensors is at 74 Hz)."""
     found = {}
     for c in ("I", "II", "III"):
         s = refine_rate(
@@ -92,6 +94,10 @@ def test_categories_ordered_and_found_rate_below_the_knee(sensor_rate, start):
         found[c] = s.found
         net = ARCH.network(c)
         assert max(net.utilisation(ARCH.rates(sensor_rate, s.found)).values()) <= 1.0 + 1e-9
+        if s.found == s.limit == ARCH.max_command_rate_hz:
+            rate, wait = s.probes[-1]
+            assert rate == s.limit and wait <= s.threshold  # stopped at the limit, no delay
+            continue
         assert max(net.utilisation(ARCH.rates(sensor_rate, s.found + 1)).values()) > 1.0
     assert found["I"] >= found["II"] >= found["III"] >= start
 
