@@ -147,6 +147,15 @@ def learn_background(background: np.ndarray, points: np.ndarray, scene: Scene) -
     return np.union1d(background, voxel_keys(static))
 
 
+def learn_released(
+    background: np.ndarray, points: np.ndarray, box: tuple[RigidTransform, np.ndarray]
+) -> np.ndarray:
+    """The background with the points inside the box of an object just let go (the robot put
+    it there: it is not an intruder, though a person is present)."""
+    inside = points[in_boxes(points, [box], MARGIN)]
+    return np.union1d(background, voxel_keys(inside))
+
+
 @dataclass(frozen=True)
 class Budget:
     """The protective-separation budget of `budget` (m, s)."""

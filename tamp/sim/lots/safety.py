@@ -4,11 +4,12 @@ between the arm command stream and the plant.
 - Something near (class-agnostic, `tamp.sim.lots.depth_safety`): the monitor's own
   low-resolution depth camera on the wrist gives points in the world through the intrinsics
   and the camera pose (the arm's own kinematics at the measured joint angles); every point
-  that is not the table, the gripper, the held object or the static scene learnt while no
-  person was in the cell is foreign, and its distance to the end effector's collision boxes
-  and the held object's box is measured. Below ``hand_distance`` (0.05 m) the arm holds
-  position; it resumes when a frame shows nothing foreign that near. No label image, body
-  index or pose of anything but the arm reaches the monitor. The rate (``image_period``,
+  that is not the table, the gripper, the held object or the static scene (learnt while no
+  person was in the cell, or let go by the robot) is foreign, and its distance to the end
+  effector's collision boxes and the held object's box is measured. Below
+  ``hand_distance`` (0.05 m) the arm holds position; it resumes when a frame shows nothing
+  foreign that near. No label image, body index or pose of anything but the arm reaches
+  the monitor. The rate (``image_period``,
   10 ms) and the resolution (80 x 45) follow from the arm's stopping distance and the
   person's speed: see `tamp.sim.lots.depth_safety`.
 - Joint speed and acceleration limits (Franka's published values, `catalogue.ARM`): the
@@ -57,6 +58,7 @@ from tamp.sim.lots.depth_safety import (
     Scene,
     depth_points,
     learn_background,
+    learn_released,
     separation,
 )
 from tamp.sim.lots.scenario import SafetySettings
@@ -96,6 +98,7 @@ class SafetyState:
     stops: tuple[SafetyStop, ...] = ()  # finished stops
     hand_distance: float = math.inf  # nearest foreign point in the last frame (inf: none)
     background: np.ndarray | None = None  # voxel keys of the static scene (depth_safety)
+    held: tuple[RigidTransform, np.ndarray] | None = None  # the held box at the last frame
     image_time: float | None = None
     last_own_image: float = -math.inf
     frames: int = 0  # images rendered for the monitor alone
@@ -397,8 +400,11 @@ class SafetyMonitor(LeafSystem):
         depth = self.depth_port.Eval(context).data[..., 0]
         self.gripper.set(q_meas)
         points, too_close = depth_points(depth, self.intrinsics, self.gripper.camera_pose())
-        scene = Scene(self.table_z, self.gripper.boxes_in_world(), self._held(q_meas, command))
+        held = self._held(q_meas, command)
+        scene = Scene(self.table_z, self.gripper.boxes_in_world(), held)
         background = s.background if s.background is not None else np.zeros(0, np.int64)
+        if present and s.held is not None and not held:  # let go here: the robot's doing
+            background = learn_released(background, points, s.held)
         if present:
             scene = dataclasses.replace(scene, background=background)
             d = separation(points, scene, too_close)
@@ -410,7 +416,8 @@ class SafetyMonitor(LeafSystem):
             s = _replace(s, frames=s.frames + 1, last_own_image=t)
         else:
             s = _replace(s, shared=s.shared + 1)
-        return _replace(s, hand_distance=d, image_time=t, background=background), True
+        s = _replace(s, held=held[0] if held else None, background=background)
+        return _replace(s, hand_distance=d, image_time=t), True
 
     def _held(self, q_meas, command) -> Boxes:
         """The held object's box while the fingers are commanded closer than they are (they

@@ -21,6 +21,7 @@ from tamp.sim.lots.depth_safety import (
     foreign_points,
     in_boxes,
     learn_background,
+    learn_released,
     separation,
 )
 from tamp.sim.lots.safety import GripperModel, held_box
@@ -105,6 +106,21 @@ def test_the_learnt_static_scene_is_not_foreign_something_new_is(gripper):
     hand = tcp + np.array([[0.0, 0.04, -0.03]])
     assert separation(np.vstack([block, hand]), known) < BAND
     assert separation(block, scene, too_close=3) == 0.0  # something under the near plane
+
+
+def test_an_object_let_go_by_the_robot_joins_the_static_scene(gripper):
+    gripper.set(np.r_[READY, 0.02, 0.02])
+    box = held_box(gripper.tcp_pose(), 0.04)
+    gripper.set(np.r_[READY, 0.04, 0.04])  # the fingers opened: nothing held any more
+    scene = Scene(-1.0, gripper.boxes_in_world())
+    X_WH, half = box
+    placed = X_WH @ np.array([[0.0, 0.0, -0.02], [0.01, 0.0, -0.015]]).T  # in the old box
+    hand = X_WH @ np.array([0.0, 0.0, half[2] + 0.02])  # 2 cm under it
+    assert separation(placed.T, scene) < BAND  # foreign until learnt
+    background = learn_released(np.zeros(0, np.int64), np.vstack([placed.T, hand]), box)
+    known = Scene(-1.0, scene.gripper, background=background)
+    assert separation(placed.T, known) == math.inf
+    assert separation(np.vstack([placed.T, hand]), known) < math.inf  # the hand is not learnt
 
 
 def test_in_boxes_with_margin():
