@@ -7,6 +7,7 @@ exported ports) and returns its handles (`LotsStation`).
       Perception.observation ─► PandaSkillController ─► ArmCommandStream (1 kHz)
         ─► SafetyMonitor ─► desired_state (the arm's PD actuators)
       SafetyMonitor.stopped ─► PandaSkillController.hold
+      safety RgbdSensor (depth only, 1/4 size, at the wrist camera) ─► SafetyMonitor
       PandaSkillController.view_request ─► Perception
     PersonSystem (optional, tamp.sim.lots.person) ─► the hand's desired state, carry forces
     exported: skill_command, person_present (in; the person's curtain when scripted);
