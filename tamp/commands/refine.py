@@ -5,6 +5,7 @@
                           [--diagram out.svg]
                           [--refined refined.yaml] [--no-verify] [--seed N]
                           [--from-log RUN.json|RUN.csv] [--meshcat] [--max-sim-time S]
+                          [--tune-online]
 
 Simulates the original program, then the program after each refinement phase
 (parallelized, speed-adjusted, rate-refined; `tamp.refine.refinement`, every run measured
@@ -79,6 +80,12 @@ def register(subparsers) -> None:
         help="refine from a measured run's log (JSON or CSV; tamp refine --json writes one) "
         "without simulating: the phases are predictions",
     )
+    p.add_argument(
+        "--tune-online",
+        action="store_true",
+        help="Fig. 5 probes the publish rates in one more simulated run (per robot and trigger "
+        "sensor) instead of on the architecture's queue model (per behavior)",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=run)
 
@@ -114,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
             ("--record", args.record),
             ("--meshcat", args.meshcat),
             ("--max-sim-time", args.max_sim_time is not None),
+            ("--tune-online", args.tune_online),
         )
         if given
     ]
@@ -163,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
         category=args.category,
         scale=args.scale,
         record=args.record,
+        tune_online=args.tune_online,
         progress=lambda m: progress(m, quiet=args.json),
     )
     if args.timeline:

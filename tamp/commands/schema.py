@@ -1,10 +1,10 @@
 """``tamp schema FORMAT``: the JSON Schema of a YAML file format, for editors to validate with.
 
-The formats read by the typed loader (`tamp.schema`: the simulation scenarios and the
-refinement scenes) have their schema derived from the dataclasses the loader reads
-(`tamp.schema.json_schema`), so it follows the code. The formats read by hand-written loaders
-(demonstrations, domains, LTL tasks, interference events, refinement programs and
-architectures) have their schema written here, beside the registry, from the loaders'
+The formats read by the typed loader (`tamp.schema`: the simulation scenarios, the
+refinement scenes and architectures) have their schema derived from the dataclasses the
+loader reads (`tamp.schema.json_schema`), so it follows the code. The formats read by
+hand-written loaders (demonstrations, domains, LTL tasks, interference events and refinement
+programs) have their schema written here, beside the registry, from the loaders'
 constants (choices, sides, sections); the tests validate every packaged file against its
 format's schema, and a packaged file no format claims fails them. A schema states the keys,
 types, bounds and choices; relations between fields (a goal named in a constraint exists, a
@@ -253,32 +253,6 @@ def _refine_program() -> dict[str, Any]:
     )
 
 
-def _refine_architecture() -> dict[str, Any]:
-    """`tamp.refine.architecture.load_architecture` (Figueroa Heredia et al. 2018, Table 1)."""
-    from tamp.refine.program import CATEGORIES
-
-    times = _obj({"sensor": _NONNEGATIVE, "command": _NONNEGATIVE}, ("sensor", "command"))
-    cats = {
-        cat: _obj(
-            {"main_cpu": times, "sub_cpu": times} | ({} if cat == "I" else {"channel": times}),
-            ("main_cpu", "sub_cpu") if cat == "I" else ("main_cpu", "sub_cpu", "channel"),
-        )
-        for cat in CATEGORIES
-    }
-    return _obj(
-        {
-            "version": _VERSION,
-            "name": _NAME,
-            "description": {"type": "string"},
-            "wait_margin": {**_NONNEGATIVE, "description": "[s]"},
-            "rate_step_hz": _POSITIVE,
-            "probe_window": {**_POSITIVE, "description": "[s]"},
-            "categories": _obj(cats, tuple(CATEGORIES)),
-        },
-        ("version", "wait_margin", "rate_step_hz", "probe_window", "categories"),
-    )
-
-
 # --- derived schemas (the typed loader's dataclasses) ----------------------------------------
 
 
@@ -300,6 +274,17 @@ def _sim_lots() -> dict[str, Any]:
         extra={"version": _VERSION, "objects": {"type": "array", "items": entry}},
         required_extra=["version"],
     )
+
+
+def _refine_architecture() -> dict[str, Any]:
+    """`tamp.refine.architecture.load_architecture` (Figueroa Heredia et al. 2018, Table 1)."""
+    from tamp.refine.architecture import Architecture
+    from tamp.refine.program import CATEGORIES
+    from tamp.schema import json_schema
+
+    doc = json_schema(Architecture, extra={"version": _VERSION}, required_extra=["version"])
+    doc["properties"]["categories"]["required"] = list(CATEGORIES)  # the loader needs each
+    return doc
 
 
 def _refine_scene() -> dict[str, Any]:
@@ -395,7 +380,7 @@ FORMATS: dict[str, Format] = {
             "refine-architecture",
             "a communication architecture",
             "tamp.refine.architecture.load_architecture",
-            ("scenarios/refine/*architecture.yaml",),
+            ("scenarios/refine/*architecture.yaml", "scenarios/refine/architecture_*.yaml"),
             _refine_architecture,
         ),
         Format(

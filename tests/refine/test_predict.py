@@ -127,6 +127,7 @@ def test_cli_from_log_predicts_and_bad_logs_exit_2(tmp_path, capsys):
     capsys.readouterr()
     rec = str(tmp_path / "r.html")
     assert tamp_main(["refine", "task4", "--from-log", str(log), "--record", rec]) == 2
+    assert tamp_main(["refine", "task4", "--from-log", str(log), "--tune-online"]) == 2
 
 
 RESULT = Path(__file__).resolve().parents[2] / "benchmarks/results/refine_task4.json"
