@@ -247,7 +247,7 @@ def test_a_perturbed_cell_adds_depth_noise_and_a_drawn_grasp_failure_is_retried(
     }
     assert readers == {
         "perception": "depth_noise",
-        "safety": "depth_noise",
+        "safety": "safety_camera",  # the monitor's own camera, noise-free
         "depth_noise": "wrist_camera",
     }
     d = CellDriver(cell)
