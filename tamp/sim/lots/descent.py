@@ -6,7 +6,10 @@ controller (`tamp.sim.lots.skills`) calls them once per view and once per contro
 **Fusion.** Each view contributes its best grasp on the target (`ViewGrasp`), stored
 relative to the target's detected centre in that view (world frame, table plane), so that a
 target that moves between views carries its grasps along. The last ``window`` views are fused
-(`fuse`): views without a grasp on the target count as views but add nothing; the estimate
+(`fuse`) over their largest agreeing cluster (grasps within `CLUSTER_RADIUS` and
+`CLUSTER_ANGLE` of one of them: the network alternating between two good grasps, e.g. either
+end of a handle, gives two modes, and the one more views support is fused); views without a
+grasp on the target or outside the cluster count as views but add nothing; the estimate
 is the quality-weighted mean of the grasp centres' offsets and of the closing angles
 (doubled, as a parallel gripper is symmetric under a half turn); its spread is the weighted
 RMS distance of the centres from the mean (m) and the circular standard deviation of the
@@ -36,6 +39,11 @@ import numpy as np
 from tamp.grasp.rect import angle_difference, wrap_angle
 from tamp.sim.lots.grasping import GraspCandidate
 
+#: views agree (`fuse`) when their grasp centres (relative to the target) lie within this
+#: distance and their closing angles within this angle of one view's: a long handle's grasps
+#: at either end are two modes, fused apart, not one wide estimate
+CLUSTER_RADIUS = 0.015
+CLUSTER_ANGLE = math.radians(20.0)
 #: other objects within this distance (m, table plane) of the target count as clutter that
 #: the exploring camera moves away from
 CLUTTER_RADIUS = 0.15
@@ -91,12 +99,33 @@ class Thresholds:
         )
 
 
-def fuse(window: Sequence[ViewGrasp], centre: tuple[float, float]) -> FusedGrasp | None:
-    """Fuse the views of ``window`` (module docstring); the executed grasp is placed on the
-    target's present ``centre``. None when no view of the window has a grasp."""
-    members = [v for v in window if v.grasp is not None]
-    if not members:
+def fuse(
+    window: Sequence[ViewGrasp],
+    centre: tuple[float, float],
+    radius: float | None = None,
+    angle: float | None = None,
+) -> FusedGrasp | None:
+    """Fuse the views of ``window`` (module docstring) over their largest agreeing cluster
+    (``radius``, ``angle``: default `CLUSTER_RADIUS`, `CLUSTER_ANGLE`); the executed grasp
+    is placed on the target's present ``centre``. None when no view of the window has a
+    grasp."""
+    radius = CLUSTER_RADIUS if radius is None else radius
+    angle = CLUSTER_ANGLE if angle is None else angle
+    grasps = [v for v in window if v.grasp is not None]
+    if not grasps:
         return None
+
+    def near(a: ViewGrasp, b: ViewGrasp) -> bool:
+        close = math.dist(a.offset, b.offset) <= radius
+        return close and angle_difference(a.grasp.yaw, b.grasp.yaw) <= angle
+
+    def support(v: ViewGrasp) -> tuple:
+        group = [u for u in grasps if near(v, u)]
+        # most views, then the most quality; the offset breaks ties by content, not order
+        return (len(group), sum(u.grasp.quality for u in group), v.offset)
+
+    seed = max(grasps, key=support)
+    members = [u for u in grasps if near(seed, u)]
     w = np.array([max(v.grasp.quality, 1e-3) for v in members])
     off = np.array([v.offset for v in members])
     mean = (w[:, None] * off).sum(axis=0) / w.sum()

@@ -277,7 +277,7 @@ class DescentSettings:
     explore_shift: float = spec(
         0.03, min=0.0, max=0.08, unit="m", help="sideways camera offset while uncertain"
     )
-    window: int = spec(4, min=1, max=20, help="views fused (the latest ones)")
+    window: int = spec(6, min=1, max=20, help="views fused (the latest ones)")
     min_views: int = spec(3, min=1, max=20, help="views with a grasp needed for confidence")
     max_spread: float = spec(
         0.008, min=0.0, strict_min=True, unit="m", help="RMS spread of the fused grasp centres"

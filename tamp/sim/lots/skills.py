@@ -703,7 +703,8 @@ class PandaSkillController(LeafSystem):
             f, (x0, y0) = s.sure  # moved with the target since that view
             g = f.grasp
             return self._grasp(s, t, replace(g, x=g.x + cx - x0, y=g.y + cy - y0))
-        hovered = s.bottom_t is not None and t - s.bottom_t > d.hover
+        # committed: no hover limit (it is settling over the committed grasp)
+        hovered = s.bottom_t is not None and t - s.bottom_t > d.hover and not s.committed
         if hovered or el > DESCENT_TIMEOUT:
             f = s.fused
             why = f"no confident grasp on the {s.target_cls} at the lowest point" + (

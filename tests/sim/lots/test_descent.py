@@ -43,12 +43,15 @@ def test_agreeing_views_are_confident_once_there_are_enough():
     assert (f.grasp.x, f.grasp.y) == pytest.approx((0.51, 0.2), abs=0.002)
 
 
-def test_two_grasp_modes_are_not_confident():
-    """The network alternating between the two ends of a tool: the mean lies between them,
-    the spread is half their distance, the hand keeps exploring."""
-    views = [_view(0.47, 0.2), _view(0.53, 0.2), _view(0.47, 0.2), _view(0.53, 0.2)]
-    f = fuse(views, (0.5, 0.2))
-    assert f.spread == pytest.approx(0.03, abs=1e-6) and not confident(f, TH)
+def test_two_grasp_modes_are_fused_apart():
+    """The network alternating between the two ends of a tool: two modes, fused apart (not
+    one wide estimate between them); the hand commits once one mode has enough views."""
+    a, b = _view(0.47, 0.2), _view(0.53, 0.2)
+    f = fuse([a, b, a, b], (0.5, 0.2))
+    assert f.spread == pytest.approx(0.0, abs=1e-9) and f.views == 2 and f.misses == 2
+    assert not confident(f, TH)
+    f = fuse([a, b, a, b, a], (0.5, 0.2))
+    assert confident(f, TH) and f.grasp.x == pytest.approx(0.47)
 
 
 def test_closing_angles_fuse_modulo_a_half_turn():

@@ -39,14 +39,17 @@ def _cell(tmp_path):
 
 def _pick(cell, scatter: float) -> tuple[Status, list[tuple[float, str]], object, list]:
     """One ``Pick(body)`` with a predictor that puts every view's grasp on the body's centre
-    plus uniform noise of ``scatter`` metres; up to the first grasp's approach (or the end).
-    Returns the status, the skill log, the final skill state and the cameras of the views."""
-    rng = np.random.default_rng(0)
+    (``scatter`` 0) or on one of four points ``scatter`` apart in turn; up to the first
+    grasp's approach (or the end). Returns the status, the skill log, the final skill state
+    and the cameras of the views."""
     cameras = []
 
     def scripted(crop, X_WC, view_height):
         cameras.append(np.asarray(X_WC)[:3, 3].copy())
-        dx, dy = rng.uniform(-scatter, scatter, 2) if scatter else (0.0, 0.0)
+        # scattered: four grasps ``scatter`` apart in turn, so that no three of any six
+        # consecutive views agree (the fused cluster never has the views to commit)
+        k = len(cameras) % 4
+        dx, dy = (scatter * (k % 2), scatter * (k // 2))
         return [GraspCandidate(XY[0] + dx, XY[1] + dy, 0.05, math.pi / 2, 0.04, 0.9, view_height)]
 
     cell.planner.candidates = scripted
