@@ -5,13 +5,6 @@ hydroelastic contact (with point-contact fallback): the objects and finger pads 
 compliant-hydroelastic boxes, the table and baskets rigid, so objects rest steadily on flat
 faces and a closed gripper holds an object only by friction. Nothing is welded to the hand.
 
-An object's compliant boxes at least 1 cm thick are meshed as convex shapes
-(`coarse_compliant_boxes`): the same box, modulus, friction and dissipation, with the
-pressure field rising linearly from the faces to the box's centre (12 tetrahedra) instead of
-Drake's medial-axis box mesh. A box resting on the table then makes about 11 contact polygons
-instead of 26-35, and each polygon is a constraint of every SAP step: resting objects were
-most of the cell's physics.
-
 The arm's joints are driven by the plant's PD-controlled actuators (`PdControllerGains`,
 implicit in SAP) tracking a desired state; gravity is switched off for the arm's model
 instance only, which is ideal gravity compensation (Franka's controller compensates the
@@ -25,15 +18,12 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.common import MemoryFile
 from pydrake.geometry import (
     AddContactMaterial,
     AddRigidHydroelasticProperties,
     Box,
     CollisionFilterDeclaration,
-    Convex,
     GeometrySet,
-    InMemoryMesh,
     PerceptionProperties,
     ProximityProperties,
     RenderLabel,
@@ -57,10 +47,6 @@ from tamp.sim.lots.catalogue import (
     ObjectClass,
 )
 from tamp.sim.lots.scenario import CellObject, CellScenario
-
-#: the thinnest box re-meshed as a convex shape (m): the 6 mm slabs of the saw's blade and the
-#: toy car's base, as 12 sliver tetrahedra, kicked their object off the table at first contact
-CONVEX_MIN_SIDE = 0.01
 
 #: colours of the workspace mats (W^A green, W^B blue), drawn 1 mm above the table
 MAT_RGBA = {"A": (0.55, 0.75, 0.55, 1.0), "B": (0.55, 0.65, 0.85, 1.0)}
@@ -151,8 +137,6 @@ def add_cell_plant(
         z = 0.01 if w is not None and w.tray else 0.0
         X = RigidTransform(RotationMatrix.MakeZRotation(o.yaw), [o.xy[0], o.xy[1], z + 1e-4])
         plant.SetDefaultFloatingBaseBodyPose(body, X)
-        if scenario.plant.contact_model != "point":
-            coarse_compliant_boxes(plant, scene_graph, body)
         bodies[o.id] = body
         classes[o.id] = o.cls
 
@@ -166,41 +150,6 @@ def add_cell_plant(
         _person_roles(plant, scene_graph, hand)
     staged_ids = tuple(o.id for o in staged or ())
     return CellPlant(plant, scene_graph, arm, bodies, classes, q0, actuator_order, hand, staged_ids)
-
-
-def box_obj(size) -> str:
-    """Wavefront OBJ text of a box of ``size`` (x, y, z) centred on its frame: 8 vertices,
-    12 outward triangles."""
-    hx, hy, hz = (float(v) / 2 for v in size)
-    lines = [f"v {x!r} {y!r} {z!r}" for x in (-hx, hx) for y in (-hy, hy) for z in (-hz, hz)]
-    quads = ((1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4))
-    for a, b, c, d in quads:
-        lines += [f"f {a} {b} {c}", f"f {a} {c} {d}"]
-    return "\n".join(lines) + "\n"
-
-
-def coarse_compliant_boxes(plant: MultibodyPlant, scene_graph, body) -> int:
-    """Re-meshes ``body``'s compliant-hydroelastic boxes as convex shapes of the same box
-    (`SceneGraph.ChangeShape`: same geometry, pose, roles and proximity properties); returns
-    how many. Drake meshes a compliant `Convex` as one tetrahedron per face triangle joined
-    at the centre, so the pressure is 0 on the faces and the box's modulus-scaled maximum at
-    its centre; a box resting on a face intersects the table in about 11 polygons (Drake's
-    medial-axis box mesh: 26-35), and SAP solves one contact constraint per polygon. Boxes
-    thinner than `CONVEX_MIN_SIDE` keep Drake's box mesh."""
-    inspector = scene_graph.model_inspector()
-    changed = 0
-    for gid in plant.GetCollisionGeometriesForBody(body):
-        shape = inspector.GetShape(gid)
-        props = inspector.GetProximityProperties(gid)
-        if not isinstance(shape, Box) or props is None or min(shape.size()) < CONVEX_MIN_SIDE:
-            continue
-        if not props.HasProperty("hydroelastic", "hydroelastic_modulus"):
-            continue  # rigid (or no hydroelastic representation): left as it is
-        name = f"{inspector.GetName(gid)}.obj"
-        mesh = InMemoryMesh(mesh_file=MemoryFile(box_obj(shape.size()), ".obj", name))
-        scene_graph.ChangeShape(plant.get_source_id(), gid, Convex(mesh))
-        changed += 1
-    return changed
 
 
 def _add_person(plant: MultibodyPlant, parser) -> object:
