@@ -280,16 +280,25 @@ def sample_cameras(rng: np.random.Generator, placements: list[Placement], cfg: S
         pl = placements[int(rng.integers(len(placements)))]
         target = np.array([pl.x, pl.y, TABLE_TOP]) + np.r_[rng.uniform(-0.04, 0.04, 2), 0.0]
         h = rng.uniform(cfg.min_height, cfg.max_height)
-        tilt = math.radians(rng.uniform(0.0, cfg.max_tilt_deg))
-        az = rng.uniform(-math.pi, math.pi)
-        eye = target + h * np.array(
-            [math.sin(tilt) * math.cos(az), math.sin(tilt) * math.sin(az), math.cos(tilt)]
-        )
-        X = np.eye(4)
-        X[:3, :3] = look_at(eye, target, rng.uniform(-math.pi, math.pi))
-        X[:3, 3] = eye
-        cams.append(X)
+        cams.append(tilted_camera(rng, target, h, cfg.max_tilt_deg))
     return cams
+
+
+def tilted_camera(
+    rng: np.random.Generator, target: np.ndarray, height: float, max_tilt_deg: float
+) -> np.ndarray:
+    """A camera pose (4 x 4, world from camera) ``height`` from ``target`` along a direction
+    tilted up to ``max_tilt_deg`` from the vertical at a random azimuth, looking at the target
+    at a random roll: the eye-in-hand views of every rendered data set."""
+    tilt = math.radians(rng.uniform(0.0, max_tilt_deg))
+    az = rng.uniform(-math.pi, math.pi)
+    eye = target + height * np.array(
+        [math.sin(tilt) * math.cos(az), math.sin(tilt) * math.sin(az), math.cos(tilt)]
+    )
+    X = np.eye(4)
+    X[:3, :3] = look_at(eye, target, rng.uniform(-math.pi, math.pi))
+    X[:3, 3] = eye
+    return X
 
 
 def visible_grasps(K, X_WC, placements, body_of, label, size) -> list[GraspRect]:

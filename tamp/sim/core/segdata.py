@@ -53,7 +53,14 @@ from pathlib import Path
 import numpy as np
 
 from tamp.grasp.objects import make_object
-from tamp.grasp.synthetic import Mat, SceneRenderer, SynthConfig, Visual, VisualBody, look_at
+from tamp.grasp.synthetic import (
+    Mat,
+    SceneRenderer,
+    SynthConfig,
+    Visual,
+    VisualBody,
+    tilted_camera,
+)
 
 BACKGROUND = "background"
 TABLE = "table"
@@ -479,15 +486,7 @@ def sample_cameras(
             target = np.zeros(3)
         target[:2] += rng.uniform(-0.05, 0.05, 2)
         h = max(rng.uniform(cfg.min_height, cfg.max_height), tallest + 0.12)
-        tilt = math.radians(rng.uniform(0.0, cfg.max_tilt_deg))
-        az = rng.uniform(-math.pi, math.pi)
-        eye = target + h * np.array(
-            [math.sin(tilt) * math.cos(az), math.sin(tilt) * math.sin(az), math.cos(tilt)]
-        )
-        X = np.eye(4)
-        X[:3, :3] = look_at(eye, target, rng.uniform(-math.pi, math.pi))
-        X[:3, 3] = eye
-        cams.append(X)
+        cams.append(tilted_camera(rng, target, h, cfg.max_tilt_deg))
     return cams
 
 
