@@ -35,7 +35,12 @@ class Extra:
 
 EXTRAS = (
     Extra("sim", ("pydrake",), "Drake", "the Drake workcells (tamp simulate, tamp refine)"),
-    Extra("grasp", ("torch", "PIL", "tifffile"), "torch", "grasp and detector networks (tamp grasp, tamp detect)"),
+    Extra(
+        "grasp",
+        ("torch", "PIL", "tifffile"),
+        "torch",
+        "grasp and detector networks (tamp grasp, tamp detect)",
+    ),
     Extra("campaign", ("ray",), "Ray", "seeded campaigns in parallel (tamp campaign)"),
     Extra("serve", ("websockets",), "websockets", "the live MR link (tamp serve)"),
 )
