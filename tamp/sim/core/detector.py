@@ -29,8 +29,8 @@ from tamp.sim.core.instances import (
     MIN_PIXELS,
     UNKNOWN_BELOW,
     ObjectDetection,
-    backproject_mask,
     extract,
+    located,
 )
 from tamp.sim.core.segdata import STUFF
 from tamp.sim.core.segnet import SegNet, load, prepare
@@ -124,20 +124,7 @@ class Detector:
         out = []
         for d in found:
             mask = d.mask.repeat(k, axis=0).repeat(k, axis=1)[:h, :w]
-            points = backproject_mask(mask, depth, intrinsics, X_WC)
-            if points.shape[1] == 0:
-                continue
-            vs, us = np.nonzero(mask)
-            valid = depth[mask]
-            out.append(
-                dataclasses.replace(
-                    d,
-                    mask=mask,
-                    points=points,
-                    centroid=tuple(float(x) for x in np.median(points, axis=1)),
-                    u=float(us.mean()),
-                    v=float(vs.mean()),
-                    depth=float(np.median(valid[valid > 0])),
-                )
-            )
+            where = located(mask, depth, intrinsics, X_WC)
+            if where is not None:
+                out.append(dataclasses.replace(d, mask=mask, **where))
         return out

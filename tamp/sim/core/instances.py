@@ -184,21 +184,25 @@ def extract(
             c = objects[int(mean.argmax())]
             score = float(mean.max())
             cls = names[c] if score >= unknown_below else UNKNOWN
-            points = backproject_mask(inst, depth, intrinsics, X_WC)
-            if points.shape[1] == 0:
-                continue
-            vs, us = np.nonzero(inst)
-            valid = depth[inst]
-            out.append(
-                ObjectDetection(
-                    cls,
-                    score,
-                    inst,
-                    tuple(float(x) for x in np.median(points, axis=1)),
-                    points,
-                    float(us.mean()),
-                    float(vs.mean()),
-                    float(np.median(valid[valid > 0])),
-                )
-            )
+            where = located(inst, depth, intrinsics, X_WC)
+            if where is not None:
+                out.append(ObjectDetection(cls, score, inst, **where))
     return out
+
+
+def located(mask: np.ndarray, depth: np.ndarray, intrinsics, X_WC) -> dict | None:
+    """Where a mask's object is: its world-frame points (``depth``: metres, 0 = no return),
+    their median as the centroid, the mask's mean pixel and its median valid depth, as
+    `ObjectDetection` fields; None when no pixel of the mask has a depth return."""
+    points = backproject_mask(mask, depth, intrinsics, X_WC)
+    if points.shape[1] == 0:
+        return None
+    vs, us = np.nonzero(mask)
+    valid = depth[mask]
+    return {
+        "centroid": tuple(float(x) for x in np.median(points, axis=1)),
+        "points": points,
+        "u": float(us.mean()),
+        "v": float(vs.mean()),
+        "depth": float(np.median(valid[valid > 0])),
+    }
