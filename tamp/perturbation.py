@@ -18,6 +18,7 @@ Format (every key optional; a spread is a standard deviation for ``normal``, cli
       robot: {distribution: uniform, xy: 0.05, yaw: 0.05}   # the robot's start pose
       friction: [0.5, 0.9]          # Coulomb coefficient of the objects, uniform in the range
       sensor: {depth_noise: 0.002, pose_noise: 0.005}       # m: per depth pixel, per estimate
+      sensor: {detector: high}      # the seeded noisy detector's level (low or high)
       timing: {jitter: 0.5}         # s: sigma of the time of each of the person's actions
       skills: {Pick: 0.05}          # probability that one attempt of the action fails
 
@@ -48,6 +49,9 @@ MAX_YAW = math.pi
 FRICTION_RANGE = (0.05, 2.0)
 MAX_DEPTH_NOISE = 0.05
 MAX_POSE_NOISE = 0.2
+#: levels of the seeded noisy detector (`tamp.sim.core.detection_noise.LEVELS` defines them):
+#: misses, class swaps, mask jitter, fresh identities and false positives in every view
+DETECTOR_LEVELS = ("low", "high")
 MAX_JITTER = 60.0
 #: how many attempts of one action get a drawn failure flag (later attempts succeed)
 MAX_ATTEMPTS = 32
@@ -109,6 +113,7 @@ class Perturbation:
     timing_jitter: float = 0.0
     skill_failure: Mapping[str, float] = field(default_factory=dict)
     source: str = ""
+    detector: str | None = None  # noisy detector level (`DETECTOR_LEVELS`); None: exact
 
     def sample(self, seed: int) -> PerturbationSample:
         """Run ``seed``'s draw of this perturbation (same seed, same sample, bit for bit)."""
@@ -129,7 +134,7 @@ class Perturbation:
             out.add("robot")
         if self.friction is not None:
             out.add("friction")
-        if self.depth_noise > 0 or self.pose_noise > 0:
+        if self.depth_noise > 0 or self.pose_noise > 0 or self.detector is not None:
             out.add("sensor")
         if self.timing_jitter > 0:
             out.add("timing")
@@ -152,7 +157,11 @@ class Perturbation:
             "objects": self.objects.to_json(),
             "robot": self.robot.to_json(),
             "friction": None if self.friction is None else list(self.friction),
-            "sensor": {"depth_noise": self.depth_noise, "pose_noise": self.pose_noise},
+            "sensor": {
+                "depth_noise": self.depth_noise,
+                "pose_noise": self.pose_noise,
+                "detector": self.detector,
+            },
             "timing": {"jitter": self.timing_jitter},
             "skills": dict(self.skill_failure),
         }
@@ -216,6 +225,7 @@ class Applied:
     friction: float | None = None
     depth_noise: float = 0.0
     pose_noise: float = 0.0
+    detector: str | None = None  # the noisy detector's level, drawn from this seed per view
     timing: dict[str, float] = field(default_factory=dict)
     skill_failures: dict[str, list[int]] = field(default_factory=dict)  # failing attempts
     notes: list[str] = field(default_factory=list)
@@ -241,6 +251,7 @@ class Applied:
             "friction": None if self.friction is None else round(self.friction, 6),
             "depth_noise": self.depth_noise,
             "pose_noise": self.pose_noise,
+            "detector": self.detector,
             "timing": {k: round(v, 6) for k, v in sorted(self.timing.items())},
             "skill_failures": {k: list(v) for k, v in sorted(self.skill_failures.items())},
             "notes": list(self.notes),
@@ -274,9 +285,10 @@ def parse_perturbation(f: Fields, key: str = "perturbation") -> Perturbation:
             raise p.error("friction", f"expected [low, high] with low <= high, got {[lo, hi]}")
         friction = (lo, hi)
     s = p.sub("sensor", {})
-    s.check_keys({"depth_noise", "pose_noise"})
+    s.check_keys({"depth_noise", "pose_noise", "detector"})
     depth_noise = s.float("depth_noise", 0.0, min=0.0, max=MAX_DEPTH_NOISE)
     pose_noise = s.float("pose_noise", 0.0, min=0.0, max=MAX_POSE_NOISE)
+    detector = s.str("detector", choices=DETECTOR_LEVELS) if s.has("detector") else None
     t = p.sub("timing", {})
     t.check_keys({"jitter"})
     jitter = t.float("jitter", 0.0, min=0.0, max=MAX_JITTER)
@@ -298,6 +310,7 @@ def parse_perturbation(f: Fields, key: str = "perturbation") -> Perturbation:
         timing_jitter=jitter,
         skill_failure=skills,
         source=f.file,
+        detector=detector,
     )
 
 

@@ -8,6 +8,7 @@ import pytest
 from tamp.errors import InputError
 from tamp.fileio import Fields
 from tamp.perturbation import (
+    DETECTOR_LEVELS,
     MAX_ATTEMPTS,
     NONE,
     NORMAL_CLIP,
@@ -67,6 +68,7 @@ def test_no_section_is_no_perturbation():
         ({"friction": 0.5}, "perturbation.friction", "list of 2"),
         ({"sensor": {"depth_noise": 1.0}}, "perturbation.sensor.depth_noise", "<="),
         ({"sensor": {"noise": 1.0}}, "perturbation.sensor.noise", "unknown key"),
+        ({"sensor": {"detector": "huge"}}, "perturbation.sensor.detector", "one of"),
         ({"timing": {"jitter": -1}}, "perturbation.timing.jitter", ">= 0"),
         ({"skills": {"Pick": 1.0}}, "perturbation.skills.Pick", "below 1"),
         ({"skills": {"Pick": "often"}}, "perturbation.skills.Pick", "number"),
@@ -80,6 +82,16 @@ def test_bad_sections_name_file_and_field(section, field, words):
     assert e.value.file == "scn.yaml"
     assert e.value.field == field
     assert words in str(e.value)
+
+
+def test_the_noisy_detector_is_a_sensor_perturbation_of_its_own():
+    from tamp.sim.core.detection_noise import LEVELS
+
+    assert set(DETECTOR_LEVELS) == set(LEVELS)  # the names the file may give are the levels
+    p = parse({"sensor": {"detector": "high"}})
+    assert p.detector == "high" and p.fields() == {"sensor"} and p.depth_noise == 0.0
+    assert p.to_json()["sensor"]["detector"] == "high"
+    assert parse(FULL).detector is None and NONE.detector is None
 
 
 def test_a_workcell_refuses_what_it_does_not_simulate():

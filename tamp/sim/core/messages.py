@@ -100,7 +100,9 @@ class ViewRequest:
     id: int = 0
     side: str = ""
     target: str | None = None  # class to find for a grasp (then the colour image is rendered)
-    track: int | None = None  # instance tracked so far (its detector id)
+    #: with ``target``: the instance followed so far (perception's track id; None: choose
+    #: one); without: the track a grasp just picked (the lift's view: is it in the gripper?)
+    track: int | None = None
     camera_pose: RigidTransform | None = None  # X_WC when the view was asked for
 
     def __deepcopy__(self, memo: dict) -> ViewRequest:
@@ -109,9 +111,11 @@ class ViewRequest:
 
 @dataclass(frozen=True)
 class Detection:
-    """One instance in view: detector id (label), class, pixel area, centroid, median depth."""
+    """One instance in view: perception's track id (`tamp.sim.core.tracks`: the same
+    instance keeps it across views; 0 when the view was not placed in the world), class,
+    pixel area, centroid pixel, median depth."""
 
-    label: int
+    track: int
     cls: str
     pixels: int
     u: float
@@ -121,10 +125,11 @@ class Detection:
 
 @dataclass(frozen=True)
 class Seen:
-    """An instance as perception last saw it: detector id, class, and the world point of its
-    centroid (back-projected through its median depth: about the middle of its top)."""
+    """An instance as perception last saw it: its track id, class, and its world centroid
+    (the median of its pixels back-projected through their depth: about the middle of its
+    top)."""
 
-    label: int
+    track: int
     cls: str
     position: tuple[float, float, float]
 
@@ -150,7 +155,9 @@ class Observation:
     side: str = ""
     counts: dict[str, int] = field(default_factory=dict)
     detections: tuple[Detection, ...] = ()
-    in_hand: tuple[str, ...] = ()  # classes seen closer than hand_depth (in the gripper)
+    #: what is in the gripper (something nearer than hand_depth): the class of the track the
+    #: grasp picked, or ``unknown``
+    in_hand: tuple[str, ...] = ()
     target: TargetCrop | None = None
     occupied: np.ndarray | None = None  # object pixels on the table (full image, bool)
     #: remembered instances of this workspace not seen now because something hides them

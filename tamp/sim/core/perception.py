@@ -4,32 +4,45 @@ Every workcell with a camera uses it: the LOTS arm's wrist camera (the LOTS cont
 per class, the grasp skill gets the target's crop) and the SMP-MRO youBot's mast camera (the
 object pose estimator back-projects the detections). The cell injects what is its own: the map
 from render labels to object classes (``classes``), the image size and period, the depth
-below which pixels are in the gripper (``hand_depth``), the intrinsics (to remember what was
-seen), and, with each `ViewRequest`, the name of the workspace looked at and the camera's pose
-from its own kinematics. The messages are in `tamp.sim.core.messages`.
+below which pixels are in the gripper (``hand_depth``), the intrinsics (to place and track
+what was seen), optionally a seeded noisy detector (``noise``), and, with each
+`ViewRequest`, the name of the workspace looked at and the camera's pose from its own
+kinematics. The messages are in `tamp.sim.core.messages`.
 
-Zhou et al. (IEEE T-ASE 2023) detect objects with YOLO in the RGB image; here the camera's
-*label image* stands in for the detector: every pixel carries the id of the body it shows
-(Drake's `RgbdSensor`), and the fixed map from those ids to object classes plays the role of
-the detector's class output. What a consumer receives is only what a detector would give:
-per class, the instances in view (pixel area, centroid, depth), never a plant pose.
+Detection. Zhou et al. (IEEE T-ASE 2023) detect objects with YOLO in the RGB image; here the
+camera's *label image* stands in for the detector's masks and classes (`detect`): every pixel
+carries the id of the body it shows (Drake's `RgbdSensor`), and the fixed map from those ids
+to object classes plays the role of the detector's class output. That is the only use of the
+label image: each instance becomes an `ObjectDetection` (mask, class, world points and
+centroid: `tamp.sim.core.instances.located`), exactly what the learned detector
+(`tamp.sim.core.detector`) reports, and nothing after this step reads a label id. With
+``noise`` the view's detections first pass through the seeded noisy detector
+(`tamp.sim.core.detection_noise.perturb`: misses, class swaps, mask jitter, fresh identities,
+false positives), so robustness to perception errors is measured on its own axis.
+
+Identity is perception's own (`tamp.sim.core.tracks`): each detection is associated with a
+track of its class by 3-D distance within a gate; a `Detection`'s ``track`` is that track's
+id. The grasp descent follows its target by track id (`choose_target`: the tracked instance
+or none, never silently another one), occlusion memory keys on tracks, and the lift check
+asks whether the target's track is still on the table. Without a camera pose (or intrinsics)
+nothing can be placed in the world: detections then carry track 0 (no identity).
 
 Counting (Zhou et al. §III-B: the observed state is the count per class of the visible
 workspace): an instance counts when at least ``min_pixels`` of its pixels lie farther than
-``hand_depth`` (0.12 m) from the camera (nearer pixels are in the gripper). For a grasp, the
-target (the instance of the requested class tracked so far, else the one nearest the image
-centre) comes with a square crop of colour, depth and its mask around it: the grasp network's
-input.
+``hand_depth`` (0.12 m) from the camera. Nearer pixels are the gripper's region: when at
+least ``min_pixels`` of them show something, an object is in hand (from depth alone), of the
+class of the track the grasp picked (the request's ``track`` after a grasp, when that track
+has left the table) or ``unknown``. For a grasp, the target comes with a square crop of
+colour, depth and its mask around it: the grasp network's input.
 
 Occlusion is not absence: an object the gripper holds can hang in front of a wrist camera
 (the LOTS arm's sits 6.5 cm off the gripper's axis) and hide part of the workspace.
 Perception therefore keeps, per workspace, what it last saw there (`Seen`: each instance's
-class and the world point of its centroid, back-projected through its depth, the intrinsics
-and the camera pose given with the request). At a new view of that workspace, a remembered
-instance that is not seen now is kept (counted, and reported as occluded) when its point is
-hidden: out of the image, or covered by something nearer than it (the gripper, the held
-object); one whose point lies in plain view is gone (`recall`). An instance seen in the
-gripper is forgotten everywhere: it lies in no workspace.
+track, class and world centroid). At a new view of that workspace, a remembered instance
+that is not seen now is kept (counted, and reported as occluded) when its point is hidden:
+out of the image, or covered by something nearer than it (the gripper, the held object); one
+whose point lies in plain view is gone (`recall`). A track taken into the gripper is
+forgotten everywhere: it lies in no workspace.
 
 Rendering is the budget (~15-20 ms per image kind at 320x180 on 2 cores): the sensor renders
 only when an output port is evaluated, and `Perception` evaluates the image inputs only in
@@ -41,6 +54,7 @@ from __future__ import annotations
 
 import time
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -50,101 +64,96 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I, ImageRgba8U
 
 from tamp.grasp.pinhole import camera_to_pixel
-from tamp.sim.core.camera import backproject
+from tamp.sim.core.detection_noise import LEVELS, perturb
+from tamp.sim.core.instances import ObjectDetection, located
 from tamp.sim.core.messages import Detection, Observation, Seen, TargetCrop, ViewRequest
 from tamp.sim.core.timing import Stopwatch
+from tamp.sim.core.tracks import Tracks, update
 
 #: a remembered point counts as covered where the image shows something this much nearer (m)
 OCCLUSION_TOLERANCE = 0.02
 #: half-size of the patch around a remembered point's pixel that is checked for cover (m)
 OCCLUSION_WINDOW = 0.015
+#: the class reported in hand when the object there is not the grasp's tracked target
+UNKNOWN = "unknown"
+
+
+@dataclass(frozen=True)
+class DetectorNoise:
+    """The seeded noisy detector applied to every view (`tamp.sim.core.detection_noise`):
+    its level (``low`` or ``high``) and the run's seed."""
+
+    level: str
+    seed: int
+
+    def __post_init__(self) -> None:
+        if self.level not in LEVELS:
+            raise ValueError(f"unknown detector noise level {self.level!r} ({sorted(LEVELS)})")
 
 
 @dataclass(frozen=True)
 class PerceptionState:
-    """Last request served, its observation, how many frames were rendered, and what was
-    last seen in each workspace (never mutated: every update builds a new mapping)."""
+    """Last request served, its observation, how many frames were rendered, what was last
+    seen in each workspace, the tracker, and the track in the gripper (never mutated: every
+    update builds new values)."""
 
     served: int = 0
     observation: Observation = field(default_factory=Observation)
     frames: int = 0
     render_kinds: int = 0  # image kinds evaluated in total (label, depth, colour)
     memory: dict[str, tuple[Seen, ...]] = field(default_factory=dict)
+    tracks: Tracks = field(default_factory=Tracks)
+    held: Seen | None = None  # the tracked object in the gripper (None: none, or unknown)
 
     def __deepcopy__(self, memo: dict) -> PerceptionState:
         return self
 
 
-@dataclass(frozen=True)
-class ViewAnalysis:
-    """What `analyse` finds in one view: per-class counts and detections of the objects on
-    the table (beyond ``hand_depth``), the detector ids and classes of the objects in the
-    gripper (`gripper_labels`), and the mask of table-object pixels."""
-
-    counts: dict[str, int]
-    detections: tuple[Detection, ...]
-    held: frozenset[int]
-    in_hand: tuple[str, ...]
-    occupied: np.ndarray
-    hand_cover: float = 0.0  # share of the image the held objects cover
-
-
-def analyse(
+def detect(
     label: np.ndarray,
     depth: np.ndarray,
     classes: dict[int, str],
     *,
     min_pixels: int = 25,
     hand_depth: float = 0.12,
-) -> ViewAnalysis:
-    """What one view's label and depth images show (see `ViewAnalysis`)."""
-    valid = np.isfinite(depth) & (depth > 0)
-    far = valid & (depth > hand_depth)
-    held = gripper_labels(label, depth, classes, min_pixels=min_pixels, hand_depth=hand_depth)
-    detections = []
-    occupied = np.zeros(label.shape, bool)
+    intrinsics: Sequence[float] | None = None,
+    X_WC=None,
+) -> list[ObjectDetection]:
+    """The instances on the table in one view, as a detector reports them: per object body
+    of the label image (``classes``: its render labels' classes), its pixels farther than
+    ``hand_depth``, when at least ``min_pixels``; placed in the world (points, centroid)
+    when ``intrinsics`` and the camera pose ``X_WC`` are given (else no points and a NaN
+    centroid). The only function that reads the label image (module docstring)."""
+    depth = np.where(np.isfinite(depth), depth, 0.0)
+    far = depth > hand_depth
+    placed = intrinsics is not None and X_WC is not None
+    out = []
     for value in np.unique(label):
         cls = classes.get(int(value))
         if cls is None:
             continue
-        on_table = (label == value) & far
-        n = int(on_table.sum())
+        mask = (label == value) & far
+        n = int(mask.sum())
         if n < min_pixels:
             continue
-        occupied |= on_table
-        vs, us = np.nonzero(on_table)
-        detections.append(
-            Detection(
-                int(value),
-                cls,
-                n,
-                float(us.mean()),
-                float(vs.mean()),
-                float(np.median(depth[on_table])),
-            )
-        )
-    counts = dict(Counter(d.cls for d in detections))
-    in_hand = tuple(sorted(classes[v] for v in held))
-    near = valid & ~far
-    cover = float(np.mean(near & np.isin(label, list(held)))) if held else 0.0
-    return ViewAnalysis(counts, tuple(detections), held, in_hand, occupied, cover)
+        where = located(mask, depth, intrinsics, X_WC) if placed else None
+        if where is None:
+            vs, us = np.nonzero(mask)
+            where = {
+                "centroid": (float("nan"),) * 3,
+                "points": np.zeros((3, 0)),
+                "u": float(us.mean()),
+                "v": float(vs.mean()),
+                "depth": float(np.median(depth[mask])),
+            }
+        out.append(ObjectDetection(cls, 1.0, mask, **where))
+    return out
 
 
-def gripper_labels(
-    label: np.ndarray,
-    depth: np.ndarray,
-    classes: dict[int, str],
-    *,
-    min_pixels: int = 25,
-    hand_depth: float = 0.12,
-) -> frozenset[int]:
-    """Detector ids of the objects in the gripper: ``min_pixels`` or more of their pixels
-    nearer than ``hand_depth``."""
-    near = np.isfinite(depth) & (depth > 0) & (depth <= hand_depth)
-    values, n = np.unique(label[near], return_counts=True)
-    return frozenset(
-        int(v) for v, k in zip(values, n, strict=True) if k >= min_pixels and int(v) in classes
-    )
+def gripper_region(depth: np.ndarray, hand_depth: float = 0.12) -> np.ndarray:
+    """The pixels showing something nearer than ``hand_depth``: what the gripper holds
+    (the fingers themselves are outside the wrist camera's view)."""
+    return np.isfinite(depth) & (depth > 0) & (depth <= hand_depth)
 
 
 def hidden(
@@ -177,7 +186,7 @@ def hidden(
 
 def recall(
     memory: tuple[Seen, ...],
-    detections: tuple[Detection, ...],
+    now: tuple[Seen, ...],
     held: frozenset[int],
     depth: np.ndarray,
     X_WC: RigidTransform,
@@ -189,23 +198,18 @@ def recall(
     """(what to remember of the workspace in view now, the remembered instances kept as
     occluded) after one view of it.
 
-    ``memory``: what was last seen in this workspace; ``detections`` and ``depth``: this
-    view; ``held``: detector ids seen in the gripper. Every detection is remembered where it
-    is seen now. A remembered instance not detected now is kept, as occluded, when its point
-    is `hidden`; it is gone when its point is in plain view or when it is in the gripper.
-    Instances are matched by detector id (the label image's instance id, as the grasp's
-    tracking uses it).
+    ``memory``: what was last seen in this workspace; ``now``: this view's detections (their
+    tracks, classes and world centroids); ``depth``: this view; ``held``: the tracks in the
+    gripper. Every detection is remembered where it is seen now. A remembered track not
+    detected now is kept, as occluded, when its point is `hidden`; it is gone when its point
+    is in plain view or when it is in the gripper.
     """
-    now = tuple(
-        Seen(d.label, d.cls, tuple(backproject(d.u, d.v, d.depth, intrinsics, X_WC).tolist()))
-        for d in detections
-    )
-    seen = {d.label for d in detections}
+    seen = {d.track for d in now}
     occluded = tuple(
         m
         for m in memory
-        if m.label not in seen
-        and m.label not in held
+        if m.track not in seen
+        and m.track not in held
         and hidden(m.position, depth, X_WC, intrinsics, tolerance=tolerance, window=window)
     )
     return now + occluded, occluded
@@ -214,11 +218,12 @@ def recall(
 def choose_target(
     detections: tuple[Detection, ...], cls: str, track: int | None, center: tuple[float, float]
 ) -> Detection | None:
-    """The tracked instance if still in view, else the instance of ``cls`` nearest ``center``."""
+    """The target of a grasp view: with a ``track``, that track's detection or None when it
+    is not in view (the target is lost: never another instance in its place); without one,
+    the instance of ``cls`` nearest ``center``."""
+    if track is not None:
+        return next((d for d in detections if d.track == track), None)
     cands = [d for d in detections if d.cls == cls]
-    for d in cands:
-        if d.label == track:
-            return d
     if not cands:
         return None
     return min(cands, key=lambda d: (d.u - center[0]) ** 2 + (d.v - center[1]) ** 2)
@@ -252,12 +257,16 @@ class Perception(LeafSystem):
         min_pixels: int = 25,
         hand_depth: float = 0.12,
         intrinsics: tuple[float, float, float, float] | None = None,
+        noise: DetectorNoise | None = None,
     ):
         super().__init__()
         self.set_name("perception")
         self._classes = dict(classes)
-        #: (fx, fy, cx, cy) of the depth image; None: remember nothing (no back-projection)
+        #: the classes a noisy detector's swap or false positive may take
+        self._task_classes = tuple(sorted(set(self._classes.values())))
+        #: (fx, fy, cx, cy) of the depth image; None: place, track and remember nothing
         self._intrinsics = intrinsics
+        self._noise = noise
         self._min_pixels = min_pixels
         self._hand_depth = hand_depth
         self._center = ((width - 1) / 2, (height - 1) / 2)
@@ -305,15 +314,30 @@ class Perception(LeafSystem):
             depth = self.depth_port.Eval(context).data[..., 0]
         self.render_seconds.append(time.perf_counter() - t0)
         kinds = 2
+        placed = req.camera_pose is not None and self._intrinsics is not None
+        X_WC = req.camera_pose if placed else None
         with self.analysis:
-            view = analyse(
-                label,
-                depth,
-                self._classes,
-                min_pixels=self._min_pixels,
-                hand_depth=self._hand_depth,
+            raw = self._detect(label, depth, req, X_WC)
+            near = gripper_region(depth, self._hand_depth)
+            holding = int(near.sum()) >= self._min_pixels
+            tracks, ids = s.tracks, (0,) * len(raw)
+            if placed:
+                keep = {m.track for seen in s.memory.values() for m in seen}
+                keep |= {req.track} if req.track is not None else set()
+                observed = [(d.cls, d.centroid) for d in raw]
+                tracks, ids = update(s.tracks, observed, context.get_time(), keep=keep)
+            dets = tuple(
+                Detection(i, d.cls, d.pixels, d.u, d.v, d.depth)
+                for i, d in zip(ids, raw, strict=True)
             )
-            counts, dets = view.counts, view.detections
+            held = self._held(s, req, tracks, ids, holding)
+            gone = frozenset({held.track}) if held is not None else frozenset()
+            tracks = tracks.without(gone)
+            in_hand = (held.cls,) if held is not None else (UNKNOWN,) if holding else ()
+            occupied = np.zeros(depth.shape, bool)
+            for d in raw:
+                occupied |= d.mask
+            counts = dict(Counter(d.cls for d in dets))
             det = None
             if req.target is not None:
                 det = choose_target(dets, req.target, req.track, self._center)
@@ -325,19 +349,24 @@ class Perception(LeafSystem):
             self.render_seconds[-1] += time.perf_counter() - t0
             kinds += 1
             with self.analysis:
-                u0, v0 = crop_square(self._crop, label.shape, det.u, det.v)
+                mask = raw[dets.index(det)].mask & (depth > self._hand_depth)
+                u0, v0 = crop_square(self._crop, depth.shape, det.u, det.v)
                 sl = (slice(v0, v0 + self._crop), slice(u0, u0 + self._crop))
                 target = TargetCrop(
                     det,
                     (u0, v0),
                     _frozen(rgb[sl]),
                     _frozen(np.nan_to_num(depth[sl], nan=0.0, posinf=0.0)),
-                    _frozen((label[sl] == det.label) & (depth[sl] > self._hand_depth)),
+                    _frozen(mask[sl]),
                 )
         memory, occluded = s.memory, ()
-        if req.camera_pose is not None and self._intrinsics is not None and req.side:
+        if placed and req.side:
             with self.analysis:
-                memory, occluded = self._remember(s.memory, req, depth, dets, view.held)
+                now = tuple(
+                    Seen(i, d.cls, tuple(float(x) for x in d.centroid))
+                    for i, d in zip(ids, raw, strict=True)
+                )
+                memory, occluded = self._remember(s.memory, req, depth, now, gone)
                 counts = dict(Counter(d.cls for d in dets) + Counter(m.cls for m in occluded))
         obs = Observation(
             req.id,
@@ -345,35 +374,73 @@ class Perception(LeafSystem):
             req.side,
             counts,
             dets,
-            view.in_hand,
+            in_hand,
             target,
-            _frozen(view.occupied),
+            _frozen(occupied),
             occluded,
-            view.hand_cover,
+            float(near.mean()) if holding else 0.0,
         )
         state.get_mutable_abstract_state(self._state).set_value(
-            PerceptionState(req.id, obs, s.frames + 1, s.render_kinds + kinds, memory)
+            PerceptionState(req.id, obs, s.frames + 1, s.render_kinds + kinds, memory, tracks, held)
         )
         return EventStatus.Succeeded()
+
+    def _detect(self, label, depth, req: ViewRequest, X_WC) -> list[ObjectDetection]:
+        """This view's detections: the label image's instances (`detect`), through the
+        noisy detector when the cell asks for one (drawn from the run's seed and the view's
+        request id: a seeded run sees the same errors every time)."""
+        intrinsics = self._intrinsics if X_WC is not None else None
+        kw = dict(min_pixels=self._min_pixels, hand_depth=self._hand_depth)
+        raw = detect(label, depth, self._classes, intrinsics=intrinsics, X_WC=X_WC, **kw)
+        if self._noise is None:
+            return raw
+        return perturb(
+            raw,
+            seed=self._noise.seed,
+            frame=req.id,
+            level=self._noise.level,
+            classes=self._task_classes,
+            depth=np.where(np.isfinite(depth), depth, 0.0),
+            intrinsics=intrinsics,
+            X_WC=X_WC,
+        )
+
+    @staticmethod
+    def _held(
+        s: PerceptionState, req: ViewRequest, tracks: Tracks, ids: tuple[int, ...], holding: bool
+    ) -> Seen | None:
+        """The tracked object in the gripper after this view: none when the gripper's region
+        is empty; the one held before while it stays full; else the track the grasp picked
+        (a request without a target but with a ``track``: the lift's view) when its points
+        left the table (no detection of this view is associated with it). An object in
+        the gripper that is none of these is in hand as ``unknown`` (returns None)."""
+        if not holding:
+            return None
+        if s.held is not None:
+            return s.held
+        if req.target is not None or req.track is None or req.track in ids:
+            return None
+        t = tracks.get(req.track)
+        return None if t is None else Seen(t.id, t.cls, t.position)
 
     def _remember(
         self,
         memory: dict[str, tuple[Seen, ...]],
         req: ViewRequest,
         depth: np.ndarray,
-        dets: tuple[Detection, ...],
+        now: tuple[Seen, ...],
         held: frozenset[int],
     ) -> tuple[dict[str, tuple[Seen, ...]], tuple[Seen, ...]]:
         """The new memory of every workspace after a view of ``req.side`` (its detections
-        ``dets``, ``held``: detector ids in the gripper), and the occluded instances of that
-        view. An instance is in one place: one seen here or in the gripper is forgotten in the
+        ``now``, ``held``: tracks taken into the gripper), and the occluded instances of that
+        view. A track is in one place: one seen here or in the gripper is forgotten in the
         other workspaces."""
         here, occluded = recall(
-            memory.get(req.side, ()), dets, held, depth, req.camera_pose, self._intrinsics
+            memory.get(req.side, ()), now, held, depth, req.camera_pose, self._intrinsics
         )
-        moved = held | {d.label for d in dets}
+        moved = held | {m.track for m in now}
         new = {
-            side: tuple(m for m in seen if m.label not in moved)
+            side: tuple(m for m in seen if m.track not in moved)
             for side, seen in memory.items()
             if side != req.side
         }

@@ -531,6 +531,7 @@ def perturbed(scenario: CellScenario, seed: int) -> tuple[CellScenario, Applied]
         placed.append(moved)
     applied.friction = sample.friction
     applied.depth_noise = scenario.perturbation.depth_noise
+    applied.detector = scenario.perturbation.detector
     for name in scenario.perturbation.skill_failure:
         draws = sample.skill_failures(name)
         applied.skill_failures[name] = [i + 1 for i, fails in enumerate(draws) if fails]

@@ -22,7 +22,10 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   fails when the fingers close on nothing (finger width) or when the target is still on the
   table in the next view (not lifted); it is retried with new predictions up to
   ``grasp.attempts`` times, never again with a grasp that missed or slipped in this pick
-  (`grasping.near_grasp`).
+  (`grasping.near_grasp`). The target is perception's track: a view without it logs
+  ``target lost`` (never another instance in its place), `LOST_VIEWS` such views in a row
+  fail the attempt, and the next attempt's look, not finding the track either, says so and
+  re-acquires the instance of the class nearest the image centre.
 - ``Place(side)``: look at W^side (at the hand's present yaw), put the held object's centre
   (its offset from the TCP kept at the grasp) on the freest spot seen (away from objects
   perception remembers there but cannot see; its reach inside the edges), lift, one view
@@ -523,6 +526,8 @@ class PandaSkillController(LeafSystem):
             X_WC = self.kin.camera_pose(q_meas[:7])
             aim = step.handler == "target"
             target, track = (s.target_cls, s.track) if aim else (None, None)
+            if step.handler == "lifted":  # is the track the grasp picked in the gripper?
+                track = s.track
             s.request = ViewRequest(s.next_view, s.side, target, track, X_WC)
             s.next_view += 1
 
@@ -587,6 +592,18 @@ class PandaSkillController(LeafSystem):
     def _on_target(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         """The first view of an attempt (the look pose): find the target, make the first
         prediction, start the descent."""
+        if obs.target is None and s.track is not None:
+            # the instance followed so far is not in view: say so, then choose afresh
+            s.log.append(
+                (
+                    t,
+                    f"target lost: track {s.track} not in view at the look pose; "
+                    f"re-acquiring the {s.target_cls} nearest the image centre",
+                )
+            )
+            s.track = None
+            s.steps = (Step("view", handler="target"),)
+            return
         if obs.target is None:
             if s.attempt == 1:
                 return self._finish(
@@ -608,11 +625,12 @@ class PandaSkillController(LeafSystem):
             s.lost += 1
             centre = s.target_xy or (0.0, 0.0)
             s.window = (*s.window, ViewGrasp(None, centre))[-d.window :]
-            s.log.append((t, f"view {s.views_done}: no {s.target_cls} in view"))
+            what = f"track {s.track}" if s.track is not None else f"no {s.target_cls}"
+            s.log.append((t, f"view {s.views_done}: target lost ({what} not in view)"))
             return
         s.lost = 0
         det = crop.detection
-        s.track = det.label
+        s.track = det.track
         p = backproject(det.u, det.v, det.depth, self.planner.intrinsics, X_WC)
         s.target_xy = (float(p[0]), float(p[1]))
         s.target_top = max(float(p[2]), 0.0)  # median depth of its pixels: about its top
@@ -620,7 +638,7 @@ class PandaSkillController(LeafSystem):
         s.others = tuple(
             (float(q[0]), float(q[1]))
             for o in obs.detections
-            if o.label != det.label
+            if o.track != det.track
             for q in [backproject(o.u, o.v, o.depth, self.planner.intrinsics, X_WC)]
         )
         height = float(X_WC.translation()[2]) - s.target_top  # camera above the target
@@ -667,7 +685,7 @@ class PandaSkillController(LeafSystem):
             if not s.committed and s.fused is not None:
                 s.explored += 1
             if s.lost >= LOST_VIEWS:
-                why = f"lost the {s.target_cls} during the descent"
+                why = f"target lost: the {s.target_cls} (track {s.track}) left the view"
                 return self._fail_descent(s, t, why)
         if s.view_asked is None and t - s.view_done_t >= d.view_period - 1e-9:
             self._ask_view(s, t)
@@ -785,7 +803,7 @@ class PandaSkillController(LeafSystem):
             )
         if q_meas[7] + q_meas[8] < MIN_HOLD_WIDTH:
             return self._retry(s, t, "slipped: the fingers closed after the lift", "grasp_slipped")
-        if any(d.label == s.track for d in obs.detections):
+        if any(d.track == s.track for d in obs.detections):  # its points are still there
             return self._retry(
                 s, t, f"not lifted: the {s.target_cls} is still on the table", "grasp_slipped"
             )

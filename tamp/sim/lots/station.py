@@ -36,7 +36,7 @@ from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
 from tamp.lots.task import Event
 from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config
-from tamp.sim.core.perception import Perception
+from tamp.sim.core.perception import DetectorNoise, Perception
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.lots.catalogue import ARM
@@ -119,6 +119,15 @@ def noisy_depth(builder, scenario: CellScenario, depth_port):
     return noise.depth_out
 
 
+def detector_noise(scenario: CellScenario) -> DetectorNoise | None:
+    """The seeded noisy detector perception applies to every view
+    (``perturbation.sensor.detector``, drawn from the run's seed), or None."""
+    level = scenario.perturbation.detector
+    if level is None or scenario.sample is None:
+        return None
+    return DetectorNoise(level, scenario.sample.seed)
+
+
 def build_station(
     scenario: CellScenario,
     *,
@@ -144,6 +153,7 @@ def build_station(
             height=scenario.camera.height,
             period=scenario.control.perception_period,
             intrinsics=intrinsics,
+            noise=detector_noise(scenario),
         )
     )
     depth = noisy_depth(builder, scenario, camera.depth_image_32F_output_port())

@@ -235,6 +235,12 @@ class ScenarioFile:
                     "model", f"unknown model {entry.model!r} (known: {', '.join(known)})"
                 )
         self.perturbation.require(PERTURBED, "SMP-MRO")
+        if self.perturbation.detector is not None:
+            raise f.error(
+                "perturbation.sensor.detector",
+                "the SMP-MRO camera's detections are one per object model, not tracked "
+                "instances: use sensor.depth_noise or sensor.pose_noise",
+            )
         for action in self.perturbation.skill_failure:
             if action not in SIMULATED_FAILURES:
                 raise f.error(

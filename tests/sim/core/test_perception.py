@@ -1,5 +1,5 @@
 """The shared detector (`tamp.sim.core.perception`) on synthetic arrays (no simulation): counts,
-targets, crops, and what it remembers of a workspace it cannot see all of."""
+targets, crops, tracks, and what it remembers of a workspace it cannot see all of."""
 
 from __future__ import annotations
 
@@ -7,16 +7,19 @@ import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RotationMatrix
 
+from tamp.sim.core.messages import Detection, Seen
 from tamp.sim.core.perception import (
-    analyse,
     choose_target,
     crop_square,
-    gripper_labels,
+    detect,
+    gripper_region,
     hidden,
     recall,
 )
+from tamp.sim.core.tracks import Tracks, update
 
 EMPTY = 32766  # RenderLabel.kEmpty
+NO_TRACKS = Tracks()
 
 
 def scene():
@@ -34,24 +37,32 @@ def scene():
 CLASSES = {5: "scissors", 6: "scissors", 7: "hammer", 8: "saw"}
 
 
-def test_counts_per_class_with_threshold_and_hand_cut():
+def test_detections_on_the_table_with_threshold_and_hand_cut():
     label, depth = scene()
-    view = analyse(label, depth, CLASSES, min_pixels=25)
-    assert view.counts == {"scissors": 2}
-    assert view.in_hand == ("saw",)
-    assert view.held == gripper_labels(label, depth, CLASSES) == {8}
-    assert sorted(d.pixels for d in view.detections) == [100, 200]
-    d5 = next(d for d in view.detections if d.label == 5)
-    assert (d5.u, d5.v, d5.depth) == pytest.approx((19.5, 14.5, 0.45))
-    assert view.occupied.sum() == 300
+    dets = detect(label, depth, CLASSES, min_pixels=25)
+    assert sorted(d.cls for d in dets) == ["scissors", "scissors"]
+    assert sorted(d.pixels for d in dets) == [100, 200]
+    big = max(dets, key=lambda d: d.pixels)
+    assert (big.u, big.v, big.depth) == pytest.approx((19.5, 14.5, 0.45))
+    assert np.isnan(big.centroid[0]) and big.points.shape == (3, 0)  # no camera pose: unplaced
+    # the gripper's region is decided from depth alone: the saw's 64 pixels
+    assert gripper_region(depth).sum() == 64
 
 
-def test_choose_target_tracks_then_nearest_centre():
-    label, depth = scene()
-    dets = analyse(label, depth, CLASSES).detections
-    assert choose_target(dets, "scissors", 6, (0, 0)).label == 6  # tracked
-    assert choose_target(dets, "scissors", None, (0, 0)).label == 5  # nearest
-    assert choose_target(dets, "scissors", 99, (80, 60)).label == 6
+def _dets():
+    return (
+        Detection(3, "scissors", 200, 19.5, 14.5, 0.45),
+        Detection(4, "scissors", 100, 54.5, 34.5, 0.45),
+    )
+
+
+def test_choose_target_follows_its_track_or_reports_it_lost():
+    dets = _dets()
+    assert choose_target(dets, "scissors", 4, (0, 0)).track == 4  # tracked
+    assert choose_target(dets, "scissors", None, (0, 0)).track == 3  # none yet: nearest
+    assert choose_target(dets, "scissors", None, (80, 60)).track == 4
+    # the tracked instance is not in view: lost, never the other scissors in its place
+    assert choose_target(dets, "scissors", 99, (80, 60)) is None
     assert choose_target(dets, "hammer", None, (0, 0)) is None
 
 
@@ -85,10 +96,15 @@ def view(objects: dict[int, tuple[slice, slice]], held: tuple[slice, slice] | No
     return label, depth
 
 
-def look(memory, label, depth):
+def look(memory, label, depth, tracks=NO_TRACKS, held=frozenset(), time=0.0):
+    """One placed view as `Perception` makes it: detections, their tracks, then memory."""
     classes = CLASSES | {9: "hammer"}
-    view = analyse(label, depth, classes)
-    return recall(memory, view.detections, view.held, depth, X_LOOK, K)
+    dets = detect(label, depth, classes, intrinsics=K, X_WC=X_LOOK)
+    keep = {m.track for m in memory}
+    tracks, ids = update(tracks, [(d.cls, d.centroid) for d in dets], time, keep=keep)
+    now = tuple(Seen(i, d.cls, d.centroid) for i, d in zip(ids, dets, strict=True))
+    memory, occluded = recall(memory, now, held, depth, X_LOOK, K)
+    return memory, occluded, tracks
 
 
 SAW = (slice(80, 100), slice(100, 130))
@@ -96,13 +112,13 @@ SCISSORS = (slice(130, 155), slice(190, 225))  # W^B's corner, where the person 
 
 
 def test_a_remembered_instance_hidden_by_the_held_object_is_kept_as_occluded():
-    memory, occluded = look((), *view({8: SAW, 5: SCISSORS}))
+    memory, occluded, tracks = look((), *view({8: SAW, 5: SCISSORS}))
     assert occluded == () and sorted(m.cls for m in memory) == ["saw", "scissors"]
     scissors = next(m for m in memory if m.cls == "scissors")
     # back-projected through depth, intrinsics and the camera pose: on the table, in W^B
     x, y, z = scissors.position
     assert z == pytest.approx(0.02, abs=1e-6)
-    u, v = 207.0, 142.0  # the block's centroid; image right is world +x, image down -y
+    u, v = 207.0, 142.0  # the block's median pixel; image right is world +x, image down -y
     assert (x, y) == pytest.approx(
         (0.5 + (u - K[2]) / K[0] * 0.45, -0.25 - (v - K[3]) / K[1] * 0.45)
     )
@@ -112,26 +128,35 @@ def test_a_remembered_instance_hidden_by_the_held_object_is_kept_as_occluded():
     hammer_band = (slice(110, 180), slice(180, 320))
     label, depth = view({8: SAW}, held=hammer_band)
     label[SCISSORS][depth[SCISSORS] > 0.1] = 5  # nothing of it is left uncovered
-    memory2, occluded2 = look(memory, label, depth)
+    memory2, occluded2, tracks2 = look(memory, label, depth, tracks, time=60.0)
     assert [m.cls for m in occluded2] == ["scissors"] and occluded2[0] == scissors
     assert sorted(m.cls for m in memory2) == ["saw", "scissors"]
+    # the saw, seen again where it was, keeps its track; the hidden scissors' track is kept
+    # by the memory although it was not seen for longer than a track's lifetime
+    saw = next(m for m in memory if m.cls == "saw")
+    assert next(m for m in memory2 if m.cls == "saw").track == saw.track
+    assert tracks2.get(scissors.track) is not None
 
 
 def test_an_instance_whose_place_is_in_plain_view_and_empty_is_gone():
-    memory, _ = look((), *view({8: SAW, 5: SCISSORS}))
+    memory, _, tracks = look((), *view({8: SAW, 5: SCISSORS}))
     # the held hammer covers another part of the image; the corner shows the bare table
-    memory2, occluded = look(memory, *view({8: SAW}, held=(slice(0, 40), slice(0, 80))))
+    label, depth = view({8: SAW}, held=(slice(0, 40), slice(0, 80)))
+    memory2, occluded, _ = look(memory, label, depth, tracks)
     assert occluded == () and [m.cls for m in memory2] == ["saw"]
 
 
-def test_an_instance_seen_in_the_gripper_is_forgotten_and_one_seen_again_is_updated():
-    memory, _ = look((), *view({8: SAW, 5: SCISSORS}))
-    # the scissors is now in the gripper (label 5 near the camera), over its old place
-    label, depth = view({8: (slice(80, 100), slice(140, 170))})
+def test_an_instance_taken_into_the_gripper_is_forgotten_and_one_seen_again_is_updated():
+    memory, _, tracks = look((), *view({8: SAW, 5: SCISSORS}))
+    scissors = next(m for m in memory if m.cls == "scissors")
+    # the scissors is now in the gripper, over its old place (perception has found its
+    # track in hand: nothing on the table there); the saw moved 2 cm to the right
+    label, depth = view({8: (slice(80, 100), slice(110, 140))})
     label[SCISSORS], depth[SCISSORS] = 5, 0.09
-    memory2, occluded = look(memory, label, depth)
+    memory2, occluded, _ = look(memory, label, depth, tracks, held=frozenset({scissors.track}))
     assert occluded == () and [m.cls for m in memory2] == ["saw"]
     saw0 = next(m for m in memory if m.cls == "saw")
+    assert memory2[0].track == saw0.track  # 2 cm: within the gate, the same track
     assert memory2[0].position[0] > saw0.position[0]  # seen further right (+x): remembered there
 
 

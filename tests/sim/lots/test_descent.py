@@ -193,7 +193,8 @@ def test_the_mask_control_closes_across_the_principal_axis(deg):
 
 def test_only_a_picks_own_views_ask_for_a_target():
     """A class left from an earlier pick must not make a later look render colour or follow
-    an instance: only a ``target`` view's request names it."""
+    an instance: only a ``target`` view's request names it. The lift's view names the track
+    the grasp picked, without a target (is it in the gripper?: no colour, no following)."""
     from tamp.sim.lots.catalogue import READY
     from tamp.sim.lots.kinematics import ArmKinematics
     from tamp.sim.lots.scenario import load_cell_scenario
@@ -206,5 +207,5 @@ def test_only_a_picks_own_views_ask_for_a_target():
     s = SkillState(q=q0[:7].copy(), target_cls="body", track=7)
     for handler in ("counted", "lifted", "seen", "target"):
         skills._enter(s, Step("view", handler=handler), 0.0, q0)
-        named = ("body", 7) if handler == "target" else (None, None)
+        named = {"target": ("body", 7), "lifted": (None, 7)}.get(handler, (None, None))
         assert (s.request.target, s.request.track) == named

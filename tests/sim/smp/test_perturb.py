@@ -135,6 +135,7 @@ def _write(tmp_path, extra: str):
         ("perturbation: {skills: {Place: 0.1}}\n", "perturbation.skills.Place", "Pick"),
         ("perturbation: {objects: {xy: 0.9}}\n", "perturbation.objects.xy", "<= 0.5"),
         ("perturbation: {colour: 1}\n", "perturbation.colour", "unknown key"),
+        ("perturbation: {sensor: {detector: low}}\n", "perturbation.sensor.detector", "tracked"),
     ],
 )
 def test_bad_grasp_perception_and_perturbation_fields_exit_2(tmp_path, extra, field, words):

@@ -1,0 +1,85 @@
+"""Perception's tracker (`tamp.sim.core.tracks`): association by class and 3-D distance within
+the gate, fresh ids beyond it, lifetime, and what occlusion memory keeps."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from tamp.sim.core.tracks import GATE, LIFETIME, Tracks, associate, update
+
+A = (0.5, 0.25, 0.02)
+
+
+def test_a_detection_within_the_gate_keeps_its_track_and_moves_it():
+    tracks, (a,) = update(Tracks(), [("saw", A)], 0.0)
+    moved = (A[0] + GATE - 0.01, A[1], A[2])
+    tracks, (b,) = update(tracks, [("saw", moved)], 1.0)
+    assert b == a and tracks.get(a).position == moved and tracks.get(a).seen == 1.0
+
+
+def test_an_object_moved_beyond_the_gate_gets_a_fresh_id():
+    tracks, (a,) = update(Tracks(), [("saw", A)], 0.0)
+    far = (A[0] + GATE + 0.01, A[1], A[2])
+    tracks, (b,) = update(tracks, [("saw", far)], 1.0)
+    assert b != a and {t.id for t in tracks.tracks} == {a, b}
+
+
+def test_only_the_same_class_associates():
+    tracks, (a,) = update(Tracks(), [("saw", A)], 0.0)
+    tracks, (b,) = update(tracks, [("hammer", A)], 0.5)
+    assert b != a
+    assert [t.cls for t in tracks.tracks] == ["saw", "hammer"]
+
+
+def test_unseen_tracks_die_after_their_lifetime_unless_kept():
+    tracks, (a, b) = update(Tracks(), [("saw", A), ("saw", (0.5, -0.25, 0.02))], 0.0)
+    later = LIFETIME + 0.5
+    dropped, ids = update(tracks, [], later)  # nothing seen: both die
+    assert ids == ()
+    assert dropped.tracks == ()
+    kept, () = update(tracks, [], later, keep={a})
+    assert [t.id for t in kept.tracks] == [a]
+    # a track dropped is never revived: the object seen again there is a new instance
+    _, (d,) = update(dropped, [("saw", A)], later + 0.1)
+    assert d not in (a, b)
+    # within the lifetime a missed view does not end it
+    _, (e,) = update(tracks, [("saw", A)], LIFETIME - 0.5)
+    assert e == a
+
+
+def test_two_neighbours_of_one_class_never_swap():
+    """Hungarian, not greedy: the nearest pairs of the whole view, not one detection's."""
+    tracks, (a, b) = update(Tracks(), [("cube", (0.0, 0.0, 0.0)), ("cube", (0.05, 0, 0))], 0.0)
+    # both shifted 3 cm in +x: greedy from the first detection would take b (2 cm away)
+    tracks, ids = update(tracks, [("cube", (0.03, 0.0, 0.0)), ("cube", (0.08, 0, 0))], 1.0)
+    assert ids == (a, b)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3)), min_size=1, max_size=6).filter(
+        lambda ps: all(
+            np.hypot(p[0] - q[0], p[1] - q[1]) > 2.5 * GATE
+            for i, p in enumerate(ps)
+            for q in ps[i + 1 :]
+        )
+    ),
+    st.floats(0.0, GATE * 0.9),
+    st.floats(-np.pi, np.pi),
+)
+def test_well_separated_objects_keep_their_ids_under_small_moves(points, step, angle):
+    objects = [("block", (x, y, 0.02)) for x, y in points]
+    tracks, ids = update(Tracks(), objects, 0.0)
+    assert len(set(ids)) == len(ids)
+    dx, dy = step * np.cos(angle), step * np.sin(angle)
+    shifted = [(c, (p[0] + dx, p[1] + dy, p[2])) for c, p in reversed(objects)]
+    _, ids2 = update(tracks, shifted, 1.0)
+    assert ids2 == tuple(reversed(ids))
+
+
+def test_associate_leaves_pairs_beyond_the_gate_alone():
+    tracks, _ = update(Tracks(), [("saw", A)], 0.0)
+    assert associate(tracks.tracks, [("saw", (A[0], A[1] + 0.2, A[2]))]) == [None]
+    assert associate(tracks.tracks, [("saw", A), ("saw", A)]) in ([0, None], [None, 0])
