@@ -156,6 +156,64 @@ def start_recording(visualizer: MeshcatVisualizer) -> None:
     visualizer.StartRecording(set_transforms_while_recording=False)
 
 
+#: colours of a view's overlays (`draw_views`): its point cloud, frustum, grasp candidates and
+#: the best of them
+CLOUD_RGBA = (0.15, 0.55, 1.0, 1.0)
+FRUSTUM_RGBA = (1.0, 0.85, 0.1, 1.0)
+GRASP_RGBA = (1.0, 0.45, 0.0, 1.0)
+BEST_GRASP_RGBA = (0.1, 0.9, 0.2, 1.0)
+#: size of a drawn point (m)
+POINT_SIZE = 0.004
+
+
+def draw_views(
+    meshcat: Meshcat,
+    visualizer: MeshcatVisualizer,
+    views: Sequence,
+    *,
+    intrinsics: tuple[float, float, float, float],
+    size: tuple[int, int],
+    end: float,
+    grasps: Callable[[object], Sequence] | None = None,
+    prefix: str = "/views",
+) -> int:
+    """Draw every view of ``views`` (`tamp.sim.core.view_log.ViewRecord`) under ``prefix``:
+    its depth as a world point cloud, the camera's frustum and, where ``grasps`` gives them
+    (best first), the grasp candidates as closing lines (the best in green); and key each
+    view's visibility in the visualizer's recording so that it shows from its own time to the
+    next view's (`view_log.visible_spans`). Call before `save_recording`. Returns the number
+    of views drawn."""
+    from pydrake.geometry import Rgba
+    from pydrake.perception import PointCloud
+
+    from tamp.sim.core.view_log import frustum_segments, grasp_segments, visible_spans
+
+    recording = visualizer.get_mutable_recording()
+    spans = visible_spans([v.time for v in views], end)
+    for k, (view, (t0, t1)) in enumerate(zip(views, spans, strict=True)):
+        path = f"{prefix}/{k:03d}"
+        cloud = PointCloud(len(view.points))
+        cloud.mutable_xyzs()[:] = np.asarray(view.points, float).T
+        meshcat.SetObject(f"{path}/cloud", cloud, POINT_SIZE, Rgba(*CLOUD_RGBA))
+        start, stop = frustum_segments(view.X_WC, intrinsics, size)
+        meshcat.SetLineSegments(f"{path}/frustum", start, stop, 2.0, Rgba(*FRUSTUM_RGBA))
+        found = list(grasps(view)) if grasps is not None else []
+        if found:
+            start, stop = grasp_segments(found[:1])
+            meshcat.SetLineSegments(f"{path}/best", start, stop, 4.0, Rgba(*BEST_GRASP_RGBA))
+        if len(found) > 1:
+            start, stop = grasp_segments(found[1:])
+            meshcat.SetLineSegments(f"{path}/grasps", start, stop, 2.0, Rgba(*GRASP_RGBA))
+        meshcat.SetProperty(path, "visible", False)
+        first, last = recording.frame(t0), recording.frame(t1)
+        last = max(last, first + 1)
+        if first > 0:
+            recording.SetProperty(0, path, "visible", False)
+        recording.SetProperty(first, path, "visible", True)
+        recording.SetProperty(last, path, "visible", False)
+    return len(views)
+
+
 def save_recording(visualizer: MeshcatVisualizer, meshcat: Meshcat, path: str | Path) -> str:
     """Stop recording and write the animation as one self-contained HTML file at ``path``
     (it opens on the camera `add_visualizer` set)."""

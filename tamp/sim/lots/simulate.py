@@ -326,6 +326,26 @@ class TableGate:
         return {"table": all(r.holds for r in self.reports)} if self.reports else {}
 
 
+def draw_cell_views(cell, context) -> int:
+    """Draw every view the wrist camera took in the run (its point cloud, frustum and the
+    grasp candidates drawn from it: `tamp.sim.core.recording.draw_views`) into the cell's
+    recording; returns how many."""
+    from tamp.sim.core.recording import draw_views
+
+    if cell.view_log is None or cell.visualizer is None:
+        return 0
+    kept = {id(crop): cands for crop, _, cands in cell.planner.history}
+    return draw_views(
+        cell.meshcat,
+        cell.visualizer,
+        cell.view_log.records(cell.view_log.GetMyContextFromRoot(context)),
+        intrinsics=cell.view_log.intrinsics,
+        size=cell.view_log.size,
+        end=context.get_time(),
+        grasps=lambda v: kept.get(id(v.target), []) if v.target is not None else [],
+    )
+
+
 def simulate_lots(
     scenario: LotsScenario,
     *,
@@ -357,6 +377,7 @@ def simulate_lots(
     built = build_lots_diagram(cell_scenario, controller, meshcat=meshcat, person=events)
     if record:
         start_recording(built.cell.visualizer)
+        built.cell.planner.record = True  # each view's candidates, for the recording
     simulator = make_simulator(built.diagram)
     context = simulator.get_mutable_context()
     ctrl = built.controller
@@ -401,7 +422,10 @@ def simulate_lots(
     status, cause = lots_verdict(controller_status, satisfied, log)
     skills = cell.skills.state(cell.skills.GetMyContextFromRoot(context))
     perception = cell.perception.state(cell.perception.GetMyContextFromRoot(context))
-    recording = save_recording(cell.visualizer, meshcat, record) if record else None
+    recording = None
+    if record:
+        draw_cell_views(cell, context)
+        recording = save_recording(cell.visualizer, meshcat, record)
     frames, stops = perception.frames, []
     if cell.safety is not None:  # the monitor's own renders count too (none without a hand)
         safety = cell.safety.state(cell.safety.GetMyContextFromRoot(context))

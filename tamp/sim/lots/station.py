@@ -12,7 +12,7 @@ exported ports) and returns its handles (`LotsStation`).
     PersonSystem (optional, tamp.sim.lots.person) ─► the hand's desired state, carry forces
     exported: skill_command, person_present (in; the person's curtain when scripted);
       skill_status, observation, view_request, arm_state, safety_stopped (out)
-    MeshcatVisualizer (optional)
+    MeshcatVisualizer, ViewLog (optional, drawn runs: every view's cloud, camera, grasps)
 
 The camera is configured through Drake's `CameraConfig` (D435 colour intrinsics at a reduced
 resolution) but added as a plain `RgbdSensor`, not through `ApplyCameraConfig`: that adds an
@@ -39,6 +39,7 @@ from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config
 from tamp.sim.core.perception import DetectorNoise, Perception
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.core.timing import Stopwatch
+from tamp.sim.core.view_log import ViewLog
 from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.command import ArmCommandStream
 from tamp.sim.lots.depth_safety import safety_camera_config
@@ -68,6 +69,8 @@ class LotsStation:
     command: ArmCommandStream | None = None
     safety: SafetyMonitor | None = None
     person: Any = None  # the PersonSystem, when a person is scripted
+    #: every view's cloud, camera and target, kept when the run is drawn in Meshcat
+    view_log: ViewLog | None = None
 
     @property
     def plant(self) -> MultibodyPlant:
@@ -187,9 +190,20 @@ def build_station(
             builder.ExportInput(safety.present_port, "person_present")
         builder.ExportOutput(safety.stopped_port, "safety_stopped")
 
-    visualizer = None
+    visualizer = view_log = None
     if meshcat is not None:
         visualizer = add_visualizer(builder, scene_graph, meshcat)
+        view_log = builder.AddSystem(
+            ViewLog(
+                width=scenario.camera.width,
+                height=scenario.camera.height,
+                period=scenario.control.perception_period,
+                intrinsics=intrinsics,
+            )
+        )
+        builder.Connect(depth, view_log.depth_port)
+        builder.Connect(skills.view_request_port, view_log.request_port)
+        builder.Connect(perception.observation_port, view_log.observation_port)
     diagram = builder.Build()
     diagram.set_name(f"lots_cell_{scenario.name}")
     return LotsStation(
@@ -206,6 +220,7 @@ def build_station(
         command,
         safety,
         person_system,
+        view_log,
     )
 
 
