@@ -30,7 +30,11 @@ Drake idioms, and why:
 
 Objects the person brings in (``add``) wait on a staging shelf beside the table
 (`staged_objects`, from the script's add events); objects it takes away (``remove``) go to
-the shelf. A ``move`` (dis_1) takes an object of the class from one workspace to a free spot
+the shelf. In a cell that declares a stack (`tamp.sim.lots.stack`), the person acts on the
+stack's top: an object of a stack class put into W^B goes on the top of the stack when that
+is the object of the class below it (Fig. 10.4: the person builds the body on the bottom),
+and the person takes (``remove``, ``move``) only objects that nothing rests on. A ``move``
+(dis_1) takes an object of the class from one workspace to a free spot
 of the other. Each object is one trip: over it at the transit height, down, take, up, over the
 destination, down, let go, up; the hand parks beyond the table when nothing is due. The
 camera renders only when perception asks for a view: the hand appears in the images the robot
@@ -58,6 +62,7 @@ from tamp.lots.task import Event
 from tamp.sim.core.messages import SkillCommand, SkillStatus
 from tamp.sim.lots.catalogue import PERSON, Footprint
 from tamp.sim.lots.scenario import CellObject, CellScenario
+from tamp.sim.lots.stack import STACK_SIDE, below, covered, free_top
 from tamp.world.interface import Status
 
 #: the person's update period (s): checks the robot's status and advances the hand's steps
@@ -240,6 +245,7 @@ class PersonSystem(LeafSystem):
         self.set_name("person")
         self.scenario = scenario
         self._classes = dict(classes)
+        self._footprints = {c: scenario.object_class(c).footprint for c in set(classes.values())}
         self._staged = tuple(staged)
         self._hand_index = int(plant.GetBodyByName(PERSON.hand_body, hand).index())
         self._bodies = {uid: int(b.index()) for uid, b in bodies.items()}
@@ -414,11 +420,17 @@ class PersonSystem(LeafSystem):
         ]
         if e.kind == "add":
             cands = [u for u in cands if u not in taken]
+        else:  # a person takes an object from the top: none that another rests on
+            cands = [u for u in cands if not self._covered(u, where)]
         act.src, act.dst, act.start = src, dst, t
         s.actions.append(act)
         if not cands:
             act.outcome, act.end = "skipped", t
             act.detail = f"no {e.cls} {'on the shelf' if src == STAGING else 'in W^' + src}"
+            if src != STAGING and any(
+                self._classes[u] == e.cls and where[u][0] == src for u in pool
+            ):
+                act.detail = f"every {e.cls} in W^{src} has something on it"
             if tuple(s.hand) != PERSON.park:
                 s.steps = (HandStep("move", PERSON.park),)
             return
@@ -427,13 +439,16 @@ class PersonSystem(LeafSystem):
         X_WO = where[uid][1]
         top = self.scenario.object_class(e.cls).footprint.top
         p_take = self._over(X_WO, e.cls)
+        stack_top = self._stack_top(dst, e.cls, where)
         if dst == STAGING:
             q = shelf_spot(len(self._staged) + s.shelf_next)
             s.shelf_next += 1
             floor = 0.0
+        elif stack_top is not None:  # a level of the declared stack: on its top
+            q, floor = stack_top[:2], stack_top[2]
         else:
             q = self._free_spot(dst, uid, where)
-            floor = 0.01 if self.scenario.workspaces[dst].tray else 0.0
+            floor = self.scenario.workspaces[dst].floor
         c = X_WO.translation()
         dx, dy = p_take[0] - c[0], p_take[1] - c[1]  # grip point's offset from the origin
         z_take = float(c[2]) + top + GRIP_GAP
@@ -473,6 +488,29 @@ class PersonSystem(LeafSystem):
         ]
         f = self._footprint(self._classes[uid])
         return free_spot(w, f, yaw_of(where[uid][1]), others)
+
+    def _objects(self, where, side: str | None = None) -> dict[str, tuple[str, np.ndarray]]:
+        """Each object (of W^side; None: everywhere) as `tamp.sim.lots.stack` reads them:
+        id -> (class, pose)."""
+        return {
+            u: (self._classes[u], X.GetAsMatrix4())
+            for u, (w, X) in where.items()
+            if side is None or w == side
+        }
+
+    def _covered(self, uid: str, where) -> bool:
+        """Whether another object rests on ``uid`` (`tamp.sim.lots.stack.covered`)."""
+        return covered(uid, self._objects(where), self._footprints)
+
+    def _stack_top(self, side: str, cls: str, where) -> tuple[float, float, float] | None:
+        """Where the person puts an object of ``cls`` in W^side when it is a level of the
+        cell's declared stack: the middle of the top of an object of the class below it that
+        nothing rests on yet (`tamp.sim.lots.stack.free_top`); None when ``cls`` goes on the
+        floor there (not a stack class, the base, another workspace, or no such object)."""
+        on = below(self.scenario.stack, cls) if side == STACK_SIDE else None
+        if on is None:
+            return None
+        return free_top(on, self._objects(where, side), self._footprints)
 
     def _footprint(self, cls: str) -> Footprint:
         return self.scenario.object_class(cls).footprint

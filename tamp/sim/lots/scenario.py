@@ -21,6 +21,12 @@ with status 2. No Drake import here. Example (``tamp/scenarios/lots_sim/model_bu
     objects:                       # xy relative to the workspace centre, yaw in degrees
       - {class: saw, workspace: A, xy: [0.0, 0.11], yaw: 3}
 
+A scenario may declare a stack (Zhou et al. Fig. 10's tower, `tamp.sim.lots.stack`): the
+classes stacked in W^B, base first; placing an object of one of them in W^B puts it on the
+object of the class before it, and the run is judged by the stack's height on the plant::
+
+    stack: [bottom, body, peak]
+
 A scenario may declare object classes of its own beside the packaged tools
 (`tamp.sim.lots.catalogue.CLASSES`) and use them in ``objects`` (and a LOTS task's
 propositions, a person's ``add`` events) like a packaged one::
@@ -65,6 +71,7 @@ DEFAULT_WEIGHTS = {name: net.weights for name, net in NETWORKS.items()}
 #: The arm's comfortable reach on the table (Franka: 0.855 m from joint 2; keep a margin).
 REACH = (0.25, 0.75)
 BASKET_HALF = 0.12  # lots_waste_basket.sdf: 0.24 x 0.24 m
+TRAY_FLOOR = 0.01  # lots_tray.sdf: its floor's top above the table (m)
 #: the sides of a workspace (m): one wrist-camera view covers it
 WORKSPACE_SIDES = (0.1, 0.4)
 #: the ``perturbation`` fields this workcell simulates: start poses of the objects and their
@@ -88,6 +95,11 @@ class Workspace:
     center: tuple[float, float] = spec(unit="m", help="centre on the table (arm base frame)")
     size: tuple[float, float] = spec(unit="m", help="sides along x and y")
     tray: bool = spec(False, help="Example 1's basket: a shallow tray welded on W^B")
+
+    @property
+    def floor(self) -> float:
+        """Where an object put down here rests: the table, or the tray's floor (1 cm up)."""
+        return TRAY_FLOOR if self.tray else 0.0
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         cx, cy = self.center
@@ -377,6 +389,11 @@ class CellScenario:
     )
     workspaces: dict[str, Workspace] = spec(parse=_workspaces, help="W^A and W^B")
     waste_basket: tuple[float, float] = spec(unit="m", help="centre of the waste basket")
+    stack: tuple[str, ...] = spec(
+        (),
+        help="classes stacked in W^B, base first (Zhou et al. Fig. 10's tower): a place in "
+        "W^B puts each on the one before it (`tamp.sim.lots.stack`)",
+    )
     max_sim_time: float = spec(600.0, min=0.0, strict_min=True, unit="s")
     perturbation: Perturbation = spec(NONE, parse=_perturbation, help="`tamp.perturbation`")
     objects: tuple[CellObject, ...] = ()
@@ -408,6 +425,7 @@ class CellScenario:
                 f"must be >= plant.time_step ({time_step:g} s), got {control.period}",
             )
         self._check_safety(f)
+        self._check_stack(f)
         if self.workspaces["A"].tray:
             raise f.error("workspaces.A.tray", "only W^B holds Example 1's basket")
         a, b = self.workspaces["A"], self.workspaces["B"]
@@ -421,6 +439,18 @@ class CellScenario:
             basket = _square(self.waste_basket, BASKET_HALF)
             if rectangles_overlap(basket, _square(w.center, *w.size), 0.03):
                 raise f.error("waste_basket", f"the waste basket lies within 3 cm of W^{w.name}")
+
+    def _check_stack(self, f: Fields) -> None:
+        """``stack``: two classes or more, each a class of the scenario, each once."""
+        if not self.stack:
+            return
+        if len(self.stack) < 2:
+            raise f.error("stack", f"a stack needs two classes or more, got {list(self.stack)}")
+        for c in self.stack:
+            if c not in self.class_names:
+                raise f.error("stack", f"unknown class {c!r} (classes: {sorted(self.class_names)})")
+            if self.stack.count(c) > 1:
+                raise f.error("stack", f"{c!r} is named twice: each level is one class")
 
     def _check_safety(self, f: Fields) -> None:
         control, safety = self.control, self.safety

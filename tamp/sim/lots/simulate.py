@@ -15,7 +15,10 @@ waste basket from the objects' poses. The run is a SUCCESS only when the control
 completed its round, the plant's W^B is a W^B state that ends a round of the task
 (`Lots.is_goal`), and the run's word — the robot's deliveries and the W^B states its camera
 saw, in order — is accepted by the task automaton (`tamp.verification.lots.judge_word`): the
-same verdict as ``tamp lots``, which applies it to its symbolic ground truth.
+same verdict as ``tamp lots``, which applies it to its symbolic ground truth. A cell that
+declares a stack (Fig. 10's tower, `tamp.sim.lots.stack`) is also judged by the stack's
+height on the plant (``stack`` in the result): counts alone would pass a tower laid side by
+side.
 `LotsWorkcell` (``WORKCELL``) is the cell's `tamp.sim.core.workcell.Workcell`.
 Drake is imported only inside functions, so listing the workcells builds nothing.
 """
@@ -44,6 +47,7 @@ if TYPE_CHECKING:
     from tamp.sim.lots.controller_system import LotsControllerSystem
     from tamp.sim.lots.person import PersonAction
     from tamp.sim.lots.safety import SafetyStop
+    from tamp.sim.lots.stack import StackCheck
     from tamp.sim.lots.station import LotsStation
 
 #: how far the simulator runs between checks of the controller's result (sim s)
@@ -126,6 +130,9 @@ class LotsSimResult(RunResult):
     frames_rendered: int = 0
     grasps: dict[str, int] = field(default_factory=dict)
     final_counts: dict[str, dict[str, int]] = field(default_factory=dict)
+    #: the declared stack judged on the plant (`tamp.sim.lots.stack.StackCheck.to_json`;
+    #: empty when the cell declares none)
+    stack: dict[str, Any] = field(default_factory=dict)
     elsewhere: list[str] = field(default_factory=list)  # objects in no workspace nor basket
     network: str = DEFAULT_NETWORK
     safety_stops: list[SafetyStop] = field(default_factory=list)
@@ -150,6 +157,7 @@ class LotsSimResult(RunResult):
             "frames_rendered": self.frames_rendered,
             "grasps": dict(self.grasps),
             "final_counts": self.final_counts,
+            "stack": self.stack,
             "elsewhere": self.elsewhere,
             "person_actions": [a.to_json() for a in self.person_actions],
             "never_happened": [e.never_happened() for e in self.never_happened],
@@ -175,6 +183,12 @@ class LotsSimResult(RunResult):
         lines += [e.never_happened() for e in self.never_happened]
         c = self.final_counts
         lines.append(f"final (plant): W^A {c['A']}  W^B {c['B']}  waste {c['waste']}")
+        if self.stack:
+            levels = " on ".join(reversed(self.stack["levels"])) or "nothing"
+            lines.append(
+                f"stack (plant): {self.stack['height']} of {len(self.stack['order'])} high: "
+                f"{levels}"
+            )
         if self.word:
             letters = " ".join("{" + ",".join(x) + "}" for x in self.word.get("trace", []))
             verdict = "accepted" if self.word_accepted else "rejected"
@@ -294,6 +308,24 @@ def plant_counts(cell: LotsStation, plant_context) -> tuple[dict[str, dict[str, 
     return counts, elsewhere
 
 
+def plant_stack(cell: LotsStation, plant_context) -> StackCheck:
+    """The cell's declared stack judged on the plant (`tamp.sim.lots.stack.judge_stack`): how
+    many levels stand on each other in W^B, from the objects' poses."""
+    from tamp.sim.lots.stack import STACK_SIDE, judge_stack
+
+    plant, scenario = cell.plant, cell.scenario
+    w = scenario.workspaces[STACK_SIDE]
+    objects = {
+        uid: (
+            cell.cell.classes[uid],
+            plant.EvalBodyPoseInWorld(plant_context, body).GetAsMatrix4(),
+        )
+        for uid, body in cell.cell.bodies.items()
+    }
+    footprints = {c: scenario.object_class(c).footprint for c in set(cell.cell.classes.values())}
+    return judge_stack(scenario.stack, objects, footprints, w.contains, w.floor)
+
+
 def perturbed_run(scenario: LotsScenario, seed: int) -> tuple[LotsScenario, Applied]:
     """``scenario`` as run ``seed`` draws it: the cell's objects, friction, depth noise and
     chance grasp failures (`tamp.sim.lots.scenario.perturbed`), and the person's reaction
@@ -400,13 +432,17 @@ def simulate_lots(
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     cell = built.cell
     s = ctrl.state(ctrl_context)
-    counts, elsewhere = plant_counts(cell, cell.plant.GetMyContextFromRoot(context))
+    plant_context = cell.plant.GetMyContextFromRoot(context)
+    counts, elsewhere = plant_counts(cell, plant_context)
+    # a declared stack (Fig. 10's tower) is judged by its height on the plant, not by counts
+    stack = plant_stack(cell, plant_context) if cell_scenario.stack else None
+    stacked = stack is None or stack.complete
     c = s.controller
     controller_status = s.result.value if s.result is not None else "TIMEOUT"
     why = s.reason if s.result is not None else f"no result within {limit:g} s of sim time"
     truth = c.lots.vector(counts["B"])
     word_ok, word_verdict = judge_verdict(c)  # what happened, read by the task automaton
-    satisfied = s.result is Status.SUCCESS and c.lots.is_goal(truth) and word_ok
+    satisfied = s.result is Status.SUCCESS and c.lots.is_goal(truth) and word_ok and stacked
     if s.result is Status.SUCCESS and not c.lots.is_goal(truth):
         why = (
             f"the controller completed its round, but the plant's W^B holds "
@@ -418,6 +454,8 @@ def simulate_lots(
             "the controller completed its round, but the run's word is not accepted by the "
             "task automaton (what happened does not satisfy the formula)"
         )
+    elif s.result is Status.SUCCESS and not stacked:
+        why = f"the controller completed its round, but on the plant the {stack.describe()}"
     log = list(s.log)
     status, cause = lots_verdict(controller_status, satisfied, log)
     skills = cell.skills.state(cell.skills.GetMyContextFromRoot(context))
@@ -458,6 +496,7 @@ def simulate_lots(
         frames_rendered=frames,
         grasps={"attempts": skills.grasp_attempts, "successes": skills.grasp_successes},
         final_counts=counts,
+        stack={} if stack is None else stack.to_json(),
         elsewhere=elsewhere,
         network=cell_scenario.grasp.network,
         safety_stops=stops,

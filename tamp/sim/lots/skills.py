@@ -29,7 +29,11 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
 - ``Place(side)``: look at W^side (at the hand's present yaw), put the held object's centre
   (its offset from the TCP kept at the grasp) on the freest spot seen (away from objects
   perception remembers there but cannot see; its reach inside the edges), lift, one view
-  from there.
+  from there. In W^B of a cell that declares a stack (``stack:``, `tamp.sim.lots.stack`), an
+  object of a stack class above the base goes on the object of the class below it instead:
+  centred on where the view shows that one (detected, or remembered and hidden now), its
+  underside on that one's top as the depth image measures it; none seen: the place fails
+  (``object_not_found``), still holding.
 - ``Discard()`` (also ``Place(waste)``, the ``lots_arm`` domain's name for it): drop the
   held object into the waste basket. Both places check the fingers before letting go: an
   object lost on the way is reported (FAILURE, "dropped ... while carrying it") and the
@@ -83,6 +87,7 @@ from tamp.sim.lots.descent import (
 from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner, near_grasp
 from tamp.sim.lots.kinematics import ArmKinematics, down, hand_yaw_for_closing, pose_error
 from tamp.sim.lots.scenario import CellScenario
+from tamp.sim.lots.stack import STACK_SIDE, below, support
 from tamp.world.interface import Status
 
 SKILLS = ("LookAt", "Pick", "PickAt", "Place", "Discard", "Wait")
@@ -115,6 +120,10 @@ TURN_SPEED = 2.0
 #: and at most these (a long object kept nearer the centre would leave no room beside it)
 PLACE_MARGIN = 0.06
 MAX_PLACE_MARGIN = 0.10
+#: the held object's underside this far (m) above where it goes when the fingers open
+RELEASE_GAP = 0.008
+#: after a place the TCP rises at least this far (m) above where it let go
+PLACE_LIFT = 0.12
 
 
 @dataclass(frozen=True)
@@ -836,31 +845,56 @@ class PandaSkillController(LeafSystem):
 
     def _on_place(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         X_WC = self.kin.camera_pose(q_meas[:7])
-        # the object's centre goes on the spot, far enough inside the edges for its reach
-        margin = min(max(PLACE_MARGIN, s.hold_radius + 0.005), MAX_PLACE_MARGIN)
-        cx, cy = free_spot(
-            self.scenario.workspaces[s.side],
-            obs.occupied,
-            X_WC,
-            self.planner.intrinsics,
-            margin=margin,
-            avoid=tuple(m.position[:2] for m in obs.occluded),
-        )
+        workspace = self.scenario.workspaces[s.side]
+        on = below(self.scenario.stack, s.held) if s.side == STACK_SIDE else None
+        if on is not None:
+            # a level of the declared stack: on the top of the object of the class below,
+            # where this view shows it (or perception remembers it, hidden now): its centre
+            # and its top from the depth image, never the plant's pose
+            seen = [
+                (d.cls, backproject(d.u, d.v, d.depth, self.planner.intrinsics, X_WC))
+                for d in obs.detections
+            ] + [(m.cls, m.position) for m in obs.occluded]
+            top = support(on, seen)
+            if top is None:
+                return self._finish(
+                    s,
+                    t,
+                    Status.FAILURE,
+                    f"no {on} seen in W^{s.side} to stack the {s.held} on",
+                    "object_not_found",
+                )
+            cx, cy, floor = top
+            where = f"on the {on} (its top at {floor:.3f} m)"
+        else:
+            # the object's centre goes on the spot, far enough inside the edges for its reach
+            margin = min(max(PLACE_MARGIN, s.hold_radius + 0.005), MAX_PLACE_MARGIN)
+            cx, cy = free_spot(
+                workspace,
+                obs.occupied,
+                X_WC,
+                self.planner.intrinsics,
+                margin=margin,
+                avoid=tuple(m.position[:2] for m in obs.occluded),
+            )
+            floor = workspace.floor
+            where = "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
         yaw = self.kin.tcp_yaw(s.q)  # the look's yaw: the held object's offset turns with it
         c, w = math.cos(yaw), math.sin(yaw)
         hx, hy = s.hold_offset
         x, y = cx - (c * hx - w * hy), cy - (w * hx + c * hy)
-        tray = 0.01 if self.scenario.workspaces[s.side].tray else 0.0
-        z = s.hold_z + 0.008 + tray
-        hidden = "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
-        s.log.append((t, f"place the {s.held}'s centre at ({cx:.3f}, {cy:.3f}){hidden}"))
+        z = floor + s.hold_z + RELEASE_GAP
+        # lift clear: the camera (5.5 cm above the TCP) farther than perception's hand depth
+        # from the top of what it put down, which may stand on a stack
+        lift = max(LIFT_Z, z + PLACE_LIFT)
+        s.log.append((t, f"place the {s.held}'s centre at ({cx:.3f}, {cy:.3f}){where}"))
         s.target_cls, s.track = None, None  # no grasp target: the views below need no colour
         s.steps = (
             self._move((x, y, z + 0.12, yaw)),
             Step("check_held"),
             self._move((x, y, z, yaw), APPROACH_SPEED),
             Step("grip", width=OPEN),
-            self._move((x, y, LIFT_Z, yaw)),
+            self._move((x, y, lift, yaw)),
             # one view from over the object just put down: perception remembers where it
             # lies (a later view with an object in the gripper may have it hidden)
             Step("settle"),

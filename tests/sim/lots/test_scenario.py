@@ -17,11 +17,13 @@ from tests.sim.lots.snapshot import SNAPSHOT, normalise, packaged_files
 def snapshot_layout(loaded: dict) -> dict:
     """A normalised scenario in the snapshot's layout (the snapshot was written by the loader
     the typed one replaced): the ``plant`` section's fields at the top, no ``description``
-    and no ``classes`` of their own (packaged files have none), and the never-set ``extra``
-    mapping."""
+    and no ``classes`` of their own (packaged files have none), no ``stack`` (a field the
+    replaced loader did not have: `tests/sim/lots/test_stack.py` checks it), and the
+    never-set ``extra`` mapping."""
     out = dict(loaded)
     out.update(out.pop("plant"))
     assert out.pop("description") == "" and out.pop("classes") == {}
+    out.pop("stack")
     out["extra"] = {}
     return out
 
