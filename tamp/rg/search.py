@@ -66,10 +66,11 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -113,6 +114,9 @@ class Bound:
     #: the optimal assignment behind ``h``: approach row (a goal's drop, -1: the robot) →
     #: the goal it approaches; rows absent are unassigned (None: not an assignment bound)
     assign: dict[int, int] | None = None
+    #: the solver's own rows → columns behind ``assign`` (positions in the state's matrix,
+    #: `OrderProblem.bound`), so bounding the children reuses them; None when inherited
+    pairs: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False, repr=False)
 
     def restricted(self, g: int, step: float, enabled: Callable[[int], bool]) -> Bound | None:
         """The bound of the child achieving ``g`` when ``g`` is the relaxation's own choice.
@@ -143,6 +147,22 @@ class Bound:
         )
 
 
+class _Rows(NamedTuple):
+    """What a state's matrix needs from its goal set alone (kept per mask, `OrderProblem`;
+    a named tuple: one is made per state bounded, on the search's hot path)."""
+
+    #: the remaining goals, ascending
+    idx: np.ndarray
+    #: Σ carry over them
+    carry: float
+    #: the matrix's columns: ``idx``, then the dummy column k
+    cols: np.ndarray
+    #: the matrix's rows: the start (k, replaced by the robot's position), then ``idx``
+    at: np.ndarray
+    #: per remaining goal, True when a predecessor remains (the robot may not drive to it)
+    waiting: np.ndarray
+
+
 def _bit_positions(mask: int, nbytes: int, k: int) -> np.ndarray:
     """Positions of the set bits of ``mask`` (< k), ascending."""
     bits = np.unpackbits(
@@ -159,31 +179,27 @@ def _forced_robot_row(square: np.ndarray, rows: np.ndarray, cols: np.ndarray, op
     column σ(0) and displaces g's row ρ(g), which takes another column, whose row moves on,
     until some row takes σ(0): the cheapest such alternating path is a shortest path from g
     to σ(0) over arcs j → j' of weight c(ρ(j), j') − c(ρ(j), j), without negative cycles
-    because the assignment is optimal (Bellman-Ford, vectorised). Returns, per real column
-    g, the optimum without row 0 and column g: ``opt − c(0, σ(0)) + dist(g → σ(0))``.
+    because the assignment is optimal (Bellman-Ford, vectorised: each round relaxes every
+    arc at once, one m×m add and row minimum, until nothing improves). Returns, per real
+    column g, the optimum without row 0 and column g: ``opt − c(0, σ(0)) + dist(g → σ(0))``.
     """
     m = square.shape[0]
     sigma = np.empty(m, dtype=np.intp)
     sigma[rows] = cols
     rho = np.empty(m, dtype=np.intp)
     rho[sigma] = np.arange(m)
-    # wt[j', j]: weight of the arc j -> j' (transposed so a round gathers rows)
-    held = np.empty(m)  # c(ρ(j), j): what column j costs now
-    held[cols] = square[rows, cols]
-    wt = square[rho].T - held
+    wt = square[rho]  # wt[j, j']: the weight of the arc j -> j'
+    wt -= square[rho, np.arange(m)][:, None]  # c(ρ(j), j): what column j costs now
     target = sigma[0]
-    dist = np.full(m, np.inf)
+    dist = wt[:, target].copy()  # one arc straight to σ(0)
     dist[target] = 0.0
-    changed = np.array([target])
-    for _ in range(m):  # a round relaxes only through the columns the last one improved
-        if not changed.size:
+    buf = np.empty_like(wt)
+    for _ in range(m):
+        np.add(wt, dist, out=buf)
+        cand = buf.min(axis=1)
+        if not (cand < dist - 1e-12).any():
             break
-        sub = wt[changed]
-        sub += dist[changed][:, None]
-        cand = sub.min(axis=0)
-        cand[target] = 0.0
-        changed = (cand < dist - 1e-12).nonzero()[0]
-        dist[changed] = cand[changed]
+        np.minimum(cand, dist, out=dist)
     return opt - square[0, target] + dist[: m - 1]
 
 
@@ -217,8 +233,11 @@ class OrderProblem:
         # `_dense` with forbidden approaches `_BIG`, and the dummy column (≤ DENSE_LIMIT)
         self._square: np.ndarray | None = None
         self._step_rows: dict[int, list[float]] = {}
+        self._step_vectors: dict[int, np.ndarray] = {}
         self._drive_rows: dict[int, list[float]] = {}
-        self._remaining: dict[int, np.ndarray] = {}
+        self._rows_of: dict[int, _Rows] = {}
+        # masks whose `_Rows` are kept: about 2 million goal indices in all
+        self._rows_limit = max(256, (1 << 21) // max(1, k))
         self._symmetry: Symmetry | None | Literal[False] = False  # False: not looked for yet
         # per goal: the bit mask of its direct predecessors (enabled once they are achieved)
         self._pred_masks = [sum(1 << p for p in ps) for ps in self.index.preds]
@@ -243,18 +262,39 @@ class OrderProblem:
 
     # -- the bound ---------------------------------------------------------------------------
     def remaining(self, mask: int) -> np.ndarray:
-        """Indices of the goals not achieved in ``mask``, ascending (the last few kept: a
-        state is bounded twice, its own assignment and then its children's)."""
-        idx = self._remaining.get(mask)
-        if idx is None:
-            if len(self._remaining) > 256:
-                self._remaining.clear()
-            if self.k == 0:
+        """Indices of the goals not achieved in ``mask``, ascending."""
+        return self._rows(mask).idx
+
+    def _rows(self, mask: int) -> _Rows:
+        """The goal-set part of a state's matrix (`_Rows`), kept per mask (up to
+        `_rows_limit` masks): a state is bounded up to twice, for its own assignment and
+        then for its children's, and the states with one goal set share it."""
+        rows = self._rows_of.get(mask)
+        if rows is None:
+            if len(self._rows_of) >= self._rows_limit:
+                self._rows_of.clear()
+            k = self.k
+            if k == 0:
                 idx = np.empty(0, dtype=np.intp)
             else:
-                idx = _bit_positions(~mask & ((1 << self.k) - 1), self._nbytes, self.k)
-            self._remaining[mask] = idx
-        return idx
+                idx = _bit_positions(~mask & ((1 << k) - 1), self._nbytes, k)
+            rem = ~mask & self.index.full
+            pm = self._pred_masks
+            n = len(idx)
+            cols = np.empty(n + 1, dtype=np.intp)
+            cols[:n] = idx
+            cols[n] = k
+            at = np.empty(n + 1, dtype=np.intp)
+            at[0] = k
+            at[1:] = idx
+            rows = self._rows_of[mask] = _Rows(
+                idx,
+                float(self.carry[idx].sum()),
+                cols,
+                at,
+                np.array([pm[b] & rem != 0 for b in idx.tolist()], dtype=bool),
+            )
+        return rows
 
     def _approach(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """Empty-drive metres from the drops ``rows`` (k: the start) to the picks ``cols``."""
@@ -321,11 +361,22 @@ class OrderProblem:
         `DENSE_LIMIT`: then each step is computed on its own)."""
         row = self._step_rows.get(last)
         if row is None:
+            costs = self.step_vector(last)
+            if costs is None:
+                return None
+            row = self._step_rows[last] = costs.tolist()
+        return row
+
+    def step_vector(self, last: int) -> np.ndarray | None:
+        """`step_row` as an array (None above `DENSE_LIMIT`), tabulated once per ``last``."""
+        row = self._step_vectors.get(last)
+        if row is None:
             self._prepare()
             if self._dense is None:
                 return None
-            costs = self.per_metre * (self._dense[last] + self.carry) + self.per_goal
-            row = self._step_rows[last] = costs.tolist()
+            row = self._step_vectors[last] = (
+                self.per_metre * (self._dense[last] + self.carry) + self.per_goal
+            )
         return row
 
     def drive_row(self, a: int) -> list[float]:
@@ -381,19 +432,21 @@ class OrderProblem:
         return sub
 
     def bound(
-        self, mask: int, last: int, children: bool = True, assign: dict[int, int] | None = None
+        self, mask: int, last: int, children: bool = True, known: Bound | None = None
     ) -> Bound:
         """The admissible bound of state (mask, last), with its optimal assignment and (when
         ``children``) a lower bound of each child's bound (`_forced_robot_row`).
 
-        ``assign``: the state's optimal assignment when already known (`Bound.restricted`):
-        only the children's bounds are computed then, no assignment is solved.
+        ``known``: the state's bound when already solved (its own, or `Bound.restricted`
+        from its parent): only the children's bounds are computed then, no assignment is
+        solved.
         """
-        idx = self.remaining(mask)
+        rows = self._rows(mask)
+        idx = rows.idx
         n = len(idx)
         if n == 0:
             return Bound(0.0)
-        carry = float(self.carry[idx].sum())
+        carry = rows.carry
         if n > BOUND_LIMIT:
             return Bound(self.per_metre * carry + self.per_goal * n)
         self._prepare()
@@ -401,29 +454,26 @@ class OrderProblem:
         # the robot drives to an enabled goal first, and the goal left unassigned (the last
         # one) has no successors: the dummy column n takes only such rows, never the robot's
         if self._square is not None:  # one gather: the robot's row, then the remaining drops
-            at = np.empty(n + 1, dtype=np.intp)
+            at = rows.at.copy()
             at[0] = here
-            at[1:] = idx
-            cols = np.empty(n + 1, dtype=np.intp)
-            cols[:n] = idx
-            cols[n] = self.k  # the dummy column
-            cost = self._square[at[:, None], cols]
+            cost = self._square[at[:, None], rows.cols]
         else:
             cost = np.empty((n + 1, n + 1))
             cost[0, :n] = self._approach(np.array([here]), idx)[0]
             cost[1:, :n] = self._predecessor_costs(idx)
             cost[0, n] = _BIG
             cost[1:, n] = self._dummy[idx]
-        rem = ~mask & self.index.full
-        pm = self._pred_masks
-        cost[0, :n][[pm[b] & rem != 0 for b in idx.tolist()]] = _BIG
+        cost[0, :n][rows.waiting] = _BIG
         if n == 1:
             return Bound(self.per_metre * (carry + float(cost[0, 0])) + self.per_goal)
         self.bounds_solved += 1
         if self.bound_kind == "min":
             empty = float(cost[:, :n].min(axis=0).sum())
             return Bound(self.per_metre * (carry + empty) + self.per_goal * n)
-        if assign is not None and len(assign) == n:
+        assign = known.assign if known is not None else None
+        if known is not None and known.pairs is not None:
+            r, c = known.pairs
+        elif assign is not None and len(assign) == n:
             rows_of = np.fromiter(assign.keys(), dtype=np.intp, count=n)
             cols_of = np.fromiter(assign.values(), dtype=np.intp, count=n)
             r = np.arange(n + 1)
@@ -434,17 +484,16 @@ class OrderProblem:
         else:
             r, c = linear_sum_assignment(cost)
             real = c < n  # the row on the dummy column is unassigned
-            row_goal = np.empty(n + 1, dtype=np.intp)
+            row_goal = rows.at.copy()
             row_goal[0] = -1
-            row_goal[1:] = idx
             assign = dict(zip(row_goal[r[real]].tolist(), idx[c[real]].tolist(), strict=True))
         empty = float(cost[r, c].sum())
         h = self.per_metre * (carry + empty) + self.per_goal * n
         if not children:
-            return Bound(h, assign=assign)
+            return Bound(h, assign=assign, pairs=(r, c))
         child_empty = _forced_robot_row(cost, r, c, empty)
         child = self.per_metre * (carry - self.carry[idx] + child_empty) + self.per_goal * (n - 1)
-        return Bound(h, idx, child, assign)
+        return Bound(h, idx, child, assign, (r, c))
 
     def heuristic(self, mask: int, last: int) -> float:
         """Admissible lower bound on the cost of achieving every remaining goal."""
@@ -489,25 +538,28 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
     # a solved bound per state (not a lazy one): its own assignment, or its parent's family
     solved_h: dict[tuple[int, int], float] = {start: b0.h}
     own: dict[tuple[int, int], Bound] = {start: b0}  # a state's assignment, when known
-    family: dict[tuple[int, int], dict[int, float]] = {}  # a bound of every child, by goal
+    family: dict[tuple[int, int], np.ndarray | None] = {}  # a bound of every child (`children_of`)
     # state -> (parent, goal achieved in the parent's frame, automorphism to the child's)
     parent: dict[tuple[int, int], tuple[tuple[int, int], int, int]] = {}
     enabled: dict[int, tuple[int, ...]] = {0: index.initial()}
     lasts: dict[int, list[int]] = {0: [-1]}  # states (mask, last) queued, for dominance
+    # a deferred state -> (its g, its siblings not yet queued: (f, goal), the least f last)
+    waiting: dict[tuple[int, int], tuple[float, list[tuple[float, int]]]] = {}
     step_row, drive_row, step_cost = problem.step_row, problem.drive_row, problem.step_cost
+    step_vector = problem.step_vector
     push, pop = heapq.heappush, heapq.heappop
 
-    def children_of(p: tuple[int, int]) -> dict[int, float]:
-        """A lower bound of every child of ``p``, by goal (one solve per state, kept)."""
-        fam = family.get(p)
-        if fam is None:
-            pb = own.get(p)
-            fb = problem.bound(*p, assign=pb.assign if pb else None)
-            fam = family[p] = (
-                dict(zip(fb.goals.tolist(), fb.child.tolist(), strict=True))
-                if fb.goals is not None and fb.child is not None
-                else {}
-            )
+    def children_of(p: tuple[int, int]) -> np.ndarray | None:
+        """A lower bound of every child of ``p``, by goal (NaN: none; None: no bound for any
+        child), one solve per state, kept."""
+        if p in family:
+            return family[p]
+        fb = problem.bound(*p, known=own.get(p))
+        fam = None
+        if fb.goals is not None and fb.child is not None:
+            fam = np.full(problem.k, np.nan)
+            fam[fb.goals] = np.maximum(fb.child, 0.0)
+        family[p] = fam
         return fam
 
     tie = itertools.count()
@@ -523,8 +575,9 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
             continue  # stale entry
         if not deferred and state not in solved_h and heap:  # lazy bound against a competitor
             p, pg, _ = parent[state]
-            exact = children_of(p).get(pg)
-            hc = solved_h[state] = lazy if exact is None else max(0.0, exact)
+            fam = children_of(p)
+            exact = float(fam[pg]) if fam is not None else math.nan
+            hc = solved_h[state] = lazy if math.isnan(exact) else exact
             fc = _key(g_cost + hc)
             if fc > f:
                 push(heap, (fc, False, neg_g, next(tie), mask, last, hc, False))
@@ -557,10 +610,28 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
         if not deferred and choice is not None and len(here) > 1 and choice in here:
             here = (choice,)  # partial expansion: the rest waits in one deferred entry
             push(heap, (f, True, neg_g, next(tie), mask, last, h, True))
-        # siblings of the relaxation's choice, with a competitor queued: solve this state once
-        # for a bound of every child now, rather than queue them lazily and re-queue each
-        fam = children_of(state) if heap and deferred else None
         steps = step_row(last)
+        fam = None
+        if deferred:  # the siblings of the relaxation's choice, in order of their f
+            todo = waiting.get(state)
+            if todo is None or todo[0] != g_cost:  # its first pop (at this g)
+                # with a competitor queued, solve this state once for a bound of every child,
+                # rather than queue them lazily and re-queue each
+                fam = children_of(state) if heap else None
+                todo = waiting[state] = (
+                    g_cost,
+                    _sibling_order(here, fam, step_vector(last), f, g_cost),
+                )
+            rest = todo[1]
+            now = []
+            while rest and rest[-1][0] <= f:
+                now.append(rest.pop()[1])
+            if rest:  # the others wait again, at the least f among them
+                push(heap, (rest[-1][0], True, neg_g, next(tie), mask, last, h, True))
+            else:
+                del waiting[state]
+            here = tuple(now)
+            fam = family.get(state)
         images = sym.images(mask) if sym is not None else []
         for g in here:
             if sym is None:
@@ -568,7 +639,7 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
             else:
                 child_mask, child_last, which = sym.canonical(images, g)
             child = (child_mask, child_last)
-            step = steps[g] if steps is not None else step_cost(last, g)
+            step = _step(steps, step_cost, last, g)
             cost = g_cost + step
             if cost + 1e-12 >= best_g.get(child, INF):
                 continue
@@ -596,8 +667,8 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
                         cb = cb.mapped(perms[which])
                     hc = solved_h[child] = max(0.0, cb.h)
                     own[child] = cb
-                elif fam is not None and g in fam:
-                    hc = solved_h[child] = max(0.0, fam[g])
+                elif fam is not None and not math.isnan(fam[g]):
+                    hc = solved_h[child] = float(fam[g])
                 else:
                     hc = max(0.0, h - step)
                 if h >= step and (cb is not None or child not in solved_h):
@@ -636,6 +707,28 @@ def _result(problem, state, parent, perms, cost, expanded, generated) -> SearchR
     return SearchResult(
         order, problem.order_cost(order), expanded, generated, problem.bounds_solved
     )
+
+
+def _sibling_order(here, fam, steps, f: float, g_cost: float) -> list[tuple[float, int]]:
+    """The goals ``here`` with a lower bound of their child's f, the least f *last*.
+
+    ``fam``: the children's bounds (`children_of`; None, or NaN for a goal: f, their
+    parent's); ``steps``: `OrderProblem.step_vector` (None: f for all). Each bound is
+    lowered by 1e-6 so that it is never above the child's key rounded by `_key`: a sibling
+    is queued no later than its f is reached.
+    """
+    if fam is None or steps is None:
+        return [(f, g) for g in reversed(here)]
+    goals = np.fromiter(here, dtype=np.intp, count=len(here))
+    est = g_cost + steps[goals] + fam[goals] - 1e-6
+    est[np.isnan(est)] = f
+    order = np.argsort(-est, kind="stable")
+    return list(zip(est[order].tolist(), goals[order].tolist(), strict=True))
+
+
+def _step(steps: list[float] | None, step_cost, last: int, g: int) -> float:
+    """The step cost from ``last`` to ``g``: tabulated (`OrderProblem.step_row`) or computed."""
+    return steps[g] if steps is not None else step_cost(last, g)
 
 
 def _key(f: float) -> float:
