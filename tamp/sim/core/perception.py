@@ -325,7 +325,9 @@ class Perception(LeafSystem):
                 keep = {m.track for seen in s.memory.values() for m in seen}
                 keep |= {req.track} if req.track is not None else set()
                 observed = [(d.cls, d.centroid) for d in raw]
-                tracks, ids = update(s.tracks, observed, context.get_time(), keep=keep)
+                clouds = [d.points for d in raw]
+                t = context.get_time()
+                tracks, ids = update(s.tracks, observed, t, keep=keep, points=clouds)
             dets = tuple(
                 Detection(i, d.cls, d.pixels, d.u, d.v, d.depth)
                 for i, d in zip(ids, raw, strict=True)

@@ -10,43 +10,57 @@ asks whether *the target* left the table. `update` gives each detection of a vie
 a track:
 
 - a detection is associated with a live track of the **same class** whose position lies
-  within ``gate`` metres of its centroid; among several, the assignment that minimises the
-  summed distance (Hungarian, `scipy.optimize.linear_sum_assignment`, per class), so two
-  neighbours of one class never swap;
+  within ``gate`` metres of its centroid, or whose last points it overlaps (at least
+  `SHARE` of the smaller point set lies within `OVERLAP` of the other: one long object
+  seen partly hidden from two sides has centroids 10 cm apart but some surface in common);
+  among several, the assignment that minimises the summed centroid distance
+  (Hungarian, `scipy.optimize.linear_sum_assignment`, per class), so two neighbours of one
+  class never swap;
 - a detection left without a track starts a new one (a fresh id, never reused);
 - a track not associated for longer than ``lifetime`` seconds is dropped, unless the caller
   keeps it (occlusion memory: an instance remembered as hidden keeps its track).
 
 The gate (`GATE`, 7 cm) is larger than a centroid's drift between views of one still object
 (a few centimetres: the visible part changes as the camera moves) and smaller than two
-objects' centres lying side by side; an object moved farther than the gate gets a fresh id
-(the noisy detector's "fresh identity" error jumps 8 cm for that reason). Pure Python and
+objects' centres lying side by side; an object moved farther than the gate (and off its
+own last surface) gets a fresh id (the noisy detector's "fresh identity" error jumps 8 cm
+for that reason). Pure Python and
 numpy, no Drake: the learned detector plugs into the same tracker as the label image does.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+from scipy.spatial import cKDTree
 
 #: largest distance (m) between a track's position and a detection's centroid to associate
 GATE = 0.07
 #: sim seconds a track lives without being associated (a detection missed in a few views)
 LIFETIME = 3.0
+#: two point sets overlap when this share of the smaller lies within `OVERLAP` m of the other:
+#: a saw seen past the held hammer from one side, then the other, shares 18 % (its centroids
+#: 10 cm apart); objects 1 cm apart or more share none
+OVERLAP = 0.01
+SHARE = 0.1
+#: points kept per track (an even subsample of its last detection's)
+KEEP_POINTS = 300
 
 
 @dataclass(frozen=True)
 class Track:
     """One instance as the tracker knows it: its id, class, last world position (the
-    centroid of its last detection) and the sim time of that detection."""
+    centroid of its last detection), the sim time of that detection, and a subsample of
+    that detection's world points (3 x N; None: none given)."""
 
     id: int
     cls: str
     position: tuple[float, float, float]
     seen: float
+    points: np.ndarray | None = field(default=None, compare=False, repr=False)
 
 
 @dataclass(frozen=True)
@@ -64,14 +78,32 @@ class Tracks:
         return Tracks(tuple(t for t in self.tracks if t.id not in ids), self.next_id)
 
 
+def overlaps(a: np.ndarray | None, b: np.ndarray | None, r: float = OVERLAP) -> float:
+    """The share of the smaller of two point sets (3 x N) lying within ``r`` of the other
+    (0 when either is missing or empty)."""
+    if a is None or b is None or a.shape[1] == 0 or b.shape[1] == 0:
+        return 0.0
+    small, big = (a, b) if a.shape[1] <= b.shape[1] else (b, a)
+    d, _ = cKDTree(big.T).query(small.T, distance_upper_bound=r)
+    return float(np.mean(np.isfinite(d)))
+
+
+def _subsample(points: np.ndarray | None, n: int = KEEP_POINTS) -> np.ndarray | None:
+    if points is None or points.shape[1] <= n:
+        return points
+    return points[:, :: int(np.ceil(points.shape[1] / n))]
+
+
 def associate(
     tracks: Sequence[Track],
     observed: Sequence[tuple[str, Sequence[float]]],
     gate: float = GATE,
+    points: Sequence[np.ndarray | None] | None = None,
+    share: float = SHARE,
 ) -> list[int | None]:
     """For each observed (class, centroid), the index in ``tracks`` of its track, or None:
-    per class, the minimum-distance assignment among pairs within ``gate`` (module
-    docstring)."""
+    per class, the minimum-distance assignment among pairs within ``gate`` or whose points
+    overlap (``points``: each observation's world points; module docstring)."""
     out: list[int | None] = [None] * len(observed)
     for cls in {c for c, _ in observed}:
         rows = [i for i, (c, _) in enumerate(observed) if c == cls]
@@ -81,11 +113,18 @@ def associate(
         a = np.array([observed[i][1] for i in rows], float).reshape(len(rows), 3)
         b = np.array([tracks[j].position for j in cols], float).reshape(len(cols), 3)
         dist = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
-        # pairs beyond the gate cost more than any set of gated pairs: never preferred
-        big = gate * (len(rows) + len(cols) + 1)
-        cost = np.where(dist <= gate, dist, big)
+        ok = dist <= gate
+        if points is not None:
+            for r, i in enumerate(rows):
+                for c, j in enumerate(cols):
+                    if not ok[r, c] and overlaps(points[i], tracks[j].points) >= share:
+                        ok[r, c] = True
+        # ineligible pairs cost more than any set of eligible ones: never preferred
+        finite = np.where(np.isfinite(dist), dist, 0.0)
+        big = (finite[ok].sum() if ok.any() else 0.0) + 1.0
+        cost = np.where(ok, finite, big)
         for r, c in zip(*linear_sum_assignment(cost), strict=True):
-            if dist[r, c] <= gate:
+            if ok[r, c]:
                 out[rows[r]] = cols[c]
     return out
 
@@ -98,25 +137,28 @@ def update(
     keep: frozenset[int] | set[int] = frozenset(),
     gate: float = GATE,
     lifetime: float = LIFETIME,
+    points: Sequence[np.ndarray | None] | None = None,
 ) -> tuple[Tracks, tuple[int, ...]]:
     """The tracker after one view at sim ``time`` whose detections are ``observed`` (class,
-    world centroid), and the track id of each detection. Associated tracks move to their
-    detection's centroid; unassociated detections start tracks with fresh ids; tracks unseen
-    for longer than ``lifetime`` are dropped unless their id is in ``keep``."""
+    world centroid; ``points``: their world points, when known), and the track id of each
+    detection. Associated tracks move to their detection's centroid; unassociated
+    detections start tracks with fresh ids; tracks unseen for longer than ``lifetime`` are
+    dropped unless their id is in ``keep``."""
     live = [t for t in state.tracks if time - t.seen <= lifetime or t.id in keep]
-    match = associate(live, observed, gate)
+    match = associate(live, observed, gate, points)
     next_id = state.next_id
     ids: list[int] = []
     moved: dict[int, Track] = {}
     fresh: list[Track] = []
-    for (cls, p), j in zip(observed, match, strict=True):
+    for k, ((cls, p), j) in enumerate(zip(observed, match, strict=True)):
         position = tuple(float(x) for x in p)
+        pts = _subsample(points[k]) if points is not None else None
         if j is None:
-            fresh.append(Track(next_id, cls, position, time))
+            fresh.append(Track(next_id, cls, position, time, pts))
             ids.append(next_id)
             next_id += 1
         else:
-            moved[j] = Track(live[j].id, cls, position, time)
+            moved[j] = Track(live[j].id, cls, position, time, pts)
             ids.append(live[j].id)
     tracks = tuple(moved.get(j, t) for j, t in enumerate(live)) + tuple(fresh)
     return Tracks(tracks, next_id), tuple(ids)

@@ -83,3 +83,33 @@ def test_associate_leaves_pairs_beyond_the_gate_alone():
     tracks, _ = update(Tracks(), [("saw", A)], 0.0)
     assert associate(tracks.tracks, [("saw", (A[0], A[1] + 0.2, A[2]))]) == [None]
     assert associate(tracks.tracks, [("saw", A), ("saw", A)]) in ([0, None], [None, 0])
+
+
+def _bar(x0: float, x1: float, y: float = 0.0) -> np.ndarray:
+    """The top of a bar 2 cm wide between x0 and x1 (3 x N points, 5 mm apart)."""
+    xs, ys = np.meshgrid(np.arange(x0, x1, 0.005), np.arange(y - 0.01, y + 0.01, 0.005))
+    return np.vstack([xs.ravel(), ys.ravel(), np.full(xs.size, 0.02)])
+
+
+def _seen(points):
+    return ("saw", tuple(np.median(points, axis=1)))
+
+
+def test_a_long_object_seen_partly_from_two_sides_keeps_its_track():
+    """Its visible parts' centroids lie beyond the gate, but the parts share some surface."""
+    right, left = _bar(0.47, 0.66), _bar(0.43, 0.51)
+    tracks, (a,) = update(Tracks(), [_seen(right)], 0.0, points=[right])
+    assert np.linalg.norm(np.subtract(_seen(right)[1], _seen(left)[1])) > GATE
+    _, (b,) = update(tracks, [_seen(left)], 1.0, points=[left])
+    assert b == a
+    _, (c,) = update(tracks, [_seen(left)], 1.0)  # without points: the gate alone
+    assert c != a
+
+
+def test_a_neighbour_a_centimetre_away_shares_no_surface():
+    one, other = _bar(0.40, 0.60), _bar(0.40, 0.60, y=0.03)  # 1 cm gap between them
+    tracks, (a,) = update(Tracks(), [_seen(one)], 0.0, points=[one])
+    # the first is gone (lifted): the neighbour, 3 cm from it (beyond a 2 cm gate), does not
+    # take its track by overlap
+    _, (b,) = update(tracks, [_seen(other)], 1.0, points=[other], gate=0.02)
+    assert b != a
