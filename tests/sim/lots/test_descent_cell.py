@@ -85,3 +85,43 @@ def test_a_confident_prediction_commits_early_and_an_uncertain_one_explores(tmp_
     assert end2 - start2 > 2 * (grasp_t - start)
     assert max(math.dist(c[:2], XY) for c in cams2[2:]) > 0.02
     assert commit - start < 1.0
+
+
+def test_a_descent_that_loses_its_target_says_so_and_never_takes_another(tmp_path):
+    """Two bodies in W^A; once the descent follows the one at the centre, it is taken away
+    (out of every view). The views say ``target lost`` and the attempt fails: the other body,
+    in view at the look pose, is not followed silently. The next attempt states that it
+    re-acquires, then follows the other body (a new track)."""
+    from pydrake.math import RigidTransform
+
+    path = write_scenario(
+        tmp_path,
+        [
+            {"class": "body", "workspace": "A", "xy": [0.0, 0.0], "yaw": 0},
+            {"class": "body", "workspace": "A", "xy": [0.1, -0.1], "yaw": 0},
+        ],
+    )
+    cell = build_station(load_cell_scenario(path))
+    cell.planner.candidates = lambda crop, X_WC, h: [
+        GraspCandidate(XY[0], XY[1], 0.05, math.pi / 2, 0.04, 0.9, h)
+    ]
+    driver = CellDriver(cell)
+    h = driver.start("Pick(body)")
+    taken = None
+    while driver.context.get_time() < 60.0 and driver.poll(h) is Status.RUNNING:
+        s = driver.skill_state()
+        if taken is None and any(m.startswith("view 1 ") for _, m in s.log):
+            taken = s.track
+            body = cell.cell.bodies["body_0"]
+            cell.plant.SetFreeBodyPose(driver.plant_context(), body, RigidTransform([0.2, 0, 0]))
+        if sum(m.startswith("view 1 ") for _, m in s.log) == 2:  # the next attempt's first
+            break
+    log = [m for _, m in driver.skill_state().log]
+    assert taken is not None
+    lost = [m for m in log if f"target lost (track {taken} not in view)" in m]
+    assert len(lost) >= 3, log
+    failed = next(i for i, m in enumerate(log) if "attempt 1 failed" in m)
+    assert f"target lost: the body (track {taken}) left the view" in log[failed]
+    assert not any(m.startswith("grasp at") for m in log[:failed])  # nothing grasped instead
+    assert any(f"track {taken} not in view at the look pose; re-acquiring" in m for m in log)
+    assert driver.skill_state().track not in (None, taken)  # the other body, its own track
