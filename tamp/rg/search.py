@@ -16,13 +16,23 @@ no successors in C. Two bounds are available:
 * ``"min"`` — each goal's cheapest such approach, independently;
 * ``"assignment"`` — the assignment-problem relaxation: the approach points must be
   distinct (the relaxation that lower-bounds asymmetric TSP tours; a dummy column takes
-  the last goal's row, only for goals without successors). It is never weaker and prunes
-  far more on hard layouts, at a higher cost per evaluation. Sending the robot to enabled
-  goals only expands about 40 % fewer states on the cyclic swaps than the bare relaxation.
+  the last goal's row, only for goals without successors). It prunes far more on hard
+  layouts, at a higher cost per evaluation. Sending the robot to enabled goals only
+  expands about 40 % fewer states on the cyclic swaps than the bare relaxation. Up to
+  `CONFLICT_LIMIT` goals it is also a Lagrangian bound (`tamp.rg.conflicts`): pairs of
+  approaches that no order takes both (b right after a, and d right after c) have a
+  multiplier λ priced into both, less Σλ; an arc with a goal forced between its ends is
+  forbidden. On the cyclic swap of 24 objects this raises the first bound from 4.7 % to
+  2.2 % below the optimum and expands 10 times fewer states.
 
-The true remaining route is one such assignment, so both never overestimate. Above
-`BOUND_LIMIT` remaining goals neither is computed and ``E = 0`` (still admissible; the
-search stays exact, it only prunes less).
+The true remaining route is one such assignment, so ``"min"`` and the bare assignment never
+overestimate; for the priced one, the route's cost plus its Lagrangian terms (each ≤ 0,
+since the route takes at most one arc of each pair) is at least the relaxation's minimum.
+It is at least the bare assignment in the first state, where λ is fitted; deeper, a pair
+that lost one arc keeps its λ, and the bound may fall below the bare one (still
+admissible, not consistent: the search re-opens states and keeps ``max(h, h(parent) −
+step)``). Above `BOUND_LIMIT` remaining goals no bound is computed and ``E = 0`` (still
+admissible; the search stays exact, it only prunes less).
 
 What keeps the search cheap (no geometry is stored per pair of goals above `DENSE_LIMIT`;
 below it one (goals+1)² table makes a state's assignment matrix a single gather):
@@ -36,16 +46,19 @@ below it one (goals+1)² table makes a state's assignment matrix a single gather
   the rest of that assignment is an optimal assignment of the child (S ∪ {g*}, g*) — its
   rows are the parent's minus the robot's, its columns minus g*, and the child's robot row
   is g*'s drop row — so, when g*'s row goes to a goal enabled in the child, the child's
-  bound is ``h − step(r, g*)`` exactly and its own assignment is known: following the
-  relaxation's chain costs no solve at all.
+  bound is ``h − step(r, g*)`` exactly (plus the multipliers of the pairs that leave with
+  that row and column, `OrderProblem.chain_gain`) and its own assignment is known:
+  following the relaxation's chain costs no solve at all.
 * **Partial expansion.** A state with a known choice queues only that child (same f) and
   one deferred entry at its own f for the others (each of their f is at least that); on
   equal f, exact bounds pop before lazy ones. The deferred entry is expanded only if the
   chain stops paying (a subtour of the relaxation must be broken): then, with a competitor
   queued, the state is solved once for a lower bound of every child (one Bellman-Ford pass,
   `_forced_robot_row`: the child's matrix without the rule that its robot row goes to an
-  enabled goal) and the siblings are queued with it; a child popped against a competitor
-  solves its own assignment, and is queued again if that raises its f.
+  enabled goal), the siblings whose bound gives the state's own f are queued, and the
+  deferred entry waits again at the least f of the others (most are never queued: on the
+  24-object swap 7,000 children are queued instead of 58,000); a child popped against a
+  competitor solves its own assignment, and is queued again if that raises its f.
   f is compared to 1e-6 (`_key`): the same costs summed in another order must tie, or
   float drift sends the search through every state of a plateau of equal f (the cliff of
   wide tasks: 1,000 independent goals in a row took 9 minutes, now 2 s).
@@ -76,6 +89,14 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from tamp.demo.model import Demonstration
+from tamp.rg.conflicts import (
+    CONFLICT_LIMIT,
+    Conflicts,
+    fit,
+    never_adjacent,
+    order_closure,
+    symmetrised,
+)
 from tamp.rg.costs import CostModel, planar
 from tamp.rg.graph import GoalIndex
 from tamp.rg.symmetry import Symmetry, find_symmetry
@@ -161,6 +182,8 @@ class _Rows(NamedTuple):
     at: np.ndarray
     #: per remaining goal, True when a predecessor remains (the robot may not drive to it)
     waiting: np.ndarray
+    #: per goal (and the start, last), True when it remains
+    has: np.ndarray
 
 
 def _bit_positions(mask: int, nbytes: int, k: int) -> np.ndarray:
@@ -239,6 +262,8 @@ class OrderProblem:
         # masks whose `_Rows` are kept: about 2 million goal indices in all
         self._rows_limit = max(256, (1 << 21) // max(1, k))
         self._symmetry: Symmetry | None | Literal[False] = False  # False: not looked for yet
+        self._conflicts: Conflicts | None = None  # arcs priced into `_square` (conflicts.py)
+        self._penalty = np.zeros(0)  # their multipliers per arc, (k+1)² (with _conflicts)
         # per goal: the bit mask of its direct predecessors (enabled once they are achieved)
         self._pred_masks = [sum(1 << p for p in ps) for ps in self.index.preds]
         # the dummy column's cost per goal: only a goal without successors can be the last
@@ -287,12 +312,15 @@ class OrderProblem:
             at = np.empty(n + 1, dtype=np.intp)
             at[0] = k
             at[1:] = idx
+            has = np.zeros(k + 1, dtype=bool)
+            has[idx] = True
             rows = self._rows_of[mask] = _Rows(
                 idx,
                 float(self.carry[idx].sum()),
                 cols,
                 at,
                 np.array([pm[b] & rem != 0 for b in idx.tolist()], dtype=bool),
+                has,
             )
         return rows
 
@@ -355,6 +383,56 @@ class OrderProblem:
         square[: self.k, self.k] = self._dummy
         square[self.k, self.k] = _BIG
         self._square = square
+        if self.k <= CONFLICT_LIMIT and self.index.acyclic():
+            self._price_conflicts()
+
+    def _price_conflicts(self) -> None:
+        """Up to `CONFLICT_LIMIT` goals: forbid the arcs no order takes (a goal between), and
+        raise `_square` by the multipliers of conflicting arcs (`tamp.rg.conflicts`), fitted
+        on the first state's problem and spread over the task's automorphisms (symmetric
+        states keep equal bounds, which `Bound.mapped` relies on)."""
+        k = self.k
+        square = self._square
+        assert square is not None  # called by _prepare once the table exists
+        le = order_closure([self._successors(g) for g in range(k)], k)
+        square[:k, :k][never_adjacent(le)] = _BIG
+        if self.bound_kind != "assignment":
+            return
+        first = square.copy()  # the first state: the robot at the start, nothing achieved
+        first[k, :k][[bool(m) for m in self._pred_masks]] = _BIG
+        priced = fit(first, le, _BIG)
+        if priced is None:
+            return
+        sym = self.symmetry()
+        if sym is not None:
+            priced = symmetrised(priced, sym.perms)
+        self._conflicts = priced
+        self._penalty = priced.penalty(k + 1)
+        self._square = square + self._penalty
+
+    @property
+    def conflicts(self) -> Conflicts | None:
+        """The conflicting arcs priced into the bound (`tamp.rg.conflicts`); None if none."""
+        self._prepare()
+        return self._conflicts
+
+    def chain_gain(self, mask: int, last: int, g: int) -> float:
+        """What the bound of the child achieving ``g`` has above ``h − step`` when the child
+        keeps the rest of the state's assignment (`Bound.restricted`): the multipliers of the
+        conflicting pairs (`tamp.rg.conflicts`) that leave the matrix with the robot's row and
+        g's column, less those priced into the arc driven; 0 without conflicts. It may be
+        negative: the conflict bound is admissible but not consistent."""
+        priced = self._conflicts
+        if priced is None:
+            return 0.0
+        here = self.k if last < 0 else last
+        has = self._rows(mask).has
+        rows = has.copy()
+        rows[here] = True
+        cols = has.copy()
+        cols[g] = False
+        lost = priced.present(rows, has) - priced.present(has, cols)
+        return self.per_metre * (lost - float(self._penalty[here, g]))
 
     def step_row(self, last: int) -> list[float] | None:
         """`step_cost` (last, g) for every goal g, tabulated once per ``last`` (None above
@@ -464,6 +542,12 @@ class OrderProblem:
             cost[0, n] = _BIG
             cost[1:, n] = self._dummy[idx]
         cost[0, :n][rows.waiting] = _BIG
+        # conflicting arcs are priced into the table: their multipliers come back off
+        priced = self._conflicts
+        if priced is not None:
+            inr = rows.has.copy()  # the matrix's rows: the remaining goals and the robot's
+            inr[here] = True
+            carry -= priced.present(inr, rows.has)
         if n == 1:
             return Bound(self.per_metre * (carry + float(cost[0, 0])) + self.per_goal)
         self.bounds_solved += 1
@@ -492,7 +576,10 @@ class OrderProblem:
         if not children:
             return Bound(h, assign=assign, pairs=(r, c))
         child_empty = _forced_robot_row(cost, r, c, empty)
-        child = self.per_metre * (carry - self.carry[idx] + child_empty) + self.per_goal * (n - 1)
+        child_carry = rows.carry - self.carry[idx]
+        if priced is not None:  # a child's matrix loses the robot's row and its goal's column
+            child_carry -= priced.present_without(rows.has, rows.has, self.k + 1)[idx]
+        child = self.per_metre * (child_carry + child_empty) + self.per_goal * (n - 1)
         return Bound(h, idx, child, assign, (r, c))
 
     def heuristic(self, mask: int, last: int) -> float:
@@ -656,22 +743,28 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
             hc = solved_h.get(child)
             key = None
             if hc is None:
-                cb = None
+                cb, gain = None, 0.0
                 if g == choice:
                     assert b is not None  # choice comes from b's assignment
                     child_real = mask | 1 << g  # the child in this state's frame
-                    cb = b.restricted(g, step, partial(index.ready, child_real))
+                    gain = problem.chain_gain(mask, last, g)
+                    cb = b.restricted(g, step - gain, partial(index.ready, child_real))
                 if cb is not None:
                     if which:
                         assert perms is not None  # as above: which > 0 only under a symmetry
                         cb = cb.mapped(perms[which])
-                    hc = solved_h[child] = max(0.0, cb.h)
+                    # h − step bounds every child too (h is admissible): keep the larger
+                    hc = solved_h[child] = max(0.0, cb.h, h - step)
                     own[child] = cb
                 elif fam is not None and not math.isnan(fam[g]):
-                    hc = solved_h[child] = float(fam[g])
+                    hc = solved_h[child] = max(float(fam[g]), h - step)
                 else:
                     hc = max(0.0, h - step)
-                if h >= step and (cb is not None or child not in solved_h):
+                if (
+                    h >= step
+                    and (cb is None or gain <= 0)
+                    and (cb is not None or child not in solved_h)
+                ):
                     key = f  # f(child) = f(state) exactly: keep the key (no float drift)
             if key is None:
                 key = _key(cost + hc)
