@@ -10,6 +10,7 @@ runs past its limit, it is not run on the larger sizes.
 
     python benchmarks/rg_vs_planner.py                 # n = 3 ... 24, FD limit 300 s
     python benchmarks/rg_vs_planner.py --sizes 3 5 8 --fd-timeout 120
+    python benchmarks/rg_vs_planner.py --fd-max 8 --fd-timeout 120   # the peer up to n = 8
     python benchmarks/rg_vs_planner.py --no-fd --layout ring --sizes 8 12 16
     python benchmarks/rg_vs_planner.py --baseline /tmp/old   # beside an older tamp checkout
 
@@ -175,6 +176,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--sizes", type=int, nargs="+", default=[3, 5, 8, 10, 12, 16, 20, 24])
     ap.add_argument("--fd-timeout", type=float, default=300.0)
     ap.add_argument("--no-fd", action="store_true", help="skip the Fast Downward peer")
+    ap.add_argument(
+        "--fd-max", type=int, metavar="N", help="run the Fast Downward peer only up to size N"
+    )
     ap.add_argument("--layout", default="shelf", choices=("shelf", "staging", "ring"))
     ap.add_argument("--baseline", metavar="DIR", help="also time the tamp package in DIR")
     ap.add_argument("--out", metavar="FILE", help="also write the JSON document to FILE")
@@ -202,13 +206,15 @@ def main(argv: list[str] | None = None) -> int:
             row["baseline"] = baseline(n, args.layout, args.baseline)
             row["same_cost_as_baseline"] = abs(row["baseline"]["cost"] - row["ours"]["cost"]) < 0.5
         fd = None
-        if not args.no_fd and fd_over is None:
+        above = args.fd_max is not None and n > args.fd_max
+        if not args.no_fd and fd_over is None and not above:
             fd = fast_downward(n, args.layout, args.fd_timeout)
             row["fd"] = fd
             if fd["cost"] is None:
                 fd_over = n
         elif not args.no_fd:
-            row["fd"] = {"cost": None, "status": f"not run: past its limit at n = {fd_over}"}
+            why = f"past its limit at n = {fd_over}" if fd_over else f"above --fd-max {args.fd_max}"
+            row["fd"] = {"cost": None, "status": f"not run: {why}"}
         o = row["ours"]
         fd_cost = f"{fd['cost']:.0f}" if fd and fd["cost"] is not None else "-"
         fd_time = (

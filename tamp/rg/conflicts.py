@@ -39,10 +39,14 @@ from scipy.optimize import linear_sum_assignment
 
 #: Goals up to which conflicts are priced (each fitting step is O(goals³)).
 CONFLICT_LIMIT = 200
-#: Subgradient steps when fitting λ (each one assignment of the first state's size).
+#: Subgradient steps when fitting λ (each one assignment of the first state's size), and at
+#: most two per goal: a search expands at least one state per goal, each with about one
+#: assignment, so fitting never costs more than about twice the least search.
 ITERATIONS = 120
 #: First subgradient step, as a fraction of the mean allowed approach cost; then ×0.97.
 STEP = 0.05
+#: Steps without a better bound (by 0.01 %) after which the fitting stops.
+PATIENCE = 20
 
 
 @dataclass(frozen=True)
@@ -128,13 +132,17 @@ def fit(cost: np.ndarray, le: np.ndarray, big: float) -> Conflicts | None:
     where: dict[tuple[int, int, int, int], int] = {}
     quads = np.empty((0, 4), dtype=np.intp)
     lam = np.zeros(0)
-    best, best_lam = -np.inf, lam
+    best, best_lam, since = -np.inf, lam, 0
     pen = np.zeros(m * m)
-    for _ in range(ITERATIONS):
+    for _ in range(min(ITERATIONS, 2 * k)):
         r, c = linear_sum_assignment(cost + pen.reshape(m, m))
         value = float(cost[r, c].sum() + pen[r * m + c].sum() - lam.sum())
-        if value > best:
-            best, best_lam = value, lam.copy()
+        if value > best + 1e-4 * abs(value):  # a gain of 0.01 % or more
+            best, best_lam, since = value, lam.copy(), 0
+        else:
+            since += 1
+            if since >= PATIENCE:
+                break
         arcs = (r < k) & (c < k)
         a, b = r[arcs], c[arcs]
         i, j = np.nonzero(np.triu(conflicting(a, b, le)))
