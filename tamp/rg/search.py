@@ -259,8 +259,9 @@ class OrderProblem:
         self._step_vectors: dict[int, np.ndarray] = {}
         self._drive_rows: dict[int, list[float]] = {}
         self._rows_of: dict[int, _Rows] = {}
-        # masks whose `_Rows` are kept: about 2 million goal indices in all
-        self._rows_limit = max(256, (1 << 21) // max(1, k))
+        # masks whose `_Rows` are kept: about half a million goals in all (four arrays each,
+        # some 16 MB)
+        self._rows_limit = max(256, (1 << 19) // max(1, k))
         self._symmetry: Symmetry | None | Literal[False] = False  # False: not looked for yet
         self._conflicts: Conflicts | None = None  # arcs priced into `_square` (conflicts.py)
         self._penalty = np.zeros(0)  # their multipliers per arc, (k+1)² (with _conflicts)
@@ -664,7 +665,8 @@ def astar(problem: OrderProblem, symmetry: bool = True) -> SearchResult | None:
             p, pg, _ = parent[state]
             fam = children_of(p)
             exact = float(fam[pg]) if fam is not None else math.nan
-            hc = solved_h[state] = lazy if math.isnan(exact) else exact
+            # the queued h(parent) − step bounds it too (the priced bound is not consistent)
+            hc = solved_h[state] = lazy if math.isnan(exact) else max(lazy, exact)
             fc = _key(g_cost + hc)
             if fc > f:
                 push(heap, (fc, False, neg_g, next(tie), mask, last, hc, False))
