@@ -327,7 +327,9 @@ class Perception(LeafSystem):
                 observed = [(d.cls, d.centroid) for d in raw]
                 clouds = [d.points for d in raw]
                 t = context.get_time()
-                tracks, ids = update(s.tracks, observed, t, keep=keep, points=clouds)
+                # the lift's view (a track, no target): only the target's own surface counts
+                firm = {req.track} if req.target is None and req.track is not None else set()
+                tracks, ids = update(s.tracks, observed, t, keep=keep, points=clouds, firm=firm)
             dets = tuple(
                 Detection(i, d.cls, d.pixels, d.u, d.v, d.depth)
                 for i, d in zip(ids, raw, strict=True)

@@ -16,7 +16,12 @@ a track:
   among several, the assignment that minimises the summed centroid distance
   (Hungarian, `scipy.optimize.linear_sum_assignment`, per class), so two neighbours of one
   class never swap;
-- a detection left without a track starts a new one (a fresh id, never reused);
+- then, among what is left (detections without a track, live tracks without a detection),
+  the same assignment with the wider gate `REGATE`: one object seen partly, from two sides
+  or cut by the image's edge, has centroids farther apart than the gate and may share no
+  surface (a scissors' two visible parts lay 8 cm apart, a saw's 10 cm; the second stage
+  never takes a track another detection of this view could have: only leftovers meet);
+- a detection still left without a track starts a new one (a fresh id, never reused);
 - a track not associated for longer than ``lifetime`` seconds is dropped, unless the caller
   keeps it (occlusion memory: an instance remembered as hidden keeps its track).
 
@@ -39,6 +44,8 @@ from scipy.spatial import cKDTree
 
 #: largest distance (m) between a track's position and a detection's centroid to associate
 GATE = 0.07
+#: the second stage's gate (m): about half the longest object's length
+REGATE = 0.15
 #: sim seconds a track lives without being associated (a detection missed in a few views)
 LIFETIME = 3.0
 #: two point sets overlap when this share of the smaller lies within `OVERLAP` m of the other:
@@ -138,14 +145,24 @@ def update(
     gate: float = GATE,
     lifetime: float = LIFETIME,
     points: Sequence[np.ndarray | None] | None = None,
+    regate: float = REGATE,
+    firm: frozenset[int] | set[int] = frozenset(),
 ) -> tuple[Tracks, tuple[int, ...]]:
     """The tracker after one view at sim ``time`` whose detections are ``observed`` (class,
     world centroid; ``points``: their world points, when known), and the track id of each
     detection. Associated tracks move to their detection's centroid; unassociated
     detections start tracks with fresh ids; tracks unseen for longer than ``lifetime`` are
-    dropped unless their id is in ``keep``."""
+    dropped unless their id is in ``keep``. Tracks in ``firm`` take part in the first stage
+    only (the lift's check: is the target's own surface still on the table?)."""
     live = [t for t in state.tracks if time - t.seen <= lifetime or t.id in keep]
     match = associate(live, observed, gate, points)
+    left = [k for k, j in enumerate(match) if j is None]
+    spare = [j for j in range(len(live)) if j not in set(match) and live[j].id not in firm]
+    if left and spare:
+        again = associate([live[j] for j in spare], [observed[k] for k in left], regate)
+        for k, j in zip(left, again, strict=True):
+            if j is not None:
+                match[k] = spare[j]
     next_id = state.next_id
     ids: list[int] = []
     moved: dict[int, Track] = {}

@@ -7,7 +7,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tamp.sim.core.tracks import GATE, LIFETIME, Tracks, associate, update
+from tamp.sim.core.tracks import GATE, LIFETIME, REGATE, Tracks, associate, update
 
 A = (0.5, 0.25, 0.02)
 
@@ -21,9 +21,17 @@ def test_a_detection_within_the_gate_keeps_its_track_and_moves_it():
 
 def test_an_object_moved_beyond_the_gate_gets_a_fresh_id():
     tracks, (a,) = update(Tracks(), [("saw", A)], 0.0)
-    far = (A[0] + GATE + 0.01, A[1], A[2])
-    tracks, (b,) = update(tracks, [("saw", far)], 1.0)
-    assert b != a and {t.id for t in tracks.tracks} == {a, b}
+    far = (A[0] + REGATE + 0.01, A[1], A[2])
+    moved, (b,) = update(tracks, [("saw", far)], 1.0)
+    assert b != a and {t.id for t in moved.tracks} == {a, b}
+    # between the gates: the second stage takes the track, when nothing nearer claims it
+    half = (A[0] + GATE + 0.02, A[1], A[2])
+    _, (c,) = update(tracks, [("saw", half)], 1.0)
+    assert c == a
+    _, (d,) = update(tracks, [("saw", half)], 1.0, regate=GATE)
+    assert d != a
+    _, ids = update(tracks, [("saw", half), ("saw", (A[0] + 0.01, A[1], A[2]))], 1.0)
+    assert ids[1] == a and ids[0] != a  # the nearer detection keeps it
 
 
 def test_only_the_same_class_associates():
@@ -102,14 +110,17 @@ def test_a_long_object_seen_partly_from_two_sides_keeps_its_track():
     assert np.linalg.norm(np.subtract(_seen(right)[1], _seen(left)[1])) > GATE
     _, (b,) = update(tracks, [_seen(left)], 1.0, points=[left])
     assert b == a
-    _, (c,) = update(tracks, [_seen(left)], 1.0)  # without points: the gate alone
+    _, (c,) = update(tracks, [_seen(left)], 1.0, regate=GATE)  # the gate alone: a new one
     assert c != a
 
 
-def test_a_neighbour_a_centimetre_away_shares_no_surface():
+def test_a_firm_track_is_not_taken_by_a_neighbour_that_shares_no_surface():
+    """The lift's check: the target gone from the table, a neighbour 1 cm beside it (its
+    centroid 3 cm away, beyond a 2 cm gate) does not take its track by overlap, nor by the
+    second stage when the track is firm."""
     one, other = _bar(0.40, 0.60), _bar(0.40, 0.60, y=0.03)  # 1 cm gap between them
     tracks, (a,) = update(Tracks(), [_seen(one)], 0.0, points=[one])
-    # the first is gone (lifted): the neighbour, 3 cm from it (beyond a 2 cm gate), does not
-    # take its track by overlap
-    _, (b,) = update(tracks, [_seen(other)], 1.0, points=[other], gate=0.02)
+    _, (b,) = update(tracks, [_seen(other)], 1.0, points=[other], gate=0.02, firm={a})
     assert b != a
+    _, (c,) = update(tracks, [_seen(other)], 1.0, points=[other], gate=0.02)
+    assert c == a  # not firm: the second stage takes it (an object seen partly)
