@@ -32,8 +32,9 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   from there. In W^B of a cell that declares a stack (``stack:``, `tamp.sim.lots.stack`), an
   object of a stack class above the base goes on the object of the class below it instead:
   centred on where the view shows that one (detected, or remembered and hidden now), its
-  underside on that one's top as the depth image measures it; none seen: the place fails
-  (``object_not_found``), still holding.
+  underside `STACK_GAP` over that one's top as the depth image measures it, let go along a
+  ramp of the fingers (`RELEASE_TIME`); none seen: the place fails (``object_not_found``),
+  still holding.
 - ``Discard()`` (also ``Place(waste)``, the ``lots_arm`` domain's name for it): drop the
   held object into the waste basket. Both places check the fingers before letting go: an
   object lost on the way is reported (FAILURE, "dropped ... while carrying it") and the
@@ -120,8 +121,16 @@ TURN_SPEED = 2.0
 #: and at most these (a long object kept nearer the centre would leave no room beside it)
 PLACE_MARGIN = 0.06
 MAX_PLACE_MARGIN = 0.10
-#: the held object's underside this far (m) above where it goes when the fingers open
+#: the held object's underside this far (m) above where it goes when the fingers open: on
+#: the floor, and on a stack's top measured from depth (`STACK_GAP`). An 8 mm drop onto a
+#: stack let the opening fingers drag the tower's body 2 cm across the bottom's top (seen on
+#: the plant); from 2 mm it lands where it was put
 RELEASE_GAP = 0.008
+STACK_GAP = 0.002
+#: a level put on a stack is let go along a ramp of the fingers' target, from closed to open
+#: over this long (s): the squeeze eases off on both pads together. Opened in one step, the
+#: compliant pads let go unevenly and flicked the body 1-2 cm across the bottom's 6 cm top
+RELEASE_TIME = 1.0
 #: after a place the TCP rises at least this far (m) above where it let go
 PLACE_LIFT = 0.12
 
@@ -130,7 +139,8 @@ PLACE_LIFT = 0.12
 class Step:
     """One step of a skill. ``pose``: TCP goal (x, y, z, yaw) of a move."""
 
-    #: move | descend | brake | settle | grip | wait | view | check_fingers | check_held | finish
+    #: move | descend | brake | settle | grip | release | wait | view | check_fingers |
+    #: check_held | finish
     kind: str
     pose: tuple[float, float, float, float] | None = None
     speed: float = 0.0
@@ -473,6 +483,9 @@ class PandaSkillController(LeafSystem):
             done = (el >= 0.3 and np.max(np.abs(v_meas[7:])) < 0.003) or el >= 1.5
         elif step.kind == "wait":
             done = el >= step.duration
+        elif step.kind == "release":  # open along a ramp (`RELEASE_TIME`)
+            s.finger = CLOSED + (OPEN - CLOSED) * min(el / step.duration, 1.0)
+            done = el >= step.duration and np.max(np.abs(v_meas[7:])) < 0.003
         elif step.kind == "view":
             if obs.id == s.request.id:
                 s.steps = s.steps[1:]
@@ -865,7 +878,8 @@ class PandaSkillController(LeafSystem):
                     "object_not_found",
                 )
             cx, cy, floor = top
-            where = f"on the {on} (its top at {floor:.3f} m)"
+            gap = STACK_GAP
+            where = f" on the {on} (its top at {floor:.3f} m)"
         else:
             # the object's centre goes on the spot, far enough inside the edges for its reach
             margin = min(max(PLACE_MARGIN, s.hold_radius + 0.005), MAX_PLACE_MARGIN)
@@ -877,13 +891,13 @@ class PandaSkillController(LeafSystem):
                 margin=margin,
                 avoid=tuple(m.position[:2] for m in obs.occluded),
             )
-            floor = workspace.floor
+            floor, gap = workspace.floor, RELEASE_GAP
             where = "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
         yaw = self.kin.tcp_yaw(s.q)  # the look's yaw: the held object's offset turns with it
         c, w = math.cos(yaw), math.sin(yaw)
         hx, hy = s.hold_offset
         x, y = cx - (c * hx - w * hy), cy - (w * hx + c * hy)
-        z = floor + s.hold_z + RELEASE_GAP
+        z = floor + s.hold_z + gap
         # lift clear: the camera (5.5 cm above the TCP) farther than perception's hand depth
         # from the top of what it put down, which may stand on a stack
         lift = max(LIFT_Z, z + PLACE_LIFT)
@@ -893,7 +907,7 @@ class PandaSkillController(LeafSystem):
             self._move((x, y, z + 0.12, yaw)),
             Step("check_held"),
             self._move((x, y, z, yaw), APPROACH_SPEED),
-            Step("grip", width=OPEN),
+            Step("release", duration=RELEASE_TIME) if on else Step("grip", width=OPEN),
             self._move((x, y, lift, yaw)),
             # one view from over the object just put down: perception remembers where it
             # lies (a later view with an object in the gripper may have it hidden)
