@@ -4,7 +4,9 @@ The files under ``golden/`` were written by ``tamp lots`` before `tamp.ltl` exis
 ``--json`` and ``--dot``) for every packaged task, alone and with each packaged interference
 script, with both tree-update variants; they were rewritten once when runs were first judged
 on their word (a ``run's word`` line, the ``word`` keys) and the robot lost the return action
-by default (Example 1 with its interference no longer takes the screwdriver back). Any change
+by default (Example 1 with its interference no longer takes the screwdriver back), and
+Example 1's when its task file took the paper's round order (hammer, screw, screwdriver,
+screw: the formula's conjuncts written reversed for Spot). Any change
 in the automaton (state numbers, edge order, labels), the plan or the robot's actions shows
 up here.
 """

@@ -21,7 +21,7 @@ def keys(report):
 def test_example1_without_interference(example1, mode):
     r = run_task(example1, mode=mode, seed=11)
     assert r.satisfied
-    assert keys(r) == [("move", "p4"), ("move", "p3"), ("move", "p2"), ("move", "p1")]
+    assert keys(r) == [("move", "p1"), ("move", "p2"), ("move", "p3"), ("move", "p4")]
     assert r.counts() == {
         "A": {},
         "B": {"hammer": 1, "screw": 2, "screwdriver": 1},
