@@ -563,6 +563,16 @@ class PandaSkillController(LeafSystem):
         w = q0.slerp(a, X1.rotation().ToQuaternion()).wxyz()
         rot = RotationMatrix(Quaternion(w / np.linalg.norm(w)))
         X_des = RigidTransform(rot, (1 - a) * np.asarray(p0) + a * X1.translation())
+        if el >= T:
+            err = pose_error(self.kin.tcp_pose(s.q), X1)
+            there = bool(np.linalg.norm(err[3:]) < 0.002 and np.linalg.norm(err[:3]) < 0.01)
+            # the next step starts from rest: arrive only when stopping now keeps within the
+            # acceleration limits (else the safety monitor stops the arm), and arrive where
+            # the arm stands: a setpoint moved in the period its velocity drops to zero would
+            # send the 1 kHz stream that step's speed, and a next move starting the other way
+            # would reverse it at twice the limit
+            if (there or el >= T + 1.0) and bool(np.all(np.abs(s.v) <= self.kin.amax * self.dt)):
+                return True
         if el >= T + 2.0:
             # the pose was not reached in time: give it up, braking to rest within the
             # acceleration limits rather than dropping the velocity to zero in one step
@@ -575,13 +585,6 @@ class PandaSkillController(LeafSystem):
             v = self.kin.brake(s.v)
         s.q = s.q + v * self.dt
         s.v = v
-        if el >= T:
-            err = pose_error(self.kin.tcp_pose(s.q), X1)
-            there = bool(np.linalg.norm(err[3:]) < 0.002 and np.linalg.norm(err[:3]) < 0.01)
-            # the next step starts from rest: arrive only when stopping now keeps within
-            # the acceleration limits (else the safety monitor stops the arm)
-            slow = bool(np.all(np.abs(v) <= self.kin.amax * self.dt))
-            return (there or el >= T + 1.0) and slow
         return False
 
     # ---- view handlers -------------------------------------------------------------------
@@ -739,7 +742,9 @@ class PandaSkillController(LeafSystem):
         )
         if settled and s.sure is not None:
             s.steps, s.step_t0, s.servo = s.steps[1:], None, None
-            s.v = np.zeros(7)
+            # stop where the arm stood before this period (the stream sees it come to rest
+            # within the limits, not this step's speed followed by the next move's)
+            s.q, s.v = s.q - v * self.dt, np.zeros(7)
             f, (x0, y0) = s.sure  # moved with the target since that view
             g = f.grasp
             return self._grasp(s, t, replace(g, x=g.x + cx - x0, y=g.y + cy - y0))
