@@ -15,8 +15,10 @@ every time:
 - **mask jitter**: the mask grows or shrinks by one pixel (binary dilation or erosion) with
   probability ``jitter``, and its points and centroid follow;
 - **fresh identities**: with probability ``fresh`` the centroid and points jump
-  ``fresh_jump`` metres in a random horizontal direction, beyond a tracker's gate, so that
-  association by position starts a new track;
+  ``fresh_jump`` metres in a random horizontal direction, beyond the tracker's first gate
+  (`tamp.sim.core.tracks.GATE`); its second round (``REGATE``, 15 cm) matches most of them
+  back to their track when no other detection claims it, so fresh track ids under this
+  noise come mostly from false positives and from jumps another detection takes over;
 - **false positives**: ``false_positives`` extra detections per view on average (Poisson),
   each a disc of 6-15 pixels' radius of a random task class at a random pixel, with the
   depth there.
