@@ -14,7 +14,8 @@ Changed on purpose once (nothing a run does changed, only how it is reported): a
 Added later (nothing a run does changed; every other value was compared equal before
 the files were rewritten): ``cause`` (None on success), ``task_time``, ``failures`` (the
 lost grasp's ``injected_failure``), ``grasp`` (weld), ``perception`` (truth), ``seed`` (0)
-and ``perturbation`` (nothing drawn: the packaged cases have no section).
+and ``perturbation`` (nothing drawn: the packaged cases have no section; its
+``detector`` key, null here, came with the noisy-detector perturbation).
 
 Every workcell's run document now starts with the common keys of
 `tamp.sim.core.workcell.RunResult`: ``schema`` and ``workcell`` are new (checked, not
