@@ -396,6 +396,7 @@ def simulate_lots(
     from tamp.lots.run import run_word_json
     from tamp.sim.core.recording import new_meshcat, save_recording, start_recording
     from tamp.sim.core.runner import make_simulator, run_in_chunks
+    from tamp.sim.lots.stack import required_height
     from tamp.verification.lots import judge_verdict
     from tamp.world.interface import Status
 
@@ -436,8 +437,11 @@ def simulate_lots(
     counts, elsewhere = plant_counts(cell, plant_context)
     # a declared stack (Fig. 10's tower) is judged by its height on the plant, not by counts
     stack = plant_stack(cell, plant_context) if cell_scenario.stack else None
-    stacked = stack is None or stack.complete
     c = s.controller
+    # as high as the task's planned W^B needs (a task delivering only the base: one level)
+    stacked = stack is None or stack.height >= required_height(
+        stack.order, c.lots.named(c.plan.end[1])
+    )
     controller_status = s.result.value if s.result is not None else "TIMEOUT"
     why = s.reason if s.result is not None else f"no result within {limit:g} s of sim time"
     truth = c.lots.vector(counts["B"])

@@ -152,6 +152,18 @@ class StackCheck:
         }
 
 
+def required_height(order: Sequence[str], planned: Mapping[str, int]) -> int:
+    """How many levels of stack ``order`` (base first) the task's planned W^B needs: the
+    longest prefix of ``order`` whose classes it holds (a task that delivers only the base
+    needs a stack one high; Fig. 10's tower needs all three)."""
+    n = 0
+    for cls in order:
+        if planned.get(cls, 0) < 1:
+            break
+        n += 1
+    return n
+
+
 def judge_stack(
     order: Sequence[str],
     objects: Mapping[str, tuple[str, np.ndarray]],

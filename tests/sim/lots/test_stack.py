@@ -156,3 +156,15 @@ def test_a_bad_stack_names_the_file_and_the_field(tmp_path, stack, reason):
     with pytest.raises(InputError) as e:
         load_cell_scenario(path)
     assert str(e.value).startswith(f"{path}: stack: ") and reason in str(e.value)
+
+
+def test_a_task_needs_the_stack_only_as_high_as_its_plan():
+    """A task delivering only the base needs one level; the tower all three; a gap in the
+    order stops the count (a peak without a body cannot stand)."""
+    from tamp.sim.lots.stack import required_height
+
+    order = ("bottom", "body", "peak")
+    assert required_height(order, {"bottom": 1}) == 1
+    assert required_height(order, {"bottom": 1, "body": 1, "peak": 1}) == 3
+    assert required_height(order, {"bottom": 1, "peak": 1}) == 1
+    assert required_height(order, {}) == 0
