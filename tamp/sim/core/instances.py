@@ -193,16 +193,23 @@ def extract(
 def located(mask: np.ndarray, depth: np.ndarray, intrinsics, X_WC) -> dict | None:
     """Where a mask's object is: its world-frame points (``depth``: metres, 0 = no return),
     their median as the centroid, the mask's mean pixel and its median valid depth, as
-    `ObjectDetection` fields; None when no pixel of the mask has a depth return."""
-    points = backproject_mask(mask, depth, intrinsics, X_WC)
-    if points.shape[1] == 0:
-        return None
-    vs, us = np.nonzero(mask)
+    `ObjectDetection` fields; None when no pixel of the mask has a depth return. Without
+    ``intrinsics`` or ``X_WC`` the view cannot be placed in the world: no points and a NaN
+    centroid, the pixel and depth as ever."""
     valid = depth[mask]
+    valid = valid[np.isfinite(valid) & (valid > 0)]
+    if valid.size == 0:
+        return None
+    if intrinsics is None or X_WC is None:
+        points, centroid = np.zeros((3, 0)), (float("nan"),) * 3
+    else:
+        points = backproject_mask(mask, depth, intrinsics, X_WC)
+        centroid = tuple(float(x) for x in np.median(points, axis=1))
+    vs, us = np.nonzero(mask)
     return {
-        "centroid": tuple(float(x) for x in np.median(points, axis=1)),
+        "centroid": centroid,
         "points": points,
         "u": float(us.mean()),
         "v": float(vs.mean()),
-        "depth": float(np.median(valid[valid > 0])),
+        "depth": float(np.median(valid)),
     }

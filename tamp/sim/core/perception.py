@@ -56,6 +56,7 @@ import time
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -136,17 +137,9 @@ def detect(
         n = int(mask.sum())
         if n < min_pixels:
             continue
-        where = located(mask, depth, intrinsics, X_WC) if placed else None
-        if where is None:
-            vs, us = np.nonzero(mask)
-            where = {
-                "centroid": (float("nan"),) * 3,
-                "points": np.zeros((3, 0)),
-                "u": float(us.mean()),
-                "v": float(vs.mean()),
-                "depth": float(np.median(depth[mask])),
-            }
-        out.append(ObjectDetection(cls, 1.0, mask, **where))
+        where = located(mask, depth, intrinsics if placed else None, X_WC)
+        if where is not None:  # always: a mask's pixels lie beyond hand_depth
+            out.append(ObjectDetection(cls, 1.0, mask, **where))
     return out
 
 
@@ -235,6 +228,40 @@ def crop_square(size: int, shape: tuple[int, int], u: float, v: float) -> tuple[
     u0 = int(round(u - size / 2))
     v0 = int(round(v - size / 2))
     return min(max(u0, 0), w - size), min(max(v0, 0), h - size)
+
+
+@dataclass(frozen=True)
+class ViewTap:
+    """The inputs of a system that works in the ticks perception renders in (the depth
+    safety camera, the recording's view log): a depth image, the skills' `ViewRequest` and
+    perception's `Observation`. Declared in that system's ``__init__`` (`declare`); a
+    periodic update of it on perception's grid sees, through `serving`, the request
+    perception answers in the same tick."""
+
+    depth: Any
+    request: Any
+    observation: Any
+
+    @staticmethod
+    def declare(system: LeafSystem, width: int, height: int) -> ViewTap:
+        """Declare the three input ports on ``system`` (depth image ``width`` x ``height``)."""
+        return ViewTap(
+            system.DeclareAbstractInputPort(
+                "depth_image", AbstractValue.Make(ImageDepth32F(width, height))
+            ),
+            system.DeclareAbstractInputPort("view_request", AbstractValue.Make(ViewRequest())),
+            system.DeclareAbstractInputPort("observation", AbstractValue.Make(Observation())),
+        )
+
+    def serving(self, context) -> ViewRequest | None:
+        """The request perception serves at this tick: asked for and not answered yet
+        (perception's update answers it now, from the same context); None when there is
+        none or the request input is not connected."""
+        if not self.request.HasValue(context):
+            return None
+        req: ViewRequest = self.request.Eval(context)
+        obs: Observation = self.observation.Eval(context)
+        return req if req.id != 0 and req.id != obs.id else None
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:

@@ -24,10 +24,10 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import EventStatus, LeafSystem
-from pydrake.systems.sensors import ImageDepth32F
 
 from tamp.grasp.pinhole import pixel_to_camera
-from tamp.sim.core.messages import Observation, TargetCrop, ViewRequest
+from tamp.sim.core.messages import Observation, TargetCrop
+from tamp.sim.core.perception import ViewTap
 
 #: every ``STRIDE``-th pixel in each direction goes into a view's cloud (320x180 -> 54x30)
 STRIDE = 6
@@ -146,15 +146,10 @@ class ViewLog(LeafSystem):
         self.size = (width, height)
         self.intrinsics = intrinsics
         self._stride = stride
-        self.depth_port = self.DeclareAbstractInputPort(
-            "depth_image", AbstractValue.Make(ImageDepth32F(width, height))
-        )
-        self.request_port = self.DeclareAbstractInputPort(
-            "view_request", AbstractValue.Make(ViewRequest())
-        )
-        self.observation_port = self.DeclareAbstractInputPort(
-            "observation", AbstractValue.Make(Observation())
-        )
+        self.view = ViewTap.declare(self, width, height)
+        self.depth_port = self.view.depth
+        self.request_port = self.view.request
+        self.observation_port = self.view.observation
         self._state = self.DeclareAbstractState(AbstractValue.Make(ViewLogState()))
         # the same period and offset as Perception's update: both read the depth in one tick
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
@@ -165,13 +160,13 @@ class ViewLog(LeafSystem):
 
     def _update(self, context, state) -> EventStatus:
         records: tuple[ViewRecord, ...] = self.records(context)
-        req: ViewRequest = self.request_port.Eval(context)
         obs: Observation = self.observation_port.Eval(context)
         new = records
         if records and obs.id == records[-1].id and obs.target is not records[-1].target:
             new = (*records[:-1], replace(records[-1], target=obs.target))
         logged = records[-1].id if records else 0
-        if req.id not in (0, logged) and req.camera_pose is not None and obs.id != req.id:
+        req = self.view.serving(context)
+        if req is not None and req.id != logged and req.camera_pose is not None:
             depth = self.depth_port.Eval(context).data[..., 0]
             pts = view_points(depth, self.intrinsics, req.camera_pose, stride=self._stride)
             X = req.camera_pose.GetAsMatrix4()

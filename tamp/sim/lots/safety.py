@@ -48,10 +48,9 @@ from pydrake.geometry import Box, SceneGraph
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
-from pydrake.systems.sensors import ImageDepth32F
 
-from tamp.sim.core.messages import Observation, ViewRequest
 from tamp.sim.core.parsing import make_parser
+from tamp.sim.core.perception import ViewTap
 from tamp.sim.lots.catalogue import ARM, CLASSES
 from tamp.sim.lots.depth_safety import (
     Boxes,
@@ -311,15 +310,10 @@ class SafetyMonitor(LeafSystem):
         self.command_port = self.DeclareVectorInputPort("command", 18)
         self.count_port = self.DeclareVectorInputPort("command_count", 1)
         self.arm_state_port = self.DeclareVectorInputPort("arm_state", 18)
-        self.depth_port = self.DeclareAbstractInputPort(
-            "depth_image", AbstractValue.Make(ImageDepth32F(width, height))
-        )
-        self.request_port = self.DeclareAbstractInputPort(
-            "view_request", AbstractValue.Make(ViewRequest())
-        )
-        self.observation_port = self.DeclareAbstractInputPort(
-            "observation", AbstractValue.Make(Observation())
-        )
+        self.view = ViewTap.declare(self, width, height)
+        self.depth_port = self.view.depth
+        self.request_port = self.view.request
+        self.observation_port = self.view.observation
         self.present_port = self.DeclareVectorInputPort("person_present", 1)
         self._state = self.DeclareAbstractState(AbstractValue.Make(SafetyState()))
         self.DeclarePeriodicUnrestrictedUpdateEvent(settings.check_period, 0.0, self._update)
@@ -387,11 +381,7 @@ class SafetyMonitor(LeafSystem):
         present or the arm is stopped for something near; learn the static scene while no
         person is present, else measure the nearest foreign point's distance."""
         present = self.present_port.HasValue(context) and self.present_port.Eval(context)[0] > 0.5
-        shared = False
-        if on_grid(t, self.perception_period) and self.request_port.HasValue(context):
-            req: ViewRequest = self.request_port.Eval(context)
-            obs: Observation = self.observation_port.Eval(context)
-            shared = req.id != 0 and req.id != obs.id
+        shared = on_grid(t, self.perception_period) and self.view.serving(context) is not None
         watch = present or (s.stop is not None and s.stop.cause == "hand_near")
         own = watch and t - s.last_own_image >= self.settings.image_period - 1e-9
         if not (shared or own):

@@ -186,8 +186,7 @@ class LotsSimResult(RunResult):
         if self.stack:
             levels = " on ".join(reversed(self.stack["levels"])) or "nothing"
             lines.append(
-                f"stack (plant): {self.stack['height']} of {len(self.stack['order'])} high: "
-                f"{levels}"
+                f"stack (plant): {self.stack['height']} of {self.stack['required']} high: {levels}"
             )
         if self.word:
             letters = " ".join("{" + ",".join(x) + "}" for x in self.word.get("trace", []))
@@ -308,9 +307,10 @@ def plant_counts(cell: LotsStation, plant_context) -> tuple[dict[str, dict[str, 
     return counts, elsewhere
 
 
-def plant_stack(cell: LotsStation, plant_context) -> StackCheck:
+def plant_stack(cell: LotsStation, plant_context, required: int | None = None) -> StackCheck:
     """The cell's declared stack judged on the plant (`tamp.sim.lots.stack.judge_stack`): how
-    many levels stand on each other in W^B, from the objects' poses."""
+    many levels stand on each other in W^B, from the objects' poses; ``required``: how many
+    the task needs (None: all)."""
     from tamp.sim.lots.stack import STACK_SIDE, judge_stack
 
     plant, scenario = cell.plant, cell.scenario
@@ -323,7 +323,7 @@ def plant_stack(cell: LotsStation, plant_context) -> StackCheck:
         for uid, body in cell.cell.bodies.items()
     }
     footprints = {c: scenario.object_class(c).footprint for c in set(cell.cell.classes.values())}
-    return judge_stack(scenario.stack, objects, footprints, w.contains, w.floor)
+    return judge_stack(scenario.stack, objects, footprints, w.contains, w.floor, required=required)
 
 
 def perturbed_run(scenario: LotsScenario, seed: int) -> tuple[LotsScenario, Applied]:
@@ -436,12 +436,12 @@ def simulate_lots(
     plant_context = cell.plant.GetMyContextFromRoot(context)
     counts, elsewhere = plant_counts(cell, plant_context)
     # a declared stack (Fig. 10's tower) is judged by its height on the plant, not by counts
-    stack = plant_stack(cell, plant_context) if cell_scenario.stack else None
     c = s.controller
-    # as high as the task's planned W^B needs (a task delivering only the base: one level)
-    stacked = stack is None or stack.height >= required_height(
-        stack.order, c.lots.named(c.plan.end[1])
-    )
+    stack = None
+    if cell_scenario.stack:  # as high as the task's planned W^B needs (the base alone: one)
+        needed = required_height(cell_scenario.stack, c.lots.named(c.plan.end[1]))
+        stack = plant_stack(cell, plant_context, needed)
+    stacked = stack is None or stack.complete
     controller_status = s.result.value if s.result is not None else "TIMEOUT"
     why = s.reason if s.result is not None else f"no result within {limit:g} s of sim time"
     truth = c.lots.vector(counts["B"])

@@ -730,7 +730,6 @@ class PandaSkillController(LeafSystem):
         v, _ = self.kin.step(s.q, s.v, V)
         if not np.all(np.isfinite(v)):
             v = self.kin.brake(s.v)
-        s.q, s.v = s.q + v * self.dt, v
         low = abs(p_new[2] - goal[2]) < 0.003
         if low and s.bottom_t is None:
             s.bottom_t = t
@@ -742,12 +741,13 @@ class PandaSkillController(LeafSystem):
         )
         if settled and s.sure is not None:
             s.steps, s.step_t0, s.servo = s.steps[1:], None, None
-            # stop where the arm stood before this period (the stream sees it come to rest
-            # within the limits, not this step's speed followed by the next move's)
-            s.q, s.v = s.q - v * self.dt, np.zeros(7)
+            # stop where the arm stands, without this period's step (as a move arrives,
+            # `_track`): the stream sees it come to rest within the limits
+            s.v = np.zeros(7)
             f, (x0, y0) = s.sure  # moved with the target since that view
             g = f.grasp
             return self._grasp(s, t, replace(g, x=g.x + cx - x0, y=g.y + cy - y0))
+        s.q, s.v = s.q + v * self.dt, v
         # committed: no hover limit (it is settling over the committed grasp)
         hovered = s.bottom_t is not None and t - s.bottom_t > d.hover and not s.committed
         if hovered or el > DESCENT_TIMEOUT:

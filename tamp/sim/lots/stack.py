@@ -124,20 +124,27 @@ class StackCheck:
     levels: tuple[str, ...] = ()
     heights: tuple[float, ...] = ()  # each level's origin above the table (m)
     tolerance: float = SEAT_TOLERANCE
+    #: how many levels the task needs (`required_height`; None: all of ``order``)
+    required: int | None = None
 
     @property
     def height(self) -> int:
         return len(self.levels)
 
     @property
+    def needed(self) -> int:
+        return len(self.order) if self.required is None else self.required
+
+    @property
     def complete(self) -> bool:
-        return self.height == len(self.order)
+        """The stack stands as high as the task needs."""
+        return self.height >= self.needed
 
     def describe(self) -> str:
         if not self.levels:
             return f"no {self.order[0]} on the floor of W^{STACK_SIDE}: the stack is 0 high"
         shown = " on ".join(reversed(self.levels))
-        return f"stack {self.height} of {len(self.order)} high in W^{STACK_SIDE}: {shown}" + (
+        return f"stack {self.height} of {self.needed} high in W^{STACK_SIDE}: {shown}" + (
             "" if self.complete else f" (no {self.order[self.height]} resting on it)"
         )
 
@@ -147,6 +154,7 @@ class StackCheck:
             "levels": list(self.levels),
             "heights": [round(h, 4) for h in self.heights],
             "height": self.height,
+            "required": self.needed,
             "complete": self.complete,
             "tolerance": self.tolerance,
         }
@@ -172,13 +180,14 @@ def judge_stack(
     floor: float = 0.0,
     *,
     tol: float = SEAT_TOLERANCE,
+    required: int | None = None,
 ) -> StackCheck:
     """The tallest column of the stack ``order`` (base first) on the plant: ``objects`` maps
     each id to (class, pose 4 x 4), ``footprints`` each class to its footprint,
     ``in_workspace(x, y)`` tells whether a point lies in the stack's workspace, ``floor`` is
     the height of its floor (a tray's). The base lies in the workspace with its origin within
     ``tol`` of the floor, upright; each next level of the next class `resting_on` the one
-    below."""
+    below. ``required``: the levels the task needs (`required_height`; None: all)."""
     order = tuple(order)
     best: list[str] = []
 
@@ -203,4 +212,4 @@ def judge_stack(
         if cls == order[0] and in_workspace(x, y) and abs(z - floor) <= tol and upright(X):
             grow([uid])
     heights = tuple(float(np.asarray(objects[u][1])[2, 3]) for u in best)
-    return StackCheck(order, tuple(best), heights, tol)
+    return StackCheck(order, tuple(best), heights, tol, required)

@@ -168,3 +168,11 @@ def test_a_task_needs_the_stack_only_as_high_as_its_plan():
     assert required_height(order, {"bottom": 1, "body": 1, "peak": 1}) == 3
     assert required_height(order, {"bottom": 1, "peak": 1}) == 1
     assert required_height(order, {}) == 0
+
+
+def test_a_stack_is_complete_as_high_as_required():
+    """The judge counts the levels standing; the task's need decides `complete`."""
+    objects = {k: v for k, v in tower().items() if not k.startswith("peak")}
+    assert not judge_stack(ORDER, objects, FP, in_b).complete
+    check = judge_stack(ORDER, objects, FP, in_b, required=2)
+    assert check.complete and check.to_json()["required"] == 2
