@@ -2,6 +2,7 @@
 
     tamp simulate smp-mro [SCENARIO | --case 1|2|3] [--appear ...] [--fail ...] [--rate R]
     tamp simulate lots TASK [--cell CELL.yaml] [--interference EVENTS.yaml] [--grasp NETWORK]
+                            [--detector oracle|learned]
     tamp simulate refine PROGRAM
     ... and, for every workcell: [--seed N] [--record out.html] [--meshcat]
                                  [--max-sim-time S] [--no-verify] [--timeline out.svg]

@@ -5,17 +5,20 @@ per class, the grasp skill gets the target's crop) and the SMP-MRO youBot's mast
 object pose estimator back-projects the detections). The cell injects what is its own: the map
 from render labels to object classes (``classes``), the image size and period, the depth
 below which pixels are in the gripper (``hand_depth``), the intrinsics (to place and track
-what was seen), optionally a seeded noisy detector (``noise``), and, with each
-`ViewRequest`, the name of the workspace looked at and the camera's pose from its own
-kinematics. The messages are in `tamp.sim.core.messages`.
+what was seen), the workspaces' rectangles (``regions``), optionally a seeded noisy
+detector (``noise``), and, with each `ViewRequest`, the name of the workspace looked at and
+the camera's pose from its own kinematics. The messages are in `tamp.sim.core.messages`.
 
-Detection. Zhou et al. (IEEE T-ASE 2023) detect objects with YOLO in the RGB image; here the
-camera's *label image* stands in for the detector's masks and classes (`detect`): every pixel
-carries the id of the body it shows (Drake's `RgbdSensor`), and the fixed map from those ids
-to object classes plays the role of the detector's class output. That is the only use of the
-label image: each instance becomes an `ObjectDetection` (mask, class, world points and
-centroid: `tamp.sim.core.instances.located`), exactly what the learned detector
-(`tamp.sim.core.detector`) reports, and nothing after this step reads a label id. With
+Detection. Zhou et al. (IEEE T-ASE 2023) detect objects with YOLO in the RGB image. The cell
+chooses the source (``source``): the learned detector (`tamp.sim.core.detector`: colour and
+depth in, no label input declared at all), or the camera's *label image* as a perfect
+stand-in (`LabelOracle`, `detect`): every pixel carries the id of the body it shows (Drake's
+`RgbdSensor`), and the fixed map from those ids to object classes plays the role of the
+detector's class output. Either way each instance becomes an `ObjectDetection` (mask, class,
+world points and centroid: `tamp.sim.core.instances.located`) cut to the pixels beyond the
+gripper's region (`on_table`: the person's hand is no object), and nothing after this step
+reads a label id. An ``unknown`` object (a shape the detector was not trained on) is
+tracked, remembered and kept clear of, but never counted as a task class (`counted`). With
 ``noise`` the view's detections first pass through the seeded noisy detector
 (`tamp.sim.core.detection_noise.perturb`: misses, class swaps, mask jitter, fresh identities,
 false positives), so robustness to perception errors is measured on its own axis.
@@ -29,7 +32,10 @@ nothing can be placed in the world: detections then carry track 0 (no identity).
 
 Counting (Zhou et al. §III-B: the observed state is the count per class of the visible
 workspace): an instance counts when at least ``min_pixels`` of its pixels lie farther than
-``hand_depth`` (0.12 m) from the camera. Nearer pixels are the gripper's region: when at
+``hand_depth`` (0.12 m) from the camera and, when the cell gives the workspace's rectangle
+(``regions``), its world centroid lies in it: a wide view also shows what lies beside the
+workspace (an object that rolled off it, the other workspace's edge), which is seen (and
+tracked) but neither counted nor remembered there. Nearer pixels are the gripper's region: when at
 least ``min_pixels`` of them show something, an object is in hand (from depth alone), of the
 class of the track the grasp picked (the request's ``track`` after a grasp, when that track
 has left the table) or ``unknown``. For a grasp, the target comes with a square crop of
@@ -52,11 +58,12 @@ the request asks for it (grasping). ``frames`` in the state counts the renders.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -93,6 +100,21 @@ class DetectorNoise:
 
 
 @dataclass(frozen=True)
+class Region:
+    """A workspace's rectangle on the table (world x, y; m): a view of that workspace counts
+    and remembers only the instances whose world centroid lies in it."""
+
+    center: tuple[float, float]
+    size: tuple[float, float]
+
+    def contains(self, p) -> bool:
+        return bool(
+            abs(p[0] - self.center[0]) <= self.size[0] / 2
+            and abs(p[1] - self.center[1]) <= self.size[1] / 2
+        )
+
+
+@dataclass(frozen=True)
 class PerceptionState:
     """Last request served, its observation, how many frames were rendered, what was last
     seen in each workspace, the tracker, and the track in the gripper (never mutated: every
@@ -108,6 +130,59 @@ class PerceptionState:
 
     def __deepcopy__(self, memo: dict) -> PerceptionState:
         return self
+
+
+@dataclass(frozen=True)
+class LabelOracle:
+    """Drake's label image read as a perfect detector (the stand-in of the module
+    docstring): ``classes`` maps each object body's render label to its class."""
+
+    classes: dict[int, str]
+
+
+class ImageDetector(Protocol):
+    """What a learned detector gives `Perception` (`tamp.sim.core.detector.Detector`): the
+    objects of one colour + depth view placed with the intrinsics and the camera pose."""
+
+    classes: tuple[str, ...]
+
+    def detect(
+        self, rgb: np.ndarray, depth: np.ndarray, intrinsics: Sequence[float], X_WC
+    ) -> list[ObjectDetection]: ...
+
+
+#: what a learned detector reports that is no object on the table (never tracked or counted)
+NOT_OBJECTS = ("hand",)
+
+
+def on_table(
+    found: list[ObjectDetection],
+    depth: np.ndarray,
+    intrinsics: Sequence[float] | None,
+    X_WC,
+    *,
+    min_pixels: int = 25,
+    hand_depth: float = 0.12,
+) -> list[ObjectDetection]:
+    """A learned detector's objects as perception counts them, by the label oracle's rules
+    (`detect`): the person's hand dropped (`NOT_OBJECTS`: never an object, whatever decides
+    safety), each mask cut to its pixels farther than ``hand_depth`` (the gripper's region
+    is the in-hand check's) and kept when at least ``min_pixels``; placed in the world when
+    ``intrinsics`` and ``X_WC`` are given."""
+    depth = np.where(np.isfinite(depth), depth, 0.0)
+    far = depth > hand_depth
+    placed = intrinsics is not None and X_WC is not None
+    out = []
+    for d in found:
+        if d.cls in NOT_OBJECTS:
+            continue
+        mask = d.mask & far
+        if int(mask.sum()) < min_pixels:
+            continue
+        where = located(mask, depth, intrinsics if placed else None, X_WC)
+        if where is not None:
+            out.append(dataclasses.replace(d, mask=mask, **where))
+    return out
 
 
 def detect(
@@ -141,6 +216,12 @@ def detect(
         if where is not None:  # always: a mask's pixels lie beyond hand_depth
             out.append(ObjectDetection(cls, 1.0, mask, **where))
     return out
+
+
+def counted(classes) -> dict[str, int]:
+    """The observed state's counts (Zhou et al. §III-B) of a view's classes: per task class;
+    an `UNKNOWN` object is seen (tracked, remembered, kept clear of) but never counted."""
+    return dict(Counter(c for c in classes if c != UNKNOWN))
 
 
 def gripper_region(depth: np.ndarray, hand_depth: float = 0.12) -> np.ndarray:
@@ -271,12 +352,15 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 
 
 class Perception(LeafSystem):
-    """Answers `ViewRequest`s from a camera's label, depth (and colour) images (module
-    docstring: what the cell injects through the arguments)."""
+    """Answers `ViewRequest`s from a camera's images (module docstring: what the cell
+    injects through the arguments). ``source``: the `LabelOracle` (label and depth images,
+    colour for grasps) or a learned `ImageDetector` (colour and depth only: no label input
+    is declared); ``task_classes``: the classes a noisy detector may swap to (default: the
+    oracle's classes)."""
 
     def __init__(
         self,
-        classes: dict[int, str],
+        source: LabelOracle | ImageDetector,
         *,
         width: int,
         height: int,
@@ -285,15 +369,26 @@ class Perception(LeafSystem):
         hand_depth: float = 0.12,
         intrinsics: tuple[float, float, float, float] | None = None,
         noise: DetectorNoise | None = None,
+        regions: dict[str, Region] | None = None,
+        task_classes: Sequence[str] | None = None,
     ):
         super().__init__()
         self.set_name("perception")
-        self._classes = dict(classes)
+        self._source = source
+        self._oracle = isinstance(source, LabelOracle)
+        if task_classes is None:
+            if not isinstance(source, LabelOracle):
+                raise ValueError("a learned detector needs the cell's task_classes")
+            task_classes = source.classes.values()
+        if not self._oracle and intrinsics is None:
+            raise ValueError("a learned detector needs the camera's intrinsics")
         #: the classes a noisy detector's swap or false positive may take
-        self._task_classes = tuple(sorted(set(self._classes.values())))
+        self._task_classes = tuple(sorted(set(task_classes)))
         #: (fx, fy, cx, cy) of the depth image; None: place, track and remember nothing
         self._intrinsics = intrinsics
         self._noise = noise
+        #: each workspace's rectangle on the table: what a view of it counts and remembers
+        self._regions = dict(regions or {})
         self._min_pixels = min_pixels
         self._hand_depth = hand_depth
         self._center = ((width - 1) / 2, (height - 1) / 2)
@@ -309,8 +404,13 @@ class Perception(LeafSystem):
         self.depth_port = self.DeclareAbstractInputPort(
             "depth_image", AbstractValue.Make(ImageDepth32F(width, height))
         )
-        self.label_port = self.DeclareAbstractInputPort(
-            "label_image", AbstractValue.Make(ImageLabel16I(width, height))
+        #: only the oracle reads a label image; a learned detector has no such input
+        self.label_port = (
+            self.DeclareAbstractInputPort(
+                "label_image", AbstractValue.Make(ImageLabel16I(width, height))
+            )
+            if self._oracle
+            else None
         )
         self.request_port = self.DeclareAbstractInputPort(
             "view_request", AbstractValue.Make(ViewRequest())
@@ -336,15 +436,19 @@ class Perception(LeafSystem):
         if req.id == 0 or req.id == s.served:
             return EventStatus.DidNothing()
         t0 = time.perf_counter()
+        rgb = None
         with self.render:
-            label = self.label_port.Eval(context).data[..., 0]
+            if self.label_port is not None:
+                image = self.label_port.Eval(context).data[..., 0]
+            else:  # a learned detector reads colour in every view
+                image = rgb = self.color_port.Eval(context).data[..., :3]
             depth = self.depth_port.Eval(context).data[..., 0]
         self.render_seconds.append(time.perf_counter() - t0)
         kinds = 2
         placed = req.camera_pose is not None and self._intrinsics is not None
         X_WC = req.camera_pose if placed else None
         with self.analysis:
-            raw = self._detect(label, depth, req, X_WC)
+            raw = self._detect(image, depth, req, X_WC)
             near = gripper_region(depth, self._hand_depth)
             holding = int(near.sum()) >= self._min_pixels
             tracks, ids = s.tracks, (0,) * len(raw)
@@ -368,16 +472,20 @@ class Perception(LeafSystem):
             occupied = np.zeros(depth.shape, bool)
             for d in raw:
                 occupied |= d.mask
-            counts = dict(Counter(d.cls for d in dets))
+            # what lies in the workspace looked at (beside it: seen, not counted there)
+            region = self._regions.get(req.side) if placed else None
+            inside = [region is None or region.contains(d.centroid) for d in raw]
+            counts = counted(d.cls for d, ok in zip(dets, inside, strict=True) if ok)
             det = None
             if req.target is not None:
                 det = choose_target(dets, req.target, req.track, self._center)
         target = None
         if det is not None:
-            t0 = time.perf_counter()
-            with self.render:
-                rgb = self.color_port.Eval(context).data[..., :3]
-            self.render_seconds[-1] += time.perf_counter() - t0
+            if rgb is None:
+                t0 = time.perf_counter()
+                with self.render:
+                    rgb = self.color_port.Eval(context).data[..., :3]
+                self.render_seconds[-1] += time.perf_counter() - t0
             kinds += 1
             with self.analysis:
                 mask = raw[dets.index(det)].mask & (depth > self._hand_depth)
@@ -395,10 +503,11 @@ class Perception(LeafSystem):
             with self.analysis:
                 now = tuple(
                     Seen(i, d.cls, tuple(float(x) for x in d.centroid))
-                    for i, d in zip(ids, raw, strict=True)
+                    for i, d, ok in zip(ids, raw, inside, strict=True)
+                    if ok
                 )
                 memory, occluded = self._remember(s.memory, req, depth, now, gone)
-                counts = dict(Counter(d.cls for d in dets) + Counter(m.cls for m in occluded))
+                counts = counted(m.cls for m in (*now, *occluded))
         obs = Observation(
             req.id,
             context.get_time(),
@@ -416,13 +525,21 @@ class Perception(LeafSystem):
         )
         return EventStatus.Succeeded()
 
-    def _detect(self, label, depth, req: ViewRequest, X_WC) -> list[ObjectDetection]:
-        """This view's detections: the label image's instances (`detect`), through the
-        noisy detector when the cell asks for one (drawn from the run's seed and the view's
-        request id: a seeded run sees the same errors every time)."""
+    def _detect(self, image, depth, req: ViewRequest, X_WC) -> list[ObjectDetection]:
+        """This view's detections: the label image's instances (`detect`; ``image`` is the
+        label image) or the learned detector's objects on the table (`on_table`; ``image``
+        is the colour image), through the noisy detector when the cell asks for one (drawn
+        from the run's seed and the view's request id: a seeded run sees the same errors
+        every time)."""
         intrinsics = self._intrinsics if X_WC is not None else None
         kw = dict(min_pixels=self._min_pixels, hand_depth=self._hand_depth)
-        raw = detect(label, depth, self._classes, intrinsics=intrinsics, X_WC=X_WC, **kw)
+        if isinstance(self._source, LabelOracle):
+            raw = detect(image, depth, self._source.classes, intrinsics=intrinsics, X_WC=X_WC, **kw)
+        else:
+            # unplaced (no camera pose): detected in the camera's frame, then not placed
+            pose = req.camera_pose if req.camera_pose is not None else RigidTransform()
+            found = self._source.detect(image, depth, self._intrinsics, pose)
+            raw = on_table(found, depth, intrinsics, X_WC, **kw)
         if self._noise is None:
             return raw
         return perturb(

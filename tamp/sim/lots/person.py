@@ -555,11 +555,12 @@ class PersonSystem(LeafSystem):
 
 
 def free_spot(w, f, yaw: float, others: list[np.ndarray]) -> tuple[float, float]:
-    """The origin, on a 9 x 9 grid over workspace ``w`` (inside by the object's reach), that
-    gives an object of footprint ``f`` at ``yaw`` the largest gap to the ``others``'
-    footprints (4 x 2 corners each, `Footprint.corners`); the centre when there are none."""
+    """The origin, on a 9 x 9 grid over workspace ``w``'s floor (`Workspace.floor_size`,
+    inside by the object's reach), that gives an object of footprint ``f`` at ``yaw`` the
+    largest gap to the ``others``' footprints (4 x 2 corners each, `Footprint.corners`);
+    the centre when there are none."""
     reach = max(abs(f.xmin), abs(f.xmax), abs(f.ymin), abs(f.ymax)) + 0.01
-    hx, hy = w.size[0] / 2 - reach, w.size[1] / 2 - reach
+    hx, hy = w.floor_size[0] / 2 - reach, w.floor_size[1] / 2 - reach
     if not others or hx <= 0 or hy <= 0:
         return w.center
     best, best_d = w.center, -1.0

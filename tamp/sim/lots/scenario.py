@@ -66,12 +66,15 @@ from tamp.sim.lots.catalogue import ARM, CLASSES, ObjectClass, read_object_class
 
 CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
 SIDES = ("A", "B")
+#: what reads the wrist camera's views (`CameraSettings.detector`)
+DETECTORS = ("oracle", "learned")
 #: Where each network's shipped weights are (relative to the repository's models/ folder).
 DEFAULT_WEIGHTS = {name: net.weights for name, net in NETWORKS.items()}
 #: The arm's comfortable reach on the table (Franka: 0.855 m from joint 2; keep a margin).
 REACH = (0.25, 0.75)
 BASKET_HALF = 0.12  # lots_waste_basket.sdf: 0.24 x 0.24 m
 TRAY_FLOOR = 0.01  # lots_tray.sdf: its floor's top above the table (m)
+TRAY_INSIDE = 0.24  # lots_tray.sdf: the sides of its floor between the walls (m)
 #: the sides of a workspace (m): one wrist-camera view covers it
 WORKSPACE_SIDES = (0.1, 0.4)
 #: the ``perturbation`` fields this workcell simulates: start poses of the objects and their
@@ -101,9 +104,23 @@ class Workspace:
         """Where an object put down here rests: the table, or the tray's floor (1 cm up)."""
         return TRAY_FLOOR if self.tray else 0.0
 
+    @property
+    def floor_size(self) -> tuple[float, float]:
+        """The sides of the floor an object is put down on (centred on the workspace): the
+        whole workspace, or the tray's floor between its walls (an object reaching over a
+        wall lands on it and tips out)."""
+        if not self.tray:
+            return self.size
+        return (min(self.size[0], TRAY_INSIDE), min(self.size[1], TRAY_INSIDE))
+
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         cx, cy = self.center
         return abs(x - cx) <= self.size[0] / 2 - margin and abs(y - cy) <= self.size[1] / 2 - margin
+
+    def on_floor(self, x: float, y: float) -> bool:
+        """Whether (x, y) lies over the floor an object is put down on (`floor_size`)."""
+        (cx, cy), (sx, sy) = self.center, self.floor_size
+        return abs(x - cx) <= sx / 2 and abs(y - cy) <= sy / 2
 
     def check(self, f: Fields) -> None:
         lo, hi = WORKSPACE_SIDES
@@ -207,6 +224,12 @@ class CameraSettings:
     fov_y_deg: float = spec(42.5, min=10.0, max=120.0, unit="deg", help="vertical field of view")
     near: float = spec(0.03, min=0.005, max=0.2, unit="m", help="nearest rendered depth")
     far: float = spec(2.0, min=0.5, max=10.0, unit="m", help="farthest rendered depth")
+    detector: str = spec(
+        "oracle",
+        choices=DETECTORS,
+        help="what reads the views: the renderer's labels as a perfect detector (oracle), or "
+        "the learned detector on colour + depth (`tamp.sim.core.detector`, shipped weights)",
+    )
 
 
 @dataclass(frozen=True)
@@ -506,8 +529,9 @@ def place_objects(f: Fields, scenario: CellScenario) -> tuple[CellObject, ...]:
         dx, dy = entry.xy
         x, y = w.center[0] + dx, w.center[1] + dy
         yaw = math.radians(entry.yaw)
-        if not all(w.contains(*p) for p in c.footprint.corners(x, y, yaw)):
-            raise item.error("xy", f"the {entry.cls} at {[dx, dy]} sticks out of W^{w.name}")
+        if not all(w.on_floor(*p) for p in c.footprint.corners(x, y, yaw)):
+            where = "the tray in " if w.tray else ""
+            raise item.error("xy", f"the {entry.cls} at {[dx, dy]} sticks out of {where}W^{w.name}")
         rgb = entry.color if entry.color is not None else c.palette[n % len(c.palette)]
         out.append(CellObject(uid, entry.cls, w.name, (x, y), yaw, tuple(rgb)))
     for i, o in enumerate(out):
@@ -548,7 +572,7 @@ def perturbed(scenario: CellScenario, seed: int) -> tuple[CellScenario, Applied]
                 dx, dy, dyaw = sample.object_offset(o.id, attempt)
                 c = dataclasses.replace(o, xy=(o.xy[0] + dx, o.xy[1] + dy), yaw=o.yaw + dyaw)
                 corners = footprint_corners(scenario, c)
-                inside = all(w.contains(*p) for p in corners)
+                inside = all(w.on_floor(*p) for p in corners)
                 if inside and not any(
                     rectangles_overlap(corners, footprint_corners(scenario, p), 0.01)
                     for p in others

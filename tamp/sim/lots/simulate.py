@@ -37,7 +37,13 @@ from tamp.grasp.networks import DEFAULT_NETWORK, NETWORKS
 from tamp.lots.task import Event, Task
 from tamp.perturbation import Applied
 from tamp.sim.core.workcell import Option, RunResult
-from tamp.sim.lots.scenario import BASKET_HALF, DEFAULT_WEIGHTS, CellScenario, perturbed
+from tamp.sim.lots.scenario import (
+    BASKET_HALF,
+    DEFAULT_WEIGHTS,
+    DETECTORS,
+    CellScenario,
+    perturbed,
+)
 
 if TYPE_CHECKING:
     from pydrake.systems.framework import Diagram
@@ -245,6 +251,24 @@ def check_matches(task: Task, scenario: CellScenario) -> None:
                 file=scenario.source,
                 field="objects",
             )
+
+
+def check_detector_classes(task: Task, scenario: CellScenario) -> None:
+    """With the learned detector (``camera.detector: learned``) every class the task counts
+    must be one it was trained on: it would report any other as ``unknown`` or as a class
+    it knows, and the task could never be observed done (`InputError` naming the field)."""
+    if scenario.camera.detector != "learned":
+        return
+    from tamp.sim.lots.station import shipped_detector
+
+    missing = sorted(set(task.classes) - set(shipped_detector().classes))
+    if missing:
+        raise InputError(
+            f"the learned detector was not trained on {missing}, which task {task.name!r} "
+            "counts: use oracle",
+            file=scenario.source or None,
+            field="camera.detector",
+        )
 
 
 def check_person_classes(events: Sequence[Event], scenario: CellScenario) -> None:
@@ -545,6 +569,12 @@ class LotsWorkcell:
         ),
         Option("grasp", "grasp network (default: the scenario's)", choices=tuple(NETWORKS)),
         Option(
+            "detector",
+            "what reads the wrist camera's views: the renderer's labels as a perfect detector "
+            "or the learned detector (default: the scenario's camera.detector)",
+            choices=DETECTORS,
+        ),
+        Option(
             "return_action",
             "allow our extension of Zhou et al.'s action set: take an object from W^B back to "
             "W^A (same as 'actions: {return: true}' in the task file)",
@@ -560,12 +590,15 @@ class LotsWorkcell:
         cell: str | Path | None = None,
         interference: str | Path | None = None,
         grasp: str | None = None,
+        detector: str | None = None,
         return_action: bool = False,
     ) -> LotsScenario:
         """The task (file or packaged name), the workcell scenario (default: the packaged
-        one named like the task) with grasp network ``grasp``, and the interference events,
-        checked together: the cell starts from the task's objects, the person brings in
-        only classes the cell has (`InputError` naming file and field)."""
+        one named like the task) with grasp network ``grasp`` and its views read by
+        ``detector`` (None: the scenario's own), and the interference events,
+        checked together: the cell starts from the task's objects, its detector knows the
+        task's classes, the person brings in only classes the cell has (`InputError` naming
+        file and field)."""
         from tamp.lots.task import load_events, load_task
         from tamp.scenarios import resolve
         from tamp.sim.lots.scenario import load_cell_scenario
@@ -580,7 +613,11 @@ class LotsWorkcell:
                 field="--cell",
             )
         cell_scenario = with_network(load_cell_scenario(cell or task.name), grasp)
+        if detector is not None:
+            camera = dataclasses.replace(cell_scenario.camera, detector=detector)
+            cell_scenario = dataclasses.replace(cell_scenario, camera=camera)
         check_matches(task, cell_scenario)
+        check_detector_classes(task, cell_scenario)
         check_person_classes(events, cell_scenario)
         return LotsScenario(task, cell_scenario, tuple(events))
 

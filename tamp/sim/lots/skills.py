@@ -948,11 +948,12 @@ def free_spot(
     step: float = 0.02,
     avoid: tuple[tuple[float, float], ...] = (),
 ) -> tuple[float, float]:
-    """The point of ``workspace`` (``margin`` inside its edges) farthest from every object
-    pixel of the view and every point of ``avoid`` (objects hidden from the view: their
-    remembered centres), measured in the table plane."""
+    """The point of ``workspace``'s floor (``margin`` inside its edges, or a tray's walls)
+    farthest from every object pixel of the view and every point of ``avoid`` (objects
+    hidden from the view: their remembered centres), measured in the table plane."""
     cxw, cyw = workspace.center
-    hx, hy = workspace.size[0] / 2 - margin, workspace.size[1] / 2 - margin
+    sx, sy = workspace.floor_size
+    hx, hy = max(sx / 2 - margin, 0.0), max(sy / 2 - margin, 0.0)
     grid = np.array(
         [
             [cxw + dx, cyw + dy]

@@ -3,7 +3,8 @@
 exported ports) and returns its handles (`LotsStation`).
 
     MultibodyPlant + SceneGraph (tamp.sim.lots.plant: table, arm, baskets, objects)
-      wrist RgbdSensor (CameraConfig, VTK over EGL) ─► color/depth/label ─► Perception
+      wrist RgbdSensor (CameraConfig, VTK over EGL) ─► color/depth ─► Perception
+        (+ label: only for ``camera.detector: oracle``, the perfect stand-in)
       Perception.observation ─► PandaSkillController ─► ArmCommandStream (1 kHz)
         ─► SafetyMonitor ─► desired_state (the arm's PD actuators)
       SafetyMonitor.stopped ─► PandaSkillController.hold
@@ -24,6 +25,7 @@ camera's answers only (a test checks the diagram's connections).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -36,7 +38,8 @@ from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
 from tamp.lots.task import Event
 from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config
-from tamp.sim.core.perception import DetectorNoise, Perception
+from tamp.sim.core.detector import Detector
+from tamp.sim.core.perception import DetectorNoise, LabelOracle, Perception, Region
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.core.view_log import ViewLog
@@ -131,6 +134,25 @@ def detector_noise(scenario: CellScenario) -> DetectorNoise | None:
     return DetectorNoise(level, scenario.sample.seed)
 
 
+@functools.cache
+def shipped_detector() -> Detector:
+    """The learned detector of the shipped weights, loaded once per process (stations of a
+    campaign share it: it holds no state between views)."""
+    return Detector.load()
+
+
+def view_source(scenario: CellScenario, cell: CellPlant) -> LabelOracle | Detector:
+    """What reads the wrist camera's views (``camera.detector``): the label image as a
+    perfect detector (each object body's render label mapped to its class), or the learned
+    detector (an object of a class it was not trained on is what it makes of it: ``unknown``
+    at best; `tamp.sim.lots.simulate` refuses a task that counts such a class)."""
+    if scenario.camera.detector == "oracle":
+        return LabelOracle(
+            {int(body.index()): cell.classes[uid] for uid, body in cell.bodies.items()}
+        )
+    return shipped_detector()
+
+
 def build_station(
     scenario: CellScenario,
     *,
@@ -148,21 +170,23 @@ def build_station(
     plant, scene_graph = cell.plant, cell.scene_graph
     config = wrist_camera_config(scenario)
     camera, intrinsics = add_wrist_camera(builder, plant, scene_graph, cell.arm, config)
-    labels = {int(body.index()): cell.classes[uid] for uid, body in cell.bodies.items()}
     perception = builder.AddSystem(
         Perception(
-            labels,
+            view_source(scenario, cell),
+            task_classes=sorted(set(cell.classes.values())),
             width=scenario.camera.width,
             height=scenario.camera.height,
             period=scenario.control.perception_period,
             intrinsics=intrinsics,
             noise=detector_noise(scenario),
+            regions={side: Region(w.center, w.size) for side, w in scenario.workspaces.items()},
         )
     )
     depth = noisy_depth(builder, scenario, camera.depth_image_32F_output_port())
     builder.Connect(camera.color_image_output_port(), perception.color_port)
     builder.Connect(depth, perception.depth_port)
-    builder.Connect(camera.label_image_output_port(), perception.label_port)
+    if perception.label_port is not None:  # the label oracle only
+        builder.Connect(camera.label_image_output_port(), perception.label_port)
 
     kin = ArmKinematics(scenario.control.period)
     planner = GraspPlanner(scenario.grasp, intrinsics)

@@ -12,7 +12,7 @@ from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I, ImageRgba8U
 
 from tamp.sim.core.detection_noise import LEVELS, perturb
 from tamp.sim.core.messages import ViewRequest
-from tamp.sim.core.perception import DetectorNoise, Perception, detect
+from tamp.sim.core.perception import DetectorNoise, LabelOracle, Perception, Region, detect
 from tamp.sim.core.tracks import Tracks, update
 
 EMPTY = 32766
@@ -42,8 +42,16 @@ def images(blocks=BLOCKS, held=None):
 class Rig:
     """A `Perception` with its inputs fixed; `look` serves one request."""
 
-    def __init__(self, noise=None):
-        self.p = Perception(CLASSES, width=W, height=H, period=0.02, intrinsics=K, noise=noise)
+    def __init__(self, noise=None, regions=None):
+        self.p = Perception(
+            LabelOracle(CLASSES),
+            width=W,
+            height=H,
+            period=0.02,
+            intrinsics=K,
+            noise=noise,
+            regions=regions,
+        )
         self.sim = Simulator(self.p)
         self.ctx = self.sim.get_mutable_context()
         self.p.color_port.FixValue(self.ctx, ImageRgba8U(W, H))
@@ -77,6 +85,22 @@ def test_tracks_persist_across_views_and_a_lost_target_is_reported_not_replaced(
     assert lost.target is None and lost.counts["scissors"] == 1
     # the mask in the crop is the target's own
     assert first.target.mask.sum() == target.pixels
+
+
+def test_a_view_counts_and_remembers_only_what_lies_in_its_workspace():
+    # W^B's rectangle as the LOTS cells have it: x in [0.33, 0.67]; the scissors of label 5
+    # lies at x = 0.29 (beside the workspace, in view), the one of label 6 at x = 0.46
+    rig = Rig(regions={"B": Region((0.5, -0.25), (0.34, 0.34))})
+    obs = rig.look(*images())
+    assert len(obs.detections) == 4  # seen and tracked ...
+    assert obs.counts == {"scissors": 1, "hammer": 1, "saw": 1}  # ... counted only inside
+    outside = min(obs.detections, key=lambda d: d.u)
+    assert outside.cls == "scissors" and outside.u < 80
+    remembered = {m.track for m in rig.p.state(rig.ctx).memory["B"]}
+    assert outside.track not in remembered and len(remembered) == 3
+    # no rectangle for the side looked at (or none at all): every instance counts
+    assert Rig().look(*images()).counts["scissors"] == 2
+    assert rig.look(*images(), side="A").counts["scissors"] == 2
 
 
 def test_in_hand_from_depth_with_the_class_of_the_track_the_grasp_picked():

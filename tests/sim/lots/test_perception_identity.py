@@ -1,17 +1,23 @@
 """Identity is perception's own in the LOTS workcell: nothing that decides (controller, skills,
-grasping, descent, safety) reads a label image or a body index, and the seeded noisy detector
-is a ``perturbation.sensor`` field wired into the cell's perception from the run's seed."""
+grasping, descent, safety) reads a label image or a body index; with ``camera.detector:
+learned`` no label image reaches perception either (the diagram's connections); the seeded
+noisy detector is a ``perturbation.sensor`` field wired into the cell's perception from the
+run's seed."""
 
 from __future__ import annotations
 
 import re
 from pathlib import Path
 
+import pytest
+
 import tamp.sim.lots as lots
+from tamp.errors import InputError
 from tamp.sim.core.perception import DetectorNoise
 from tamp.sim.lots.scenario import load_cell_scenario, perturbed
-from tamp.sim.lots.station import detector_noise
-from tests.sim.lots.helpers import write_scenario
+from tamp.sim.lots.station import build_station, detector_noise
+from tests.sim.lots.helpers import BASE, write_scenario
+from tests.sim.lots.test_declared_classes import widget_scenario
 
 #: label images, render labels and body indices: the simulator's identities, not perception's
 SIM_IDS = re.compile(r"label_image|label_port|ImageLabel|RenderLabel|BodyIndex|\.index\(\)")
@@ -44,3 +50,53 @@ def test_the_noisy_detector_comes_from_the_scenario_and_the_runs_seed(tmp_path):
     assert applied.detector == "high" and applied.to_json()["detector"] == "high"
     plain, _ = perturbed(load_cell_scenario(write_scenario(tmp_path, objects)), 7)
     assert detector_noise(plain) is None
+
+
+@pytest.mark.slow
+def test_with_the_learned_detector_no_label_image_reaches_perception(tmp_path):
+    objects = [{"class": "hammer", "workspace": "A", "xy": [0.0, 0.0], "yaw": 0}]
+    camera = {**BASE["camera"], "detector": "learned"}
+    station = build_station(load_cell_scenario(write_scenario(tmp_path, objects, camera=camera)))
+    perception = station.perception
+    assert perception.label_port is None
+    inputs = {perception.get_input_port(i).get_name() for i in range(perception.num_input_ports())}
+    assert inputs == {"color_image", "depth_image", "view_request"}
+    label = station.camera.label_image_output_port().get_index()
+    assert not [
+        k for k, v in station.diagram.connection_map().items() if v == (station.camera, label)
+    ]
+    # the label oracle (the default) wires the label image to perception, and only there
+    plain = build_station(load_cell_scenario(write_scenario(tmp_path, objects)))
+    label = plain.camera.label_image_output_port().get_index()
+    users = [k for k, v in plain.diagram.connection_map().items() if v == (plain.camera, label)]
+    assert users == [(plain.perception, plain.perception.label_port.get_index())]
+
+
+def test_a_task_counting_a_class_the_learned_detector_does_not_know_is_refused(tmp_path):
+    import yaml
+
+    from tamp.lots.task import load_task
+    from tamp.sim.lots.simulate import check_detector_classes
+
+    path = widget_scenario(tmp_path)
+    text = path.read_text().replace("fov_y_deg: 42.5", "fov_y_deg: 42.5\n  detector: learned")
+    path.write_text(text)
+    scenario = load_cell_scenario(path)
+    assert scenario.camera.detector == "learned"
+
+    def task(cls: str):
+        doc = {
+            "version": 1,
+            "name": cls,
+            "formula": "GF p",
+            "propositions": {"p": {"class": cls}},
+            "initial": {"A": {"widget": 2, "body": 1}, "B": {}},
+        }
+        (tmp_path / "task.yaml").write_text(yaml.safe_dump(doc))
+        return load_task(tmp_path / "task.yaml")
+
+    check_detector_classes(task("body"), scenario)  # the widgets may lie there: unknown
+    with pytest.raises(InputError, match=r"camera\.detector: .*not trained on \['widget'\]"):
+        check_detector_classes(task("widget"), scenario)
+    oracle = load_cell_scenario(widget_scenario(tmp_path))
+    check_detector_classes(task("widget"), oracle)  # the oracle knows every class

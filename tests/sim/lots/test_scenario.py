@@ -18,12 +18,14 @@ def snapshot_layout(loaded: dict) -> dict:
     """A normalised scenario in the snapshot's layout (the snapshot was written by the loader
     the typed one replaced): the ``plant`` section's fields at the top, no ``description``
     and no ``classes`` of their own (packaged files have none), no ``stack`` (a field the
-    replaced loader did not have: `tests/sim/lots/test_stack.py` checks it), and the
+    replaced loader did not have: `tests/sim/lots/test_stack.py` checks it), no
+    ``camera.detector`` (every packaged file reads its views with the oracle), and the
     never-set ``extra`` mapping."""
     out = dict(loaded)
     out.update(out.pop("plant"))
     assert out.pop("description") == "" and out.pop("classes") == {}
     out.pop("stack")
+    assert out["camera"].pop("detector") == "oracle"
     out["extra"] = {}
     return out
 

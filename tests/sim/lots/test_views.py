@@ -55,3 +55,18 @@ def test_free_spot_keeps_away_from_hidden_objects():
     occupied = np.zeros((180, 320), bool)
     x, y = free_spot(w, occupied, X_LOOK, K, avoid=((0.61, -0.36),))
     assert math.hypot(x - 0.61, y + 0.36) > 0.25
+
+
+def test_free_spot_in_a_tray_keeps_the_object_off_its_walls():
+    """Example 1 in the cell: a screw placed 6 cm inside W^B's edges reached over the tray's
+    wall (W^B is 0.34 m, the tray's floor 0.24 m), landed on it and rolled out of W^B. The
+    spot is now measured from the tray's walls."""
+    tray = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34), tray=True)
+    assert tray.floor_size == (0.24, 0.24)
+    assert Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34)).floor_size == (0.34, 0.34)
+    assert tray.on_floor(0.61, -0.25) and not tray.on_floor(0.63, -0.25)
+    occupied = np.zeros((180, 320), bool)
+    occupied[80:100, 150:170] = True  # a 4 cm object in the middle: the spot goes to a corner
+    x, y = free_spot(tray, occupied, X_LOOK, K, margin=0.06)
+    assert max(abs(x - 0.5), abs(y + 0.25)) <= 0.12 - 0.06 + 1e-9  # 6 cm inside the walls
+    assert math.hypot(x - 0.5, y + 0.25) > 0.08

@@ -30,9 +30,11 @@ def test_the_cell_declares_the_contract():
         "cell": ("load", True, "lots_sim"),
         "interference": ("load", True, "lots"),
         "grasp": ("load", False, None),
+        "detector": ("load", False, None),  # campaigns: the cell file's camera.detector
         "return_action": ("load", False, None),  # campaigns: the task file's 'actions'
     }
     assert options["grasp"].choices == tuple(NETWORKS)
+    assert options["detector"].choices == ("oracle", "learned")
     assert WORKCELL.replay.format(scenario="tower", seed=4) == ("tamp simulate lots tower --seed 4")
     load, run = split_options(WORKCELL, {"cell": "tower", "grasp": "ggcnn"})
     assert load == {"cell": "tower", "grasp": "ggcnn"} and run == {}
