@@ -2,22 +2,26 @@
 what it confuses, what it invents, and what a frame costs on one CPU thread.
 
 Data: a set rendered by ``tamp detect render`` (its test scenes: object-wise split, unknown
-shapes never seen in training). Weights: the shipped ``tamp/models/weights`` file by default.
-Per view the detector (`tamp.sim.core.detector.Detector`) segments colour + depth and
-extracts instances; `tamp.sim.core.segtrain.score_view` scores them against the label
-image's instances. Rows:
+shapes never seen in training). Weights: the shipped ``tamp/models/weights`` file by default,
+``--weights FILE`` any other (a proposal classifier's or a segmentation network's, the same
+rows, to compare). Per view ``Detector.detect`` (`tamp.sim.core.detector`) finds the objects;
+`tamp.sim.core.segtrain.score_view` scores them against the label image's instances (an
+object held in the gripper is not counted: `segtrain.true_instances`). Rows:
 
 - per class: counting accuracy over the views where the class is present or predicted (the
   per-view count is what LOTS consumes), pixel IoU;
 - totals: views with every count right, mask IoU of matched instances, false positives per
   view, unknown objects reported as a task class, the instance confusion matrix (JSON);
+- objects wholly inside the image: the same scores with the instances and detections that
+  reach the image's edge left out (an object cut by the edge is often unnameable; the cell
+  looks at a workspace from above its centre, so what it counts lies inside the view);
 - touching clutter: counting accuracy of a class in the views where two of its instances
   touch (masks within one pixel), the case no depth jump may separate;
 - the seeded noisy detector (`tamp.sim.core.detection_noise`, levels ``low`` and ``high``)
   applied to the same detections: views with every count right, false positives per view;
-- CPU time per frame on one thread (process time; network + instances) at the network's
-  resolution (160 x 90) and for the LOTS wrist camera's 320 x 180 images (subsampled for
-  the network, masks and points at full resolution).
+- CPU time per frame on one thread (process time of the whole ``detect`` call) at the
+  detector's resolution (160 x 90) and for the LOTS wrist camera's 320 x 180 images
+  (subsampled, masks and points at full resolution).
 
 Prints the tables and one JSON line; ``--out FILE`` writes the JSON there
 (``benchmarks/results/detector.json`` is the committed run).
@@ -39,12 +43,17 @@ import numpy as np  # noqa: E402
 import torch  # noqa: E402
 from scipy import ndimage  # noqa: E402
 
+from tamp.sim.core.cropnet import WEIGHTS_FILE  # noqa: E402
 from tamp.sim.core.detection_noise import perturb  # noqa: E402
 from tamp.sim.core.detector import Detector  # noqa: E402
-from tamp.sim.core.instances import extract  # noqa: E402
 from tamp.sim.core.segdata import read_info, read_scene, scene_file  # noqa: E402
-from tamp.sim.core.segnet import WEIGHTS_FILE  # noqa: E402
-from tamp.sim.core.segtrain import Tally, report, score_view, true_instances  # noqa: E402
+from tamp.sim.core.segtrain import (  # noqa: E402
+    Tally,
+    predicted_map,
+    report,
+    score_view,
+    true_instances,
+)
 
 
 def touching_classes(truth) -> set[int]:
@@ -58,6 +67,11 @@ def touching_classes(truth) -> set[int]:
     return out
 
 
+def on_border(mask: np.ndarray) -> bool:
+    """Whether a mask reaches the image's edge (the object may be cut by it)."""
+    return bool(mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
+
+
 def run(data: Path, weights: Path | None, max_views: int, seed: int) -> dict:
     torch.set_num_threads(1)
     info = read_info(data)
@@ -65,6 +79,7 @@ def run(data: Path, weights: Path | None, max_views: int, seed: int) -> dict:
     names = list(det.classes)
     tally = Tally(names)
     noisy = {level: Tally(names) for level in ("low", "high")}
+    inside = Tally(names)
     touch = {}
     times, times_full = [], []
     views = 0
@@ -77,10 +92,7 @@ def run(data: Path, weights: Path | None, max_views: int, seed: int) -> dict:
                 break
             rgb, depth, X_WC = scene["rgb"][v], scene["depth"][v], scene["X_WC"][v]
             t0 = time.process_time()
-            probs = det.probabilities(rgb, depth)
-            found = extract(probs, depth, names, tally.objects, intr, X_WC,
-                            jump=det.jump, min_pixels=det.min_pixels,
-                            unknown_below=det.unknown_below)  # fmt: skip
+            found = det.detect(rgb, depth, intr, X_WC)
             times.append(time.process_time() - t0)
             if views % 4 == 0:  # the wrist camera's full size: every fourth view
                 big_rgb = rgb.repeat(2, 0).repeat(2, 1)
@@ -89,8 +101,14 @@ def run(data: Path, weights: Path | None, max_views: int, seed: int) -> dict:
                 t0 = time.process_time()
                 det.detect(big_rgb, big_depth, big_intr, X_WC)
                 times_full.append(time.process_time() - t0)
-            truth, small = true_instances(scene["inst"][v], scene["inst_cls"][v], det.min_pixels)
-            score_view(tally, found, truth, small, scene["cls"][v], probs.argmax(0))
+            truth, small = true_instances(
+                scene["inst"][v], scene["inst_cls"][v], det.min_pixels, depth, names
+            )
+            score_view(tally, found, truth, small, scene["cls"][v],
+                       predicted_map(found, names, depth.shape))  # fmt: skip
+            cut = [m for _, m in truth if on_border(m)]
+            score_view(inside, [d for d in found if not on_border(d.mask)],
+                       [(c, m) for c, m in truth if not on_border(m)], small + cut)  # fmt: skip
             for level, t in noisy.items():
                 out = perturb(found, seed=seed, frame=views, level=level, classes=names[2:],
                               depth=depth, intrinsics=intr, X_WC=X_WC)  # fmt: skip
@@ -109,9 +127,19 @@ def run(data: Path, weights: Path | None, max_views: int, seed: int) -> dict:
         "data": str(data),
         "test_scenes": len(info.test),
         "resolution": list(det.size),
+        "kind": det.meta.get("kind"),
         "parameters": det.meta.get("parameters"),
         "split": det.meta.get("split"),
         **report(tally),
+        "inside_image": {
+            k: report(inside)[k]
+            for k in (
+                "views_all_counts_right",
+                "task_instances",
+                "false_positives_per_view",
+                "task_class_false_positives_per_view",
+            )
+        },
         "touching_same_class": {
             k: {"correct": a, "views": b, "accuracy": round(a / b, 4)}
             for k, (a, b) in sorted(touch.items())
@@ -165,12 +193,20 @@ def table(doc: dict) -> str:
         f"views with every count right: {100 * doc['views_all_counts_right']:.1f} % "
         f"(noisy low {100 * doc['noisy']['low']['views_all_counts_right']:.1f} %, "
         f"high {100 * doc['noisy']['high']['views_all_counts_right']:.1f} %)",
+        f"objects wholly inside the image: every count right in "
+        f"{100 * doc['inside_image']['views_all_counts_right']:.1f} % of the views, "
+        f"{doc['inside_image']['task_instances']['right_class']} of "
+        f"{doc['inside_image']['task_instances']['total']} task-class instances with their class",
         f"mask IoU of matched instances: {doc['mask_iou_matched']} "
         f"({doc['matched_instances']} instances)",
         f"false positives per view: {doc['false_positives_per_view']} (task classes "
         f"{doc['task_class_false_positives_per_view']}; noisy low "
         f"{doc['noisy']['low']['false_positives_per_view']}, high "
         f"{doc['noisy']['high']['false_positives_per_view']})",
+        "task-class instances: {right_class} of {total} with their class, {unknown_or_hand} "
+        "unknown or hand, {other_task_class} another task class, {missed} missed".format(
+            **doc["task_instances"]
+        ),
         f"unknown objects reported as a task class: {doc['unknown_reported_as_task_class']} "
         f"of {doc['unknown_objects']}",
         "touching instances of one class, count right: "

@@ -1,6 +1,7 @@
 """`tamp detect`: the workcells' object detector: render its data, train it, evaluate it.
 
     tamp detect render OUT --scenes N            Drake renders of both cells' catalogues
+    tamp detect train DATA --out DIR --kind classifier    the proposal classifier (CPU)
     tamp detect train DATA --out DIR             a small segmentation network (CPU or GPU)
     tamp detect eval WEIGHTS DATA                held-out scenes: counts, IoU, confusion, time
 
@@ -44,8 +45,8 @@ def workcell_catalogue():
 
 def default_weights() -> Path:
     """The shipped detector weights, wherever tamp is installed."""
+    from tamp.sim.core.cropnet import WEIGHTS_FILE
     from tamp.sim.core.models import models_dir
-    from tamp.sim.core.segnet import WEIGHTS_FILE
 
     return models_dir() / "weights" / WEIGHTS_FILE
 
@@ -65,11 +66,24 @@ def register(subparsers) -> None:
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.set_defaults(func=run_render)
 
-    p = sub.add_parser("train", help="train the segmentation network on a rendered set")
+    p = sub.add_parser("train", help="train the detector's proposal classifier or segmentation net")
     p.add_argument("data", help="folder written by `tamp detect render`")
     p.add_argument("--out", default="runs/detect", help="output folder (default runs/detect)")
-    p.add_argument("--steps", type=int, default=3000, help="optimiser steps (default 3000)")
-    p.add_argument("--batch-size", type=int, default=16, help="views per step (default 16)")
+    p.add_argument(
+        "--kind",
+        choices=("segmentation", "classifier"),
+        default="segmentation",
+        help="segmentation: the per-pixel network (default); classifier: the classifier of "
+        "geometric proposals (the shipped detector)",
+    )
+    p.add_argument("--steps", type=int, default=3000, help="segmentation: optimiser steps")
+    p.add_argument("--epochs", type=int, default=14, help="classifier: passes over the proposals")
+    p.add_argument(
+        "--batch-size",
+        type=int,
+        default=None,
+        help="views (segmentation, default 16) or proposals (classifier, default 128) per step",
+    )
     p.add_argument("--lr", type=float, default=3e-3, help="peak learning rate (default 3e-3)")
     p.add_argument("--width", type=int, default=16, help="channels of the first stage")
     p.add_argument("--init", help="start from these weights (same classes and --width)")
@@ -116,13 +130,17 @@ def run_render(args) -> int:
 
 
 def run_train(args) -> int:
+    if args.steps < 1 or args.epochs < 1 or (args.batch_size is not None and args.batch_size < 1):
+        raise InputError("--steps, --epochs and --batch-size must be >= 1")
+    if args.lr <= 0 or args.width < 4:
+        raise InputError("--lr must be > 0 and --width >= 4")
+    if args.kind == "classifier":
+        return _train_classifier(args)
     from tamp.sim.core.segtrain import TrainSettings, train
 
-    if args.steps < 1 or args.batch_size < 1 or args.lr <= 0 or args.width < 4:
-        raise InputError("--steps and --batch-size must be >= 1, --lr > 0, --width >= 4")
     settings = TrainSettings(
         steps=args.steps,
-        batch_size=args.batch_size,
+        batch_size=args.batch_size or 16,
         lr=args.lr,
         width=args.width,
         device=args.device,
@@ -141,6 +159,35 @@ def run_train(args) -> int:
     else:
         print(
             f"{summary['steps']} steps in {summary['seconds']:.0f} s on {summary['device']}; "
+            f"weights {summary['weights']} ({summary['parameters']} parameters)"
+        )
+    return 0
+
+
+def _train_classifier(args) -> int:
+    from tamp.sim.core.croptrain import TrainSettings, train
+
+    if args.init:
+        raise InputError("--init: only with --kind segmentation")
+    if args.device not in ("auto", "cpu"):
+        raise InputError(f"--device: the classifier trains on the CPU, not {args.device!r}")
+    settings = TrainSettings(
+        epochs=args.epochs,
+        batch_size=args.batch_size or 128,
+        lr=args.lr,
+        width=args.width,
+        threads=args.threads,
+        seed=args.seed,
+    )
+    summary = train(
+        args.data, args.out, settings, log=None if args.quiet else (lambda m: progress(m))
+    )
+    if args.json:
+        print_json(summary)
+    else:
+        print(
+            f"{summary['epochs']} epochs ({summary['proposals']} proposals) in "
+            f"{summary['cpu_seconds']:.0f} s CPU; unknown below {summary['unknown_below']}; "
             f"weights {summary['weights']} ({summary['parameters']} parameters)"
         )
     return 0

@@ -1,18 +1,32 @@
 """The object detector: colour + depth + camera pose in, objects out (torch).
 
 Zhou et al. (IEEE T-ASE 2023, §IV-V) detect the workcell's objects with a network on the
-wrist camera's RGB-D images. `Detector` is ours: the segmentation network of
-`tamp.sim.core.segnet` (trained on Drake renders by ``tamp detect train``) followed by
-instance extraction (`tamp.sim.core.instances.extract`). Its inputs are only what a real
-camera and arm give: the colour and depth images, the intrinsics and the camera pose from the
-arm's kinematics. Its output per view is a list of `ObjectDetection` (class or ``unknown``,
-score, mask, pixel centroid, 3-D centroid and world-frame points).
+wrist camera's RGB-D images. Ours is the classic tabletop pipeline (Rusu et al., RAS 56(11),
+2008, §5-6), `Detector`:
 
-Resolution: the network runs at the resolution it was trained at (the weights record it:
-160 x 90, half the LOTS wrist camera's 320 x 180, which keeps one frame near 20 ms of one
-CPU core). A larger image whose size is an integer multiple of it is subsampled for the
-network and the instance extraction; the masks are scaled back up (nearest), and points,
-centroids and depths are taken from the image's own depth at its own resolution.
+1. instance proposals from geometry (`tamp.sim.core.instances.proposals`): the depth
+   back-projected through the intrinsics and the camera pose from the arm's kinematics, the
+   support plane estimated from the view, the pixels above it, their components split at
+   depth jumps;
+2. a small CNN per proposal (`tamp.sim.core.cropnet`) on its crop (colour, height above the
+   plane, mask) and its metric size, giving a catalogue class, ``unknown``, ``hand``,
+   ``several`` (touching objects: the proposal is split again at 5 mm depth steps and its
+   parts classified) or ``none`` (dropped); a task class below the weights' threshold is
+   reported ``unknown``;
+3. a part in the gripper's region (median depth under `IN_HAND_DEPTH`) that is not the
+   person's hand is the held object: not reported (perception knows what the gripper holds).
+
+Its inputs are only what a real camera and arm give: the colour and depth images, the
+intrinsics and the camera pose. Its output per view is a list of `ObjectDetection` (class or
+``unknown`` or ``hand``, score, mask, pixel centroid, 3-D centroid and world-frame points).
+`SegmentationDetector` is the earlier detector (a segmentation network, `tamp.sim.core.segnet`,
+then `tamp.sim.core.instances.extract`), kept to compare against: `Detector.load` returns
+whichever a weights file holds.
+
+Resolution: both work at the resolution they were trained at (the weights record it:
+160 x 90, half the LOTS wrist camera's 320 x 180). A larger image whose size is an integer
+multiple of it is subsampled; the masks are scaled back up (nearest), and points, centroids
+and depths are taken from the image's own depth at its own resolution.
 """
 
 from __future__ import annotations
@@ -23,20 +37,193 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from scipy import ndimage
 
+from tamp.sim.core import cropnet
 from tamp.sim.core.instances import (
     DEPTH_JUMP,
+    FINE_JUMP,
+    IN_HAND_DEPTH,
     MIN_PIXELS,
+    UNKNOWN,
     UNKNOWN_BELOW,
     ObjectDetection,
+    backproject_mask,
     extract,
     located,
+    proposals,
+    split_at_jumps,
 )
-from tamp.sim.core.segdata import STUFF
+from tamp.sim.core.segdata import HAND, STUFF
 from tamp.sim.core.segnet import SegNet, load, prepare
 
 
+def _factor(shape: tuple[int, int], size: tuple[int, int]) -> int:
+    """k when an image of ``shape`` (h, w) is k times ``size`` (w, h), else 1."""
+    h, w = shape
+    W, H = size
+    k = w // W
+    if k >= 1 and w == k * W and h == k * H:
+        return k
+    return 1
+
+
+def _upscaled(found, depth: np.ndarray, intrinsics, X_WC, k: int) -> list[ObjectDetection]:
+    """Detections made on an image subsampled ``k`` times, at the full image's size: masks
+    scaled up, points, centroids and depths from the full-size depth."""
+    if k == 1:
+        return found
+    h, w = depth.shape
+    depth = np.where(np.isfinite(depth), depth, 0.0)
+    out = []
+    for d in found:
+        mask = d.mask.repeat(k, axis=0).repeat(k, axis=1)[:h, :w]
+        where = located(mask, depth, intrinsics, X_WC)
+        if where is not None:
+            out.append(dataclasses.replace(d, mask=mask, **where))
+    return out
+
+
+def _scaled(intrinsics, k: int) -> tuple[float, float, float, float]:
+    fx, fy, cx, cy = intrinsics
+    return (fx / k, fy / k, cx / k, cy / k)
+
+
 class Detector:
+    """Proposals from geometry, each named by the crop classifier (module docstring)."""
+
+    def __init__(
+        self,
+        model: cropnet.CropNet,
+        meta: dict,
+        *,
+        min_pixels: int = MIN_PIXELS,
+        jump: float = DEPTH_JUMP,
+        fine_jump: float | None = None,
+        unknown_below: float | None = None,
+        several_above: float | None = None,
+    ):
+        self.model = model.eval()
+        self.meta = meta
+        self.classes: tuple[str, ...] = tuple(meta["classes"])
+        self.outputs: list[str] = list(meta["outputs"])
+        self.size: tuple[int, int] = tuple(meta.get("size", (160, 90)))  # (width, height)
+        self.min_pixels = min_pixels
+        self.jump = jump
+        self.fine_jump = float(meta.get("fine_jump", FINE_JUMP) if fine_jump is None else fine_jump)
+        self.unknown_below = float(
+            meta.get("unknown_below", UNKNOWN_BELOW) if unknown_below is None else unknown_below
+        )
+        self.several_above = float(
+            meta.get("several_above", 0.0) if several_above is None else several_above
+        )
+        self._several = self.outputs.index(cropnet.SEVERAL)
+        self._none = self.outputs.index(cropnet.NONE)
+        self._task = {
+            i for i, n in enumerate(self.outputs) if n not in (UNKNOWN, HAND, *_NOT_OBJECTS)
+        }
+
+    @classmethod
+    def load(cls, path: str | Path | None = None, **kwargs) -> Detector | SegmentationDetector:
+        """The detector of a weights file (default: the shipped weights): a `Detector` for a
+        crop classifier's weights, a `SegmentationDetector` for a segmentation network's."""
+        from tamp.grasp.train import read_weights
+
+        if path is None:
+            from tamp.sim.core.models import models_dir
+
+            path = models_dir() / "weights" / cropnet.WEIGHTS_FILE
+        if read_weights(path, "cpu")["meta"].get("kind") != "crop_classifier":
+            return SegmentationDetector.load(path, **kwargs)
+        model, meta = cropnet.load(path)
+        return cls(model, meta, **kwargs)
+
+    def label(self, p: np.ndarray) -> tuple[str | None, float]:
+        """(the class reported for a proposal of output probabilities ``p``, or None for
+        ``none``; its score): a task class below ``unknown_below`` is ``unknown``."""
+        i = int(p.argmax())
+        if i == self._none:
+            return None, float(p[i])
+        score = float(p[i])
+        if i in self._task and score < self.unknown_below:
+            return UNKNOWN, score
+        return self.outputs[i], score
+
+    def _at_size(self, rgb, depth, intrinsics, X_WC) -> list[ObjectDetection]:
+        depth = np.where(np.isfinite(depth), depth, 0.0).astype(np.float32)
+        prop = proposals(depth, intrinsics, X_WC, jump=self.jump, min_pixels=self.min_pixels)
+
+        def named(masks):
+            inputs = [
+                cropnet.crop_input(
+                    rgb, prop.heights, depth, m, backproject_mask(m, depth, intrinsics, X_WC)
+                )
+                for m in masks
+            ]
+            if not inputs:
+                return []
+            x = np.stack([a for a, _ in inputs])
+            f = np.stack([b for _, b in inputs])
+            return list(zip(masks, cropnet.classify(self.model, x, f), strict=True))
+
+        final = []
+        for m, p in named(prop.masks):
+            split = int(p.argmax()) == self._several and p[self._several] >= self.several_above
+            parts = (
+                split_at_jumps(m, depth, jump=self.fine_jump, min_pixels=self.min_pixels)
+                if split
+                else []
+            )
+            for part, q in named(parts) if len(parts) > 1 else [(m, p)]:
+                q = q.copy()
+                q[self._several] = 0.0  # a part not split further is named as one object
+                final.append((part, q / max(float(q.sum()), 1e-9)))
+        named_parts = [(m, *self.label(p)) for m, p in final]
+        out = []
+        for m, cls, score in _hands_joined(named_parts):
+            if cls is None:
+                continue
+            where = located(m, depth, intrinsics, X_WC)
+            if where is None or (cls != HAND and where["depth"] < IN_HAND_DEPTH):
+                continue
+            out.append(ObjectDetection(cls, score, m, **where))
+        return out
+
+    def detect(
+        self, rgb: np.ndarray, depth: np.ndarray, intrinsics: Sequence[float], X_WC
+    ) -> list[ObjectDetection]:
+        """The objects in one view: ``rgb`` (H x W x 3 or 4, uint8), ``depth`` (H x W,
+        metres), ``intrinsics`` (fx, fy, cx, cy) of this image, ``X_WC`` the camera pose
+        (4 x 4 or a Drake ``RigidTransform``) from the arm's kinematics. An image ``k`` times
+        the trained size is subsampled; masks come back at its own size."""
+        k = _factor(depth.shape, self.size)
+        found = self._at_size(rgb[::k, ::k], depth[::k, ::k], _scaled(intrinsics, k), X_WC)
+        return _upscaled(found, depth, intrinsics, X_WC, k)
+
+
+_NOT_OBJECTS = (cropnet.SEVERAL, cropnet.NONE)
+
+
+def _hands_joined(parts: list[tuple[np.ndarray, str | None, float]]) -> list:
+    """(mask, class, score) of named parts with the touching parts named ``hand`` joined
+    into one: fingers and forearm at different depths are split by the depth jumps, but a
+    hand is one thing (its score: the largest part's)."""
+    hands = [(m, s) for m, c, s in parts if c == HAND]
+    if len(hands) < 2:
+        return parts
+    union = np.zeros(hands[0][0].shape, bool)
+    for m, _ in hands:
+        union |= m
+    labels, n = ndimage.label(ndimage.binary_dilation(union), structure=np.ones((3, 3), bool))
+    joined = []
+    for k in range(1, n + 1):
+        mine = [(m, s) for m, s in hands if (labels[m] == k).any()]
+        mask = np.logical_or.reduce([m for m, _ in mine])
+        joined.append((mask, HAND, max(mine, key=lambda t: t[0].sum())[1]))
+    return [p for p in parts if p[1] != HAND] + joined
+
+
+class SegmentationDetector:
     """A trained segmentation network and the rules that make objects of its output."""
 
     def __init__(
@@ -60,23 +247,10 @@ class Detector:
         self.device = device
 
     @classmethod
-    def load(cls, path: str | Path | None = None, **kwargs) -> Detector:
-        """The detector of a weights file (default: the shipped weights)."""
-        if path is None:
-            from tamp.sim.core.models import models_dir
-            from tamp.sim.core.segnet import WEIGHTS_FILE
-
-            path = models_dir() / "weights" / WEIGHTS_FILE
+    def load(cls, path: str | Path, **kwargs) -> SegmentationDetector:
+        """The detector of a segmentation network's weights file."""
         model, meta = load(path, kwargs.get("device", "cpu"))
         return cls(model, meta, **kwargs)
-
-    def _factor(self, shape: tuple[int, int]) -> int:
-        h, w = shape
-        W, H = self.size
-        k = w // W
-        if k >= 1 and w == k * W and h == k * H:
-            return k
-        return 1
 
     @torch.no_grad()
     def _network(self, rgb: np.ndarray, depth: np.ndarray, k: int) -> np.ndarray:
@@ -87,7 +261,7 @@ class Detector:
 
     def probabilities(self, rgb: np.ndarray, depth: np.ndarray) -> np.ndarray:
         """Class probabilities (C x H x W) at the image's resolution."""
-        k = self._factor(depth.shape)
+        k = _factor(depth.shape, self.size)
         probs = self._network(rgb, depth, k)
         if k > 1:
             probs = probs.repeat(k, axis=1).repeat(k, axis=2)
@@ -103,7 +277,7 @@ class Detector:
         An image ``k`` times the network's size is segmented and split into instances at the
         network's size (on the subsampled depth); each mask is then scaled up ``k`` times and
         its points and centroid are taken from the full-size depth."""
-        k = self._factor(depth.shape)
+        k = _factor(depth.shape, self.size)
         probs = self._network(rgb, depth, k)
         fx, fy, cx, cy = intrinsics
         found = extract(
@@ -117,14 +291,4 @@ class Detector:
             min_pixels=self.min_pixels,
             unknown_below=self.unknown_below,
         )
-        if k == 1:
-            return found
-        h, w = depth.shape
-        depth = np.where(np.isfinite(depth), depth, 0.0)
-        out = []
-        for d in found:
-            mask = d.mask.repeat(k, axis=0).repeat(k, axis=1)[:h, :w]
-            where = located(mask, depth, intrinsics, X_WC)
-            if where is not None:
-                out.append(dataclasses.replace(d, mask=mask, **where))
-        return out
+        return _upscaled(found, depth, intrinsics, X_WC, k)

@@ -9,18 +9,20 @@ depth noise. A GPU is used when present
 (``device="auto"``), never required. The weights file records the classes, the network's
 width, the image size and the data set's object-wise split (`DatasetInfo.split_record`).
 
-`evaluate` scores weights on the held-out (test) scenes as a detector is scored: per-view
-counting accuracy per class (what LOTS consumes, Zhou et al., IEEE T-ASE 2023, §III-B), mask
-IoU of matched instances and per-class pixel IoU, an instance confusion matrix, false
-positives per view, and CPU time per frame on one thread (network and instance extraction;
-process time, so a busy machine does not inflate it).
+`evaluate` scores weights (of either detector, `tamp.sim.core.detector.Detector.load`) on the
+held-out (test) scenes as a detector is scored: per-view counting accuracy per class (what
+LOTS consumes, Zhou et al., IEEE T-ASE 2023, §III-B), mask IoU of matched instances and
+per-class pixel IoU (of the detections' masks), an instance confusion matrix and what became
+of the task-class instances, false positives per view, and CPU time per frame on one thread
+(the whole `detect` call; process time, so a busy machine does not inflate it). An object
+held in the gripper is not counted (`true_instances`): the detector does not report it.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -28,8 +30,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from tamp.sim.core.instances import extract
-from tamp.sim.core.segdata import STUFF, UNKNOWN, read_info, read_scene, scene_file
+from tamp.sim.core.instances import IN_HAND_DEPTH
+from tamp.sim.core.segdata import HAND, STUFF, TABLE, UNKNOWN, read_info, read_scene, scene_file
 from tamp.sim.core.segnet import SegNet, parameter_count, prepare, save
 
 #: a predicted instance matches a true one at this mask IoU or more
@@ -189,20 +191,40 @@ def train(
 
 
 def true_instances(
-    inst: np.ndarray, inst_cls: np.ndarray, min_pixels: int
+    inst: np.ndarray,
+    inst_cls: np.ndarray,
+    min_pixels: int,
+    depth: np.ndarray | None = None,
+    names: Sequence[str] | None = None,
 ) -> tuple[list[tuple[int, np.ndarray]], list[np.ndarray]]:
-    """(the view's instances large enough to count: (class index, mask)), (the masks of the
-    smaller ones: a detection on them is not a false positive)."""
+    """(the view's instances that count: (class index, mask)), (the masks of those that do
+    not: a detection on them is not a false positive, missing them is no miss): an instance
+    counts when it has ``min_pixels`` or more and, given ``depth`` and the class ``names``,
+    is not held in the gripper (median depth under `IN_HAND_DEPTH` and not the person's
+    hand: the detector does not report the held object, perception knows it)."""
     big, small = [], []
     for k in np.unique(inst):
         if k == 0 or inst_cls[k] < len(STUFF):
             continue
         m = inst == k
-        if m.sum() >= min_pixels:
+        held = False
+        if depth is not None and names is not None and names[inst_cls[k]] != HAND:
+            d = depth[m]
+            d = d[np.isfinite(d) & (d > 0)]
+            held = d.size > 0 and float(np.median(d)) < IN_HAND_DEPTH
+        if m.sum() >= min_pixels and not held:
             big.append((int(inst_cls[k]), m))
         else:
             small.append(m)
     return big, small
+
+
+def predicted_map(found, names: Sequence[str], shape: tuple[int, int]) -> np.ndarray:
+    """A class map of detections (``table`` where none lies) for the per-class pixel IoU."""
+    out = np.full(shape, names.index(TABLE), np.int64)
+    for d in found:
+        out[d.mask] = names.index(d.cls)
+    return out
 
 
 def _iou(a: np.ndarray, b: np.ndarray) -> float:
@@ -303,6 +325,25 @@ def score_view(
     tally.all_right += int(right)
 
 
+def _task_outcomes(tally: Tally) -> dict:
+    """What became of the true task-class instances (rows of the confusion matrix): found
+    with their class, reported ``unknown`` or ``hand``, given another task class, missed."""
+    names, m = tally.names, tally.confusion
+    task = [c for c in tally.objects if names[c] not in NOT_TASK]
+    other = [c for c in tally.objects if names[c] in NOT_TASK]
+    total = int(m[task].sum())
+    right = int(sum(m[c, c] for c in task))
+    wrong = int(sum(m[c, k] for c in task for k in task if k != c))
+    return {
+        "total": total,
+        "right_class": right,
+        "unknown_or_hand": int(m[np.ix_(task, other)].sum()),
+        "other_task_class": wrong,
+        "other_task_class_share": round(wrong / total, 4) if total else None,
+        "missed": int(m[task, -1].sum()),
+    }
+
+
 def report(tally: Tally) -> dict:
     """The scores of a tally (JSON-ready)."""
     names, views = tally.names, max(1, tally.views)
@@ -326,6 +367,7 @@ def report(tally: Tally) -> dict:
             "columns": names + ["missed"],
             "matrix": tally.confusion.tolist(),
         },
+        "task_instances": _task_outcomes(tally),
         "false_positives_per_view": round(tally.false_positives / views, 4),
         "task_class_false_positives_per_view": round(tally.task_false_positives / views, 4),
         "unknown_objects": tally.unknown,
@@ -339,8 +381,10 @@ def evaluate(
     *,
     max_views: int = 0,
     detector=None,
+    scenes: Sequence[int] | None = None,
 ) -> dict:
-    """Score ``weights`` on the test scenes of ``data`` (module docstring); a JSON-ready dict."""
+    """Score ``weights`` on the test scenes of ``data`` (module docstring; ``scenes``: these
+    scene indices instead, e.g. training scenes held back from a fit); a JSON-ready dict."""
     from tamp.errors import InputError
     from tamp.sim.core.detector import Detector
 
@@ -365,7 +409,7 @@ def evaluate(
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        for s in info.test:
+        for s in info.test if scenes is None else scenes:
             scene = read_scene(scene_file(Path(data), s))
             K = scene["K"]
             intr = (K[0, 0], K[1, 1], K[0, 2], K[1, 2])
@@ -374,15 +418,13 @@ def evaluate(
                     break
                 rgb, depth = scene["rgb"][v], scene["depth"][v]
                 t0 = time.process_time()
-                probs = det.probabilities(rgb, depth)
-                found = extract(probs, depth, names, tally.objects, intr, scene["X_WC"][v],
-                                jump=det.jump, min_pixels=det.min_pixels,
-                                unknown_below=det.unknown_below)  # fmt: skip
+                found = det.detect(rgb, depth, intr, scene["X_WC"][v])
                 times.append(time.process_time() - t0)
                 truth, small = true_instances(
-                    scene["inst"][v], scene["inst_cls"][v], det.min_pixels
+                    scene["inst"][v], scene["inst_cls"][v], det.min_pixels, depth, names
                 )
-                score_view(tally, found, truth, small, scene["cls"][v], probs.argmax(0))
+                score_view(tally, found, truth, small, scene["cls"][v],
+                           predicted_map(found, names, depth.shape))  # fmt: skip
     finally:
         torch.set_num_threads(threads)
     return {
@@ -417,6 +459,10 @@ def format_report(r: dict) -> str:
         f"mask IoU (matched, same class): {r['mask_iou_matched']}",
         f"false positives per view: {r['false_positives_per_view']} "
         f"(task classes: {r['task_class_false_positives_per_view']})",
+        "task-class instances: {right_class} of {total} with their class, {unknown_or_hand} "
+        "unknown or hand, {other_task_class} another task class, {missed} missed".format(
+            **r["task_instances"]
+        ),
         f"unknown objects reported as a task class: {r['unknown_reported_as_task_class']} "
         f"of {r['unknown_objects']}",
         f"CPU per frame, one thread: median {t['median']} ms, p90 {t['p90']} ms",

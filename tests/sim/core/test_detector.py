@@ -57,6 +57,18 @@ def test_a_tiny_model_trains_and_is_scored_through_the_command_line(tmp_path, ca
     assert tamp_main(["detect", "train", str(data), "--out", str(tmp_path / "bad"), "--steps",
                       "2", "--width", "8", "--init", str(weights), "--quiet"]) == 2  # fmt: skip
     assert "final.pt: --init" in capsys.readouterr().err
+    # the proposal classifier (the shipped detector's kind) through the same command
+    assert tamp_main(["detect", "train", str(data), "--out", str(tmp_path / "crops"),
+                      "--kind", "classifier", "--epochs", "1", "--width", "4", "--threads",
+                      "1", "--quiet", "--json"]) == 0  # fmt: skip
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["schema"] == 1 and doc["epochs"] == 1 and doc["proposals"] > 0
+    crops = torch.load(tmp_path / "crops" / "final.pt", weights_only=True)["meta"]
+    assert crops["kind"] == "crop_classifier" and crops["outputs"][-2:] == ["several", "none"]
+    assert 0.3 <= crops["unknown_below"] < 1.0
+    assert tamp_main(["detect", "train", str(data), "--kind", "classifier", "--init",
+                      str(weights), "--quiet"]) == 2  # fmt: skip
+    assert "--init: only with --kind segmentation" in capsys.readouterr().err
     # score on the training scenes too (the test part of 3 scenes may be empty)
     info = sd.read_info(data)
     assert len(info.train) + len(info.test) == 3
@@ -65,6 +77,9 @@ def test_a_tiny_model_trains_and_is_scored_through_the_command_line(tmp_path, ca
     doc = json.loads(capsys.readouterr().out)
     assert doc["schema"] == 1 and doc["views"] == len(info.test)
     assert (tmp_path / "detector_eval.json").is_file()
+    assert tamp_main(["detect", "eval", str(tmp_path / "crops" / "final.pt"), str(data),
+                      "--json"]) == 0  # fmt: skip
+    assert json.loads(capsys.readouterr().out)["views"] == len(info.test)
 
 
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):

@@ -7,11 +7,15 @@ import numpy as np
 import pytest
 
 from tamp.sim.core.instances import (
+    FINE_JUMP,
     ObjectDetection,
     backproject_mask,
     depth_jumps,
     extract,
+    proposals,
     split_at_jumps,
+    support_plane,
+    world_heights,
 )
 
 NAMES = ("background", "table", "block", "unknown", "hand")
@@ -126,3 +130,62 @@ def test_depth_jumps_mark_both_sides():
     e = depth_jumps(d, 0.01)
     assert e[:, 1].all() and e[:, 2].all() and not e[:, 0].any() and not e[:, 3].any()
     assert len(split_at_jumps(np.ones((3, 4), bool), d, jump=0.01, min_pixels=3)) == 2
+
+
+# --- proposals from geometry -----------------------------------------------------------
+
+#: a camera 0.5 m above the table looking straight down (its z along world -z)
+X_DOWN = np.eye(4)
+X_DOWN[:3, :3] = np.diag([1.0, -1.0, -1.0])
+X_DOWN[:3, 3] = [0.0, 0.0, 0.5]
+
+
+def _table(height: float = 0.0) -> np.ndarray:
+    """The depth image of a flat surface at world z = ``height`` under `X_DOWN`."""
+    return np.full((60, 80), 0.5 - height, np.float32)
+
+
+def test_world_heights_back_project_through_the_camera_pose():
+    depth = _table()
+    depth[10, 20] = 0.45
+    depth[0, 0] = 0.0
+    z = world_heights(depth, INTR, X_DOWN)
+    assert np.isnan(z[0, 0]) and z[10, 20] == pytest.approx(0.05)
+    assert np.nanmax(np.abs(np.delete(z.ravel(), [0, 10 * 80 + 20]))) < 1e-9
+    # a tilted camera: every pixel of the flat table is still at z = 0
+    c, s = np.cos(0.3), np.sin(0.3)
+    X = X_DOWN.copy()
+    X[:3, :3] = X_DOWN[:3, :3] @ np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    vs, us = np.mgrid[0:60, 0:80]
+    rays = np.stack([(us - 40.0) / 100, (vs - 30.0) / 100, 0 * us + 1.0])
+    ray_z = np.tensordot(X[2, :3], rays, 1)
+    tilted = (-0.5 / ray_z).astype(np.float32)  # depth along the axis to the plane z = 0
+    assert np.allclose(world_heights(tilted, INTR, X), 0.0, atol=1e-6)
+
+
+def test_the_support_plane_is_the_lowest_surface_that_fills_part_of_the_view():
+    z = np.zeros((60, 80))
+    z[:, 40:] = 0.001  # a mat 1 mm proud of the table: one band with it
+    z[20:40, 10:30] = 0.03  # an object
+    assert support_plane(z) == pytest.approx(0.0005, abs=0.001)
+    z[:] = 0.01  # a tray floor 1 cm up fills the view
+    z[5:10, 5:10] = -0.02  # a few stray low pixels are no plane
+    z[20:40, 10:30] = 0.05
+    assert support_plane(z) == pytest.approx(0.01, abs=1e-6)
+    assert support_plane(np.full((4, 4), np.nan)) is None
+
+
+def test_proposals_are_what_stands_on_the_plane_split_at_depth_jumps():
+    depth = _table(0.01)  # the surface is 1 cm up: estimated, not assumed
+    depth[20:40, 10:30] = 0.5 - 0.04  # two touching blocks, 3 and 6 cm above the surface
+    depth[20:40, 30:50] = 0.5 - 0.07
+    depth[50:52, 70:72] = 0.5 - 0.03  # 4 px: below the size rule
+    depth[:, 75:] = 0.5 - 0.012  # a mat 2 mm proud of the surface: not an object
+    prop = proposals(depth, INTR, X_DOWN)
+    assert prop.plane == pytest.approx(0.01, abs=1e-6)
+    assert sorted(int(m.sum()) for m in prop.masks) == [400, 400]
+    assert np.nanmax(prop.heights) == pytest.approx(0.06, abs=1e-6)
+    # at one height the two blocks are one proposal; the finer split cannot part them either
+    depth[20:40, 30:50] = 0.5 - 0.04
+    (one,) = proposals(depth, INTR, X_DOWN).masks
+    assert one.sum() == 800 and len(split_at_jumps(one, depth, jump=FINE_JUMP)) == 1
