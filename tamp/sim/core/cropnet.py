@@ -17,6 +17,7 @@ the share of its pixels on the image border (a truncated object looks smaller).
 Outputs (`output_names`): the object classes of the data set (the catalogue, ``unknown``,
 ``hand``), then ``several`` (the proposal holds two or more touching objects: the detector
 splits it finer) and ``none`` (not an object: a piece of table, a shadowless mat edge).
+A class is only given to a proposal of a size its training proposals had (`size_gate`).
 """
 
 from __future__ import annotations
@@ -39,6 +40,8 @@ HEIGHT_SCALE = 0.05
 MARGIN = 1.25
 SEVERAL = "several"
 NONE = "none"
+#: the size gate's slack over the sizes seen in training (`size_gate`)
+SIZE_MARGIN = 1.1
 
 
 def output_names(object_classes: Sequence[str]) -> list[str]:
@@ -139,6 +142,21 @@ def crop_input(
         np.float32,
     )
     return x, f
+
+
+def size_gate(features: np.ndarray, sizes: dict | None, margin: float = SIZE_MARGIN) -> bool:
+    """Whether a proposal of ``features`` (`crop_input`) fits a class's ``sizes`` (its
+    training proposals' span, ``{"low": [l, w, h], "high": [l, w, h]}`` in metres): no side
+    more than ``margin`` times the largest seen, and, when it is wholly inside the image, none
+    under the smallest seen divided by ``margin``. A robot knows its catalogue's sizes: a
+    plate twice a saw's width is no saw, however saw-like its crop looks."""
+    if not sizes:
+        return True
+    size = np.asarray(features[1:4], float) / 10.0
+    if (size > margin * np.asarray(sizes["high"])).any():
+        return False
+    inside = features[5] == 0
+    return not (inside and (size < np.asarray(sizes["low"]) / margin).any())
 
 
 @torch.no_grad()

@@ -11,10 +11,12 @@ Training: cross-entropy weighted per output (square root of the median count ove
 output's, clipped to [0.2, 5]: ``several`` and the rarer classes would otherwise be
 drowned), AdamW with a cosine decay, batches of crops turned by a random multiple of 90
 degrees and flipped (a view from above has no up), with colour gain and offset jitter.
-A tenth of the training scenes (`TrainSettings.val_fraction`, by scene index) is kept out of
-the fit; on them the ``unknown`` threshold is chosen (`choose_threshold`) and the classifier
-is scored. The weights file records the outputs, the threshold, the split
-(`DatasetInfo.split_record`) and the CPU time.
+Each proposal of the fit gives `TrainSettings.copies` crops: the detector's window and
+jittered ones. A tenth of the training scenes (`TrainSettings.val_fraction`, drawn from the
+seed) is kept out of the fit; on them the ``unknown`` threshold is chosen (`choose_threshold`)
+and the classifier is scored. The sizes each class spans in the fit (`size_ranges`) are the
+size gate (`cropnet.size_gate`). The weights file records the outputs, the threshold, the
+sizes, the split (`DatasetInfo.split_record`) and the CPU time.
 """
 
 from __future__ import annotations
@@ -47,7 +49,7 @@ OWN_SHARE = 0.5
 
 @dataclass(frozen=True)
 class TrainSettings:
-    epochs: int = 14
+    epochs: int = 12
     batch_size: int = 128
     lr: float = 3e-3
     width: int = 16
@@ -161,6 +163,25 @@ def _augment(x: torch.Tensor, rng: np.random.Generator) -> torch.Tensor:
     return torch.cat([rgb, x[:, 3:]], dim=1)
 
 
+def size_ranges(features: np.ndarray, labels: np.ndarray, outputs) -> dict:
+    """Per task class, the sizes its training proposals span (`cropnet.size_gate`): the
+    0.5th and 99.5th percentiles of length, width and height (m), the low ones over the
+    proposals wholly inside the image (a cut object looks smaller)."""
+    out = {}
+    for c, name in enumerate(outputs):
+        mine = labels == c
+        if name in (UNKNOWN, "hand", *_NOT_OBJECT) or mine.sum() < 20:
+            continue
+        size = features[:, 1:4] / 10.0
+        inside = mine & (features[:, 5] == 0)
+        low = np.percentile(size[inside], 0.5, axis=0) if inside.sum() >= 20 else np.zeros(3)
+        out[name] = {
+            "low": [round(float(x), 4) for x in low],
+            "high": [round(float(x), 4) for x in np.percentile(size[mine], 99.5, axis=0)],
+        }
+    return out
+
+
 def choose_threshold(probs: np.ndarray, labels: np.ndarray, outputs) -> float:
     """The ``unknown`` threshold: the probability below which a proposal given a task class
     is reported ``unknown``, chosen on held-back training scenes to maximise the proposals
@@ -260,6 +281,7 @@ def train(
         "width": settings.width,
         "size": [int(info.config["width"]), int(info.config["height"])],
         "unknown_below": threshold,
+        "sizes": size_ranges(samples["f"][fit], samples["y"][fit], outputs),
         "split": info.split_record(),
         "training": asdict(settings) | {"proposals": int(len(fit))},
         "held_back": {"proposals": int(len(vi)), "accuracy": accuracy},

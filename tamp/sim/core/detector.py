@@ -12,7 +12,8 @@ wrist camera's RGB-D images. Ours is the classic tabletop pipeline (Rusu et al.,
    plane, mask) and its metric size, giving a catalogue class, ``unknown``, ``hand``,
    ``several`` (touching objects: the proposal is split again at 5 mm depth steps and its
    parts classified) or ``none`` (dropped); a task class below the weights' threshold is
-   reported ``unknown``;
+   reported ``unknown``, and so is one of a size its class never had in training
+   (`cropnet.size_gate`);
 3. a part in the gripper's region (median depth under `IN_HAND_DEPTH`) that is not the
    person's hand is the held object: not reported (perception knows what the gripper holds).
 
@@ -117,6 +118,7 @@ class Detector:
         self.several_above = float(
             meta.get("several_above", 0.0) if several_above is None else several_above
         )
+        self.sizes: dict = dict(meta.get("sizes", {}))
         self._several = self.outputs.index(cropnet.SEVERAL)
         self._none = self.outputs.index(cropnet.NONE)
         self._task = {
@@ -138,14 +140,21 @@ class Detector:
         model, meta = cropnet.load(path)
         return cls(model, meta, **kwargs)
 
-    def label(self, p: np.ndarray) -> tuple[str | None, float]:
+    def label(self, p: np.ndarray, features: np.ndarray | None = None) -> tuple[str | None, float]:
         """(the class reported for a proposal of output probabilities ``p``, or None for
-        ``none``; its score): a task class below ``unknown_below`` is ``unknown``."""
+        ``none``; its score): a task class below ``unknown_below``, or one whose sizes the
+        proposal's ``features`` do not fit (`cropnet.size_gate`), is ``unknown``."""
         i = int(p.argmax())
         if i == self._none:
             return None, float(p[i])
         score = float(p[i])
-        if i in self._task and score < self.unknown_below:
+        if i in self._task and (
+            score < self.unknown_below
+            or (
+                features is not None
+                and not cropnet.size_gate(features, self.sizes.get(self.outputs[i]))
+            )
+        ):
             return UNKNOWN, score
         return self.outputs[i], score
 
@@ -164,21 +173,21 @@ class Detector:
                 return []
             x = np.stack([a for a, _ in inputs])
             f = np.stack([b for _, b in inputs])
-            return list(zip(masks, cropnet.classify(self.model, x, f), strict=True))
+            return list(zip(masks, cropnet.classify(self.model, x, f), f, strict=True))
 
         final = []
-        for m, p in named(prop.masks):
+        for m, p, f in named(prop.masks):
             split = int(p.argmax()) == self._several and p[self._several] >= self.several_above
             parts = (
                 split_at_jumps(m, depth, jump=self.fine_jump, min_pixels=self.min_pixels)
                 if split
                 else []
             )
-            for part, q in named(parts) if len(parts) > 1 else [(m, p)]:
+            for part, q, g in named(parts) if len(parts) > 1 else [(m, p, f)]:
                 q = q.copy()
                 q[self._several] = 0.0  # a part not split further is named as one object
-                final.append((part, q / max(float(q.sum()), 1e-9)))
-        named_parts = [(m, *self.label(p)) for m, p in final]
+                final.append((part, q / max(float(q.sum()), 1e-9), g))
+        named_parts = [(m, *self.label(p, f)) for m, p, f in final]
         out = []
         for m, cls, score in _hands_joined(named_parts):
             if cls is None:

@@ -126,3 +126,22 @@ def test_touching_parts_named_hand_are_one_hand():
     hands = sorted(int(m.sum()) for m, c, _ in out if c == "hand")
     assert hands == [25, 45] and [c for _, c, _ in out].count("block") == 1
     assert next(s for m, c, s in out if c == "hand" and m.sum() == 45) == 0.9
+
+
+def test_a_class_is_only_given_to_a_proposal_of_its_size():
+    """The size gate: larger than the class ever was (with the 10 % slack) is no member of
+    it; smaller is only judged when the proposal is wholly inside the image; the detector
+    reports a sure class of the wrong size as ``unknown``."""
+    sizes = {"low": [0.05, 0.02, 0.01], "high": [0.10, 0.04, 0.03]}
+    f = np.array([0.0, 0.8, 0.3, 0.2, 2.0, 0.0])  # 8 x 3 x 2 cm, inside the image
+    assert cropnet.size_gate(f, sizes) and cropnet.size_gate(f, None)
+    assert not cropnet.size_gate(f + [0, 0.4, 0, 0, 0, 0], sizes)  # 12 cm long
+    small = f - [0, 0.5, 0, 0, 0, 0]  # 3 cm long
+    assert not cropnet.size_gate(small, sizes)
+    assert cropnet.size_gate(small + [0, 0, 0, 0, 0, 1.0], sizes)  # cut by the image edge
+    meta = {"classes": ["background", "table", *OBJECTS], "outputs": OUTPUTS,
+            "unknown_below": 0.5, "sizes": {"block": sizes}}  # fmt: skip
+    det = Detector(cropnet.CropNet(len(OUTPUTS)), meta)
+    p = np.zeros(len(OUTPUTS))
+    p[0] = 0.99
+    assert det.label(p, f)[0] == "block" and det.label(p, f + [0, 0.4, 0, 0, 0, 0])[0] == "unknown"
