@@ -102,7 +102,6 @@ class Detector:
         jump: float = DEPTH_JUMP,
         fine_jump: float | None = None,
         unknown_below: float | None = None,
-        several_above: float | None = None,
     ):
         self.model = model.eval()
         self.meta = meta
@@ -114,9 +113,6 @@ class Detector:
         self.fine_jump = float(meta.get("fine_jump", FINE_JUMP) if fine_jump is None else fine_jump)
         self.unknown_below = float(
             meta.get("unknown_below", UNKNOWN_BELOW) if unknown_below is None else unknown_below
-        )
-        self.several_above = float(
-            meta.get("several_above", 0.0) if several_above is None else several_above
         )
         self.sizes: dict = dict(meta.get("sizes", {}))
         self._several = self.outputs.index(cropnet.SEVERAL)
@@ -159,6 +155,7 @@ class Detector:
         return self.outputs[i], score
 
     def _at_size(self, rgb, depth, intrinsics, X_WC) -> list[ObjectDetection]:
+        """The detections of an image at the trained size (module docstring, steps 1-3)."""
         depth = np.where(np.isfinite(depth), depth, 0.0).astype(np.float32)
         prop = proposals(depth, intrinsics, X_WC, jump=self.jump, min_pixels=self.min_pixels)
 
@@ -177,7 +174,7 @@ class Detector:
 
         final = []
         for m, p, f in named(prop.masks):
-            split = int(p.argmax()) == self._several and p[self._several] >= self.several_above
+            split = int(p.argmax()) == self._several
             parts = (
                 split_at_jumps(m, depth, jump=self.fine_jump, min_pixels=self.min_pixels)
                 if split
