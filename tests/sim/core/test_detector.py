@@ -122,16 +122,20 @@ def test_the_shipped_weights_count_scenes_from_an_unseen_seed(detector, catalogu
         for v in _views(scene, catalogue, cfg):
             K = v.K
             found = detector.detect(v.rgb, v.depth, (K[0, 0], K[1, 1], K[0, 2], K[1, 2]), v.X_WC)
-            truth, small = true_instances(v.inst, v.inst_cls, detector.min_pixels)
+            truth, small = true_instances(
+                v.inst, v.inst_cls, detector.min_pixels, v.depth, list(detector.classes)
+            )
             score_view(tally, found, truth, small)
     r = report(tally)
     assert r["views"] == 16
     true_instances_total = sum(sum(row) for row in r["confusion"]["matrix"][:-1])
     # found with their own class and a mask IoU >= 0.5 (the benchmark's figure on the
-    # held-out test scenes is the reference; this guards against a broken detector)
-    assert r["matched_instances"] >= 0.4 * true_instances_total
-    assert r["mask_iou_matched"] > 0.7
-    assert r["false_positives_per_view"] < 2.0
+    # held-out test scenes is the reference; this guards against a broken detector:
+    # the shipped weights find 50 of 61 here, with a mask IoU of 0.95)
+    assert r["matched_instances"] >= 0.65 * true_instances_total
+    assert r["mask_iou_matched"] > 0.85
+    assert r["false_positives_per_view"] < 1.0
+    assert r["task_instances"]["other_task_class"] <= 1
 
 
 def test_full_size_images_give_full_size_masks_and_world_points(detector, catalogue):
