@@ -154,8 +154,9 @@ class Detector:
             return UNKNOWN, score
         return self.outputs[i], score
 
-    def _at_size(self, rgb, depth, intrinsics, X_WC) -> list[ObjectDetection]:
-        """The detections of an image at the trained size (module docstring, steps 1-3)."""
+    def _at_size(self, rgb, depth, intrinsics, X_WC) -> list[tuple[np.ndarray, str, float]]:
+        """(mask, class, score) of the objects of an image at the trained size (module
+        docstring, steps 1-3)."""
         depth = np.where(np.isfinite(depth), depth, 0.0).astype(np.float32)
         prop = proposals(depth, intrinsics, X_WC, jump=self.jump, min_pixels=self.min_pixels)
 
@@ -187,12 +188,11 @@ class Detector:
         named_parts = [(m, *self.label(p, f)) for m, p, f in final]
         out = []
         for m, cls, score in _hands_joined(named_parts):
-            if cls is None:
+            d = depth[m]
+            d = d[d > 0]
+            if cls is None or d.size == 0 or (cls != HAND and np.median(d) < IN_HAND_DEPTH):
                 continue
-            where = located(m, depth, intrinsics, X_WC)
-            if where is None or (cls != HAND and where["depth"] < IN_HAND_DEPTH):
-                continue
-            out.append(ObjectDetection(cls, score, m, **where))
+            out.append((m, cls, score))
         return out
 
     def detect(
@@ -204,7 +204,16 @@ class Detector:
         the trained size is subsampled; masks come back at its own size."""
         k = _factor(depth.shape, self.size)
         found = self._at_size(rgb[::k, ::k], depth[::k, ::k], _scaled(intrinsics, k), X_WC)
-        return _upscaled(found, depth, intrinsics, X_WC, k)
+        h, w = depth.shape
+        depth = np.where(np.isfinite(depth), depth, 0.0)
+        out = []
+        for m, cls, score in found:
+            if k > 1:
+                m = m.repeat(k, axis=0).repeat(k, axis=1)[:h, :w]
+            where = located(m, depth, intrinsics, X_WC)
+            if where is not None:
+                out.append(ObjectDetection(cls, score, m, **where))
+        return out
 
 
 _NOT_OBJECTS = (cropnet.SEVERAL, cropnet.NONE)
