@@ -427,6 +427,11 @@ class Perception(LeafSystem):
     def state(self, context) -> PerceptionState:
         return context.get_abstract_state(self._state).get_value()
 
+    @property
+    def noise(self) -> DetectorNoise | None:
+        """The seeded noisy detector every view passes through (None: exact)."""
+        return self._noise
+
     def _calc_observation(self, context, output) -> None:
         output.set_value(self.state(context).observation)
 

@@ -1,7 +1,7 @@
 """Object poses from the youBot's camera (``perception: camera``), not from the plant.
 
     RgbdSensor (mast camera on the base) ─► [DepthNoise] ─► Perception (the shared
-    detector, `tamp.sim.core.perception`: label + depth image -> detections)
+    detector, `tamp.sim.core.perception`: label + depth image -> detections by class)
       ─► ObjectPoseEstimator ─► body_poses
     ObjectPoseEstimator.view_request ─► Perception          (one view every period)
 
@@ -17,6 +17,13 @@ m) is added to x and y, drawn from the seed and the frame. Yaw is not estimated 
 prior): only the obstacle box has one that matters, and it appears with yaw 0. A detection
 whose size (pixels x depth^2) is below `WHOLE` of the largest seen for that object is partly
 hidden and is not used.
+
+Identity is the estimator's own: the detector reports each object's *class* (its model:
+``bottle``, ``obstacle``), never which object it is, and `ObjectPoseEstimator._associate`
+pairs a view's detections with the objects of their class by position (least total distance
+to the current estimates, within a gate; then what is left of both by distance alone: an
+object a person put somewhere else, believed once seen there in `CONFIRM` views in a row and
+never where another object stands), as a tracker would.
 
 Before the camera has seen an object its estimate is the prior: where the demonstration
 showed it (the nominal pose, not the perturbed one); an object that appears later (Case 3's
@@ -38,6 +45,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import EventStatus, LeafSystem
+from scipy.optimize import linear_sum_assignment
 
 from tamp.perturbation import stream
 from tamp.sim.core.camera import backproject
@@ -50,6 +58,17 @@ NEAR_SIDE = 0.8
 #: a detection counts only when its size (pixels x depth^2) is this share of the object's
 #: largest so far: a partly hidden object's centroid is off by centimetres (measured 1.8 cm)
 WHOLE = 0.8
+#: how far (m, in the floor plane) a detection may lie from the estimate of an object seen
+#: before and still be that object (between two views 0.1 s apart only a carried or falling
+#: object moves; the nearest other object of a kind is farther in every packaged case)
+GATE = 0.15
+#: ... from the prior of an object not seen yet (its start is perturbed: 3 sigma of 3 cm)
+FIRST_GATE = 0.25
+#: a detection this near (m) another object's estimate is that object: no object moves there
+OCCUPIED = 0.08
+#: views in a row an object must be seen away from its estimate before it is believed moved
+#: there (a lone false detection or class swap moves nothing)
+CONFIRM = 2
 #: an object let go at most this high above its resting height is taken to rest on the floor
 #: (a friction-held object slips up to ~2 cm in the fingers, so the hand is that much higher)
 LET_GO = 0.04
@@ -67,6 +86,8 @@ class EstimatorState:
     following: str | None = None  # the object in the closed hand (its pose is the hand's)
     #: per object, the largest pixels x depth^2 seen: its size in a full view
     full: dict = field(default_factory=dict)
+    #: per object seen away from its estimate: (x, y, views in a row there), until confirmed
+    moving: dict = field(default_factory=dict)
 
     def __deepcopy__(self, memo: dict) -> EstimatorState:
         return self  # replaced, never changed in place
@@ -154,6 +175,7 @@ class ObjectPoseEstimator(LeafSystem):
         estimates = dict(s.estimates)
         seen = dict(s.seen)
         full = dict(s.full)
+        moving = dict(s.moving)
         cameras = {k: v for k, v in s.cameras.items() if k >= _key(t - 1.0)}
         X_WC = plant_poses[self._camera_body].multiply(self._X_BC)
         cameras[_key(t)] = X_WC
@@ -162,19 +184,24 @@ class ObjectPoseEstimator(LeafSystem):
         if obs.id and obs.id != s.used and _key(obs.time) in s.cameras:
             used = obs.id
             rng = stream(self._seed, "sensor", "pose", obs.id)
-            for det in obs.detections:
-                if det.cls not in self._bodies:
-                    continue
+            X_view = s.cameras[_key(obs.time)]
+            for uid, det, moved in self._associate(obs.detections, X_view, s):
+                if moved:  # seen away from its estimate: believed once seen there again
+                    xy = self._estimate(det, X_view, 0.0, self._kinds[uid])[:2]
+                    moving[uid] = seen_moved(moving.get(uid), xy)
+                    if moving[uid][2] < CONFIRM:
+                        continue
+                moving.pop(uid, None)
                 size = det.pixels * det.depth**2  # about constant over distance, unoccluded
-                full[det.cls] = max(full.get(det.cls, 0.0), size)
-                if size < WHOLE * full[det.cls]:
+                full[uid] = max(full.get(uid, 0.0), size)
+                if size < WHOLE * full[uid]:
                     continue  # partly hidden (by the arm, the held object, the image border)
-                est = self._estimate(det, s.cameras[_key(obs.time)], estimates[det.cls][3])
+                est = self._estimate(det, X_view, estimates[uid][3], self._kinds[uid])
                 if self._noise > 0:
                     dx, dy = np.clip(rng.standard_normal(2), -3.0, 3.0) * self._noise
                     est = (est[0] + float(dx), est[1] + float(dy), est[2], est[3])
-                estimates[det.cls] = est
-                seen[det.cls] = obs.time
+                estimates[uid] = est
+                seen[uid] = obs.time
         grasp: GraspRequest = self.grasp_port.Eval(context)
         held = grasp.holding
         following = held if held is not None and grasp.obj == held else None
@@ -187,12 +214,54 @@ class ObjectPoseEstimator(LeafSystem):
             hh = self._kinds[s.following].half_height
             estimates[s.following] = (x, y, hh if z < hh + LET_GO else z, yaw)
         state.get_mutable_abstract_state(self._state).set_value(
-            EstimatorState(s.request + 1, used, estimates, seen, cameras, following, full)
+            EstimatorState(s.request + 1, used, estimates, seen, cameras, following, full, moving)
         )
         return EventStatus.Succeeded()
 
-    def _estimate(self, det, X_WC, yaw: float) -> tuple[float, float, float, float]:
-        kind = self._kinds[det.cls]
+    def _associate(self, detections, X_WC, s: EstimatorState) -> list[tuple[str, object, bool]]:
+        """Which object each detection of this view is (module docstring, "Identity"), and
+        whether it was seen away from its estimate: per class, detections and the objects
+        of that kind are paired by least total planar distance between the detection's
+        position and the object's estimate, first within `GATE` of an object seen before or
+        `FIRST_GATE` of one not seen yet (its prior, the demonstration's pose); then the
+        detections left over and the objects of their kind that no detection of this view
+        explains are paired by least total distance whatever it is (moved: an object a
+        person put down elsewhere, as Case 3's O_a appears on a place), except where another
+        object is believed to stand (within `OCCUPIED` of its estimate: a detection there
+        is that object, seen as the wrong class). A detection left over is no object the
+        robot knows: it is ignored."""
+        out: list[tuple[str, object, bool]] = []
+        by_class: dict[str, list] = {}
+        for det in detections:
+            by_class.setdefault(det.cls, []).append(det)
+        for cls, dets in by_class.items():
+            uids = [u for u, k in self._kinds.items() if k.name == cls]
+            if not uids:
+                continue
+            kind = self._kinds[uids[0]]
+            where = np.array([self._estimate(d, X_WC, 0.0, kind)[:2] for d in dets])
+            est = np.array([s.estimates[u][:2] for u in uids])
+            dist = np.linalg.norm(where[:, None, :] - est[None, :, :], axis=2)
+            gate = np.array([GATE if u in s.seen else FIRST_GATE for u in uids])
+            near = _pair(np.where(dist <= gate[None, :], dist, np.inf))
+            out += [(uids[j], dets[i], False) for i, j in near]
+            free_d = [i for i in range(len(dets)) if i not in {i for i, _ in near}]
+            free_u = [j for j in range(len(uids)) if j not in {j for _, j in near}]
+            others = [xy[:2] for u, xy in s.estimates.items() if u not in uids]
+            free_d = [
+                i
+                for i in free_d
+                if all(math.dist(where[i], o) > OCCUPIED for o in others)
+                and all(dist[i, j] > OCCUPIED for j in range(len(uids)) if j not in free_u)
+            ]
+            if free_d and free_u:
+                far = _pair(dist[np.ix_(free_d, free_u)])
+                out += [(uids[free_u[j]], dets[free_d[i]], True) for i, j in far]
+        return out
+
+    def _estimate(
+        self, det, X_WC, yaw: float, kind: ObjectKind
+    ) -> tuple[float, float, float, float]:
         # a detection's centroid is a mean of pixel indices; a pixel's centre is half a
         # pixel further (measured: a 0.5 px lateral bias, ~6 mm at 1.3 m, without it)
         p = backproject(det.u + 0.5, det.v + 0.5, det.depth, self._K, X_WC)
@@ -207,6 +276,27 @@ class ObjectPoseEstimator(LeafSystem):
             # above, it is biased upward from the centre): resting, at its model's height
             z = kind.half_height
         return (float(p[0]), float(p[1]), z, yaw)
+
+
+def seen_moved(
+    before: tuple[float, float, int] | None, xy: tuple[float, float]
+) -> tuple[float, float, int]:
+    """(x, y, views in a row) of an object seen away from its estimate at ``xy``, after
+    ``before`` (None: not so seen in the last view): one more view when within `GATE` of
+    where it was seen then, else a first one here."""
+    x, y = float(xy[0]), float(xy[1])
+    if before is not None and math.hypot(x - before[0], y - before[1]) <= GATE:
+        return (x, y, before[2] + 1)
+    return (x, y, 1)
+
+
+def _pair(cost: np.ndarray) -> list[tuple[int, int]]:
+    """The (row, column) pairs of least total cost, none at an infinite cost."""
+    if cost.size == 0:
+        return []
+    finite = np.isfinite(cost)
+    rows, cols = linear_sum_assignment(np.where(finite, cost, 1e9))
+    return [(int(i), int(j)) for i, j in zip(rows, cols, strict=True) if finite[i, j]]
 
 
 def _key(t: float) -> int:

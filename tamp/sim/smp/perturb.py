@@ -74,11 +74,13 @@ def perturb(scenario: SimScenario, seed: int) -> tuple[SimScenario, Applied]:
     applied.friction = sample.friction
     applied.depth_noise = spec.depth_noise
     applied.pose_noise = spec.pose_noise
+    applied.detector = spec.detector
     conditions = RunConditions(
         seed=seed,
         friction=sample.friction,
         depth_noise=spec.depth_noise,
         pose_noise=spec.pose_noise,
+        detector=spec.detector,
         chance_failures=tuple(failures),
         nominal=tuple((o.id, o.xy[0], o.xy[1], o.yaw) for o in standing),
     )

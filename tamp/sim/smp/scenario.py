@@ -235,11 +235,10 @@ class ScenarioFile:
                     "model", f"unknown model {entry.model!r} (known: {', '.join(known)})"
                 )
         self.perturbation.require(PERTURBED, "SMP-MRO")
-        if self.perturbation.detector is not None:
+        if self.perturbation.detector is not None and self.perception != "camera":
             raise f.error(
                 "perturbation.sensor.detector",
-                "the SMP-MRO camera's detections are one per object model, not tracked "
-                "instances: use sensor.depth_noise or sensor.pose_noise",
+                "a noisy detector needs a detector: set 'perception: camera'",
             )
         for action in self.perturbation.skill_failure:
             if action not in SIMULATED_FAILURES:
@@ -271,12 +270,14 @@ class SimObject:
 class RunConditions:
     """What one seeded run draws beyond poses (`tamp.sim.smp.perturb.perturb`): the seed,
     the objects' friction coefficient (None: the SDFs'), the camera's depth noise and the
-    perceived pose noise (m, sigma), and per action the attempts that fail by chance."""
+    perceived pose noise (m, sigma), the noisy detector's level, and per action the attempts
+    that fail by chance."""
 
     seed: int = 0
     friction: float | None = None
     depth_noise: float = 0.0
     pose_noise: float = 0.0
+    detector: str | None = None  # the seeded noisy detector's level (None: exact)
     chance_failures: tuple[tuple[str, tuple[bool, ...]], ...] = ()
     #: (id, x, y, yaw) where the robot was shown each object (its camera prior), when the run
     #: moved them; empty: the scenario's own poses

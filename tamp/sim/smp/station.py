@@ -88,7 +88,7 @@ def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
 def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodies, kinds, palm):
     """The mast camera, depth noise, the detector and the pose estimator (wired)."""
     from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config, look_at
-    from tamp.sim.core.perception import LabelOracle, Perception
+    from tamp.sim.core.perception import DetectorNoise, LabelOracle, Perception
     from tamp.sim.smp.perception import ObjectPoseEstimator, prior_poses
 
     base = plant.GetBodyByName(ROBOT.base_body, robot)
@@ -98,10 +98,15 @@ def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodie
     )
     camera, K = add_rgbd_camera(builder, plant, scene_graph, base, X_BC, config)
     run = scenario.conditions
-    labels = {int(b.index()): uid for uid, b in bodies.items()}
+    # the oracle's classes are the object models' (identity is the estimator's: by position)
+    labels = {int(b.index()): kinds[uid].name for uid, b in bodies.items()}
     detector = builder.AddSystem(
         Perception(
-            LabelOracle(labels), width=CAMERA.width, height=CAMERA.height, period=CAMERA.period
+            LabelOracle(labels),
+            width=CAMERA.width,
+            height=CAMERA.height,
+            period=CAMERA.period,
+            noise=None if run.detector is None else DetectorNoise(run.detector, run.seed),
         )
     )
     depth = camera.depth_image_32F_output_port()

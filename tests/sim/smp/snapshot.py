@@ -46,6 +46,10 @@ def recorded_layout(scenario: dict[str, Any]) -> dict[str, Any]:
             kind["added"] = {k: o["kind"][k] for k in ADDED_KIND_FIELDS}  # never recorded
         objects.append({**o, "kind": kind})
     out["objects"] = objects
+    # the run's noisy-detector level came with the camera cell's tracking: never recorded
+    conditions = dict(out["conditions"])
+    assert conditions.pop("detector") is None  # a loaded file draws nothing: exact
+    out["conditions"] = conditions
     return out
 
 

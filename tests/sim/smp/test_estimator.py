@@ -66,3 +66,71 @@ def test_an_object_moved_in_the_plant_is_seen_there():
     assert "Oa" in world.objects
     assert not IsAreaFree("L1").holds(world)
     assert math.isclose(world.objects["Oa"].pos.x, area.pos.x)
+
+
+def test_the_pose_estimator_tells_objects_apart_by_position_not_by_label():
+    """The detector reports classes only (``bottle``, ``obstacle``); the estimator pairs a
+    view's detections with its objects by position: nearest within the gate whatever the
+    order, a moved object (a person put it elsewhere) from what is left, an extra detection
+    of a class no object is left for ignored."""
+    import numpy as np
+    from pydrake.math import RigidTransform, RotationMatrix
+
+    from tamp.grasp.pinhole import camera_to_pixel
+    from tamp.sim.core.messages import Detection
+    from tamp.sim.smp.perception import EstimatorState, ObjectPoseEstimator
+    from tamp.sim.smp.robot import OBJECT_KINDS as KINDS
+
+    K = (300.0, 300.0, 160.0, 120.0)
+    X_WC = RigidTransform(RotationMatrix(np.diag([1.0, -1.0, -1.0])), [1.0, 0.0, 2.0])
+    kinds = {"O0": KINDS["bottle"], "O1": KINDS["bottle"], "Oa": KINDS["obstacle"]}
+    est = ObjectPoseEstimator(
+        bodies={"O0": 1, "O1": 2, "Oa": 3},
+        kinds=kinds,
+        prior={},
+        camera_body=0,
+        X_BC=RigidTransform(),
+        intrinsics=K,
+        palm_body=0,
+        grasp_offset=0.0,
+        period=0.2,
+    )
+
+    def seen_at(cls, x, y):
+        p_C = X_WC.inverse().multiply(np.array([x, y, 0.1]))
+        u, v = camera_to_pixel(p_C, K)
+        return Detection(0, cls, 300, float(u), float(v), float(p_C[2]))
+
+    s = EstimatorState(
+        estimates={"O0": (0.8, 0.2, 0.1, 0), "O1": (1.2, -0.2, 0.1, 0), "Oa": (5, 5, 0.07, 0)},
+        seen={"O0": 1.0, "O1": 1.0, "Oa": 1.0},
+    )
+    near_o1, near_o0 = seen_at("bottle", 1.22, -0.19), seen_at("bottle", 0.79, 0.21)
+
+    def paired(dets):
+        return {u: (d, moved) for u, d, moved in est._associate(dets, X_WC, s)}
+
+    assert paired([near_o1, near_o0]) == {"O1": (near_o1, False), "O0": (near_o0, False)}
+    # the obstacle waited (and was seen) outside the workspace; a person put it down here
+    put = seen_at("obstacle", 1.0, 0.1)
+    assert paired([put, near_o0]) == {"Oa": (put, True), "O0": (near_o0, False)}
+    # O1 out of view, O0 in view, a bottle far from both: O1 moved there (what is left)
+    far = seen_at("bottle", 1.3, 0.4)
+    assert paired([near_o0, far]) == {"O0": (near_o0, False), "O1": (far, True)}
+    # three bottles in view, two objects: the one nobody explains is ignored
+    third = seen_at("bottle", 0.6, -0.4)
+    assert paired([near_o0, near_o1, third]) == {"O0": (near_o0, False), "O1": (near_o1, False)}
+    # an "obstacle" where a bottle stands is that bottle, seen as the wrong class: O_a stays
+    assert paired([seen_at("obstacle", 0.81, 0.2)]) == {}
+    # a bottle where O0 stands, O0 also seen: a second mask of O0, not O1 moved there
+    assert paired([near_o0, seen_at("bottle", 0.83, 0.22)]) == {"O0": (near_o0, False)}
+
+
+def test_an_object_seen_away_from_its_estimate_moves_once_seen_there_again():
+    from tamp.sim.smp.perception import CONFIRM, GATE, seen_moved
+
+    first = seen_moved(None, (1.0, 0.1))
+    assert first == (1.0, 0.1, 1) and first[2] < CONFIRM  # a lone sighting moves nothing
+    again = seen_moved(first, (1.02, 0.11))
+    assert again[2] == 2 == CONFIRM
+    assert seen_moved(first, (1.0 + 2 * GATE, 0.1))[2] == 1  # elsewhere: counting restarts

@@ -135,7 +135,11 @@ def _write(tmp_path, extra: str):
         ("perturbation: {skills: {Place: 0.1}}\n", "perturbation.skills.Place", "Pick"),
         ("perturbation: {objects: {xy: 0.9}}\n", "perturbation.objects.xy", "<= 0.5"),
         ("perturbation: {colour: 1}\n", "perturbation.colour", "unknown key"),
-        ("perturbation: {sensor: {detector: low}}\n", "perturbation.sensor.detector", "tracked"),
+        (
+            "perturbation: {sensor: {detector: low}}\n",
+            "perturbation.sensor.detector",
+            "perception: camera",
+        ),
     ],
 )
 def test_bad_grasp_perception_and_perturbation_fields_exit_2(tmp_path, extra, field, words):
@@ -143,3 +147,21 @@ def test_bad_grasp_perception_and_perturbation_fields_exit_2(tmp_path, extra, fi
         load_scenario(_write(tmp_path, extra))
     assert e.value.field == field and words in str(e.value)
     assert e.value.file.endswith("s.yaml")
+
+
+def test_the_noisy_detector_is_a_camera_cell_perturbation(tmp_path):
+    """With ``perception: camera`` the seeded noisy detector is drawn per run (exact
+    without a seed) and reaches the cell's perception."""
+    from tamp.sim.core.perception import DetectorNoise
+    from tamp.sim.smp.simulate import prepare
+    from tamp.sim.smp.station import build_station
+
+    s = load_scenario(
+        _write(tmp_path, "perception: camera\nperturbation: {sensor: {detector: high}}\n")
+    )
+    assert s.perturbation.detector == "high" and s.conditions.detector is None
+    run, applied = perturb(s, 3)
+    assert run.conditions.detector == "high" and applied.to_json()["detector"] == "high"
+    system = build_station(run, prepare(run).policy)
+    perception = system.diagram.GetSubsystemByName("perception")
+    assert perception.noise == DetectorNoise("high", 3)
