@@ -9,6 +9,12 @@ Sections (``--only``):
 - ``lots``: the LOTS tower with the person's interference (``tower_interference``) in the
   perturbed cell ``tower_perturbed`` over 20 seeds (target >= 90 %); ``--lots-scenario``,
   ``--lots-cell`` and ``--lots-interference`` change them.
+- ``perception``: the same campaigns read by another perception, each beside the one it
+  changes: the seeded noisy detector (``perturbation.sensor.detector: low`` and ``high``,
+  `tamp.sim.core.detection_noise`) over the label oracle, and (LOTS) the learned detector
+  (``camera.detector: learned``). ``--perception-cells`` picks ``smp`` and/or ``lots``
+  (default ``smp``: a LOTS tower campaign costs about 280 CPU s per run); each variant is
+  the packaged file with that one field changed, written into the output folder.
 - ``overhead``: Ray's own cost per run, without a simulation's noise: runs that only sleep
   ``--sleep`` s, in this process and on a local Ray with 1 and 2 workers (scheduling, the
   worker's start-up, pickling the job and the record both ways).
@@ -110,6 +116,55 @@ def campaign(scenario: str, runs: int, workers: int, out: Path, *extra: str) -> 
     return doc
 
 
+def variant(name: str, folder: str, out: Path, tag: str, **sections) -> Path:
+    """The packaged scenario ``name`` (in ``folder``) with the given fields changed
+    (``sections``: section -> {field: value}, merged one level down), written to
+    ``out/<stem>_<tag>.yaml``; a relative ``demonstration`` is made absolute."""
+    import yaml
+
+    from tamp.scenarios import resolve
+
+    src = resolve(name, folder)
+    data = yaml.safe_load(src.read_text())
+    if isinstance(data.get("demonstration"), str) and data["demonstration"].startswith("."):
+        data["demonstration"] = str((src.parent / data["demonstration"]).resolve())
+    for section, fields in sections.items():
+        node = data.setdefault(section, {})
+        for key, value in fields.items():
+            if isinstance(value, dict):
+                node.setdefault(key, {}).update(value)
+            else:
+                node[key] = value
+    data["name"] = f"{data['name']}_{tag}"
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / f"{src.stem}_{tag}.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def perception(cells: list[str], runs: dict[str, int], workers: int, out: Path, lots) -> list:
+    """The ``perception`` section (module docstring): one row per cell and reading."""
+    rows = []
+    noisy = {lvl: {"perturbation": {"sensor": {"detector": lvl}}} for lvl in ("low", "high")}
+    if "smp" in cells:
+        for tag, change in noisy.items():
+            path = variant("case3_camera", "sim", out / "perception", f"detector_{tag}", **change)
+            doc = campaign(str(path), runs["smp"], workers, out / f"perception_smp_{tag}")
+            rows.append({**row("perception", doc), "cell": "smp", "reading": f"oracle, {tag}"})
+    if "lots" in cells:
+        scenario, cell, interference = lots
+        readings = {"learned": {"camera": {"detector": "learned"}}, **noisy}
+        for tag, change in readings.items():
+            path = variant(cell, "lots_sim", out / "perception", tag, **change)
+            extra = ("--cell", str(path))
+            if interference != "none":
+                extra += ("--interference", interference)
+            doc = campaign(scenario, runs["lots"], workers, out / f"perception_lots_{tag}", *extra)
+            reading = tag if tag == "learned" else f"oracle, {tag}"
+            rows.append({**row("perception", doc), "cell": "lots", "reading": reading})
+    return rows
+
+
 def row(section: str, doc: dict) -> dict:
     """The figures of one campaign that the table and the JSON line report."""
     per_run = [r["wall_time"] for r in doc["runs"]]
@@ -155,7 +210,10 @@ def main() -> int:
     ap.add_argument("--throughput-scenario", default="case1.yaml")
     ap.add_argument("--workers", type=int, default=2, help="Ray workers of smp and lots")
     ap.add_argument("--overhead-runs", type=int, default=20)
-    ap.add_argument("--only", nargs="+", choices=("smp", "lots", "overhead", "throughput"))
+    ap.add_argument(
+        "--only", nargs="+", choices=("smp", "lots", "perception", "overhead", "throughput")
+    )
+    ap.add_argument("--perception-cells", nargs="+", choices=("smp", "lots"), default=["smp"])
     ap.add_argument("--out", default="build/bench_campaign", help="campaign folders")
     args = ap.parse_args()
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
@@ -164,7 +222,7 @@ def main() -> int:
     os.environ["PYTHONPATH"] = os.pathsep.join(
         p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p
     )
-    only = set(args.only or ("smp", "lots", "overhead", "throughput"))
+    only = set(args.only or ("smp", "lots", "perception", "overhead", "throughput"))
     out = Path(args.out)
     rows = []
     if "smp" in only:
@@ -177,6 +235,10 @@ def main() -> int:
             extra += ("--interference", args.lots_interference)
         doc = campaign(args.lots_scenario, n, args.workers, out / "lots", *extra)
         rows.append(row("lots", doc))
+    if "perception" in only:
+        runs = {"smp": args.runs or args.smp_runs, "lots": args.runs or args.lots_runs}
+        lots = (args.lots_scenario, args.lots_cell, args.lots_interference)
+        rows += perception(args.perception_cells, runs, args.workers, out, lots)
     engine_cost = overhead(args.runs or args.overhead_runs) if "overhead" in only else None
     scaling = None
     if "throughput" in only:
@@ -202,6 +264,8 @@ def main() -> int:
     )
     for r in rows:
         lo, hi = r["wilson_95"]
+        if "reading" in r:
+            print(f"{'':<10} {r['cell']} read by: {r['reading']}")
         target = "-" if r["target"] is None else f"{r['target']:.0%}"
         print(
             f"{r['section']:<10} {r['scenario']:<12} {r['engine']:<6} {r['workers']:>2} "
