@@ -100,3 +100,31 @@ def test_a_task_counting_a_class_the_learned_detector_does_not_know_is_refused(t
         check_detector_classes(task("widget"), scenario)
     oracle = load_cell_scenario(widget_scenario(tmp_path))
     check_detector_classes(task("widget"), oracle)  # the oracle knows every class
+
+
+@pytest.mark.slow
+def test_the_learned_detector_counts_the_packaged_scenes_looks(tmp_path):
+    """A look from the look pose with the learned detector counts what the label oracle
+    counts (model building's W^A: saw, 2 scissors, hammer; the tower's W^A: bottom, 2
+    bodies, peak), from colour and depth alone, and renders colour instead of labels."""
+    import yaml
+
+    from tamp.scenarios import resolve
+    from tamp.sim.lots.driver import CellDriver
+    from tamp.world.interface import Status
+
+    for name, want in (
+        ("model_building", "hammer=1,saw=1,scissors=2"),
+        ("tower", "body=2,bottom=1,peak=1"),
+    ):
+        data = yaml.safe_load(resolve(name, "lots_sim").read_text())
+        data["camera"]["detector"] = "learned"
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(yaml.safe_dump(data))
+        station = build_station(load_cell_scenario(path))
+        d = CellDriver(station)
+        look = d.run("LookAt(A)")
+        assert look.status is Status.SUCCESS and look.detail == want, name
+        assert d.run("LookAt(B)").detail == ""
+        p = station.perception
+        assert p.state(p.GetMyContextFromRoot(d.context)).render_kinds == 4  # colour + depth
