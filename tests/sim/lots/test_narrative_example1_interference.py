@@ -6,18 +6,19 @@ from __future__ import annotations
 
 import pytest
 
-from tests.sim.lots.narratives import kinds, run_narrative
+from tests.sim.lots.narratives import DETECTORS, kinds, run_narrative
 
 
 @pytest.mark.slow
 @pytest.mark.paper  # a whole narrative of the paper (2-5 min): make test-paper
-def test_example1_screwdriver_moved_early_is_replanned_and_completed():
+@pytest.mark.parametrize("detector", DETECTORS)
+def test_example1_screwdriver_moved_early_is_replanned_and_completed(detector):
     """The person puts the screwdriver into W^B before the first action: that is the
     person's p3 in the run's word. With Zhou et al.'s actions the robot cannot take it back:
     it replans (Alg. 3, from the automaton states the word can be in) and delivers the rest
     of the round (hammer, then the screws; the symbolic run's p1, p2, p2); the run's word is
     accepted. No object it placed is taken for gone while it carries the next one."""
-    r = run_narrative("example1_interference")
+    r = run_narrative("example1_interference", detector)
     assert r.satisfied and r.exit_code == 0 and r.word_accepted
     (moved,) = r.person_actions
     assert moved.outcome == "done" and moved.uid.startswith("screwdriver")

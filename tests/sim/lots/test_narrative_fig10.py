@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import pytest
 
-from tests.sim.lots.narratives import kinds, run_narrative
+from tests.sim.lots.narratives import DETECTORS, kinds, run_narrative
 
 
 @pytest.mark.slow
 @pytest.mark.paper  # a whole narrative of the paper (2-5 min): make test-paper
-def test_fig10_tower_stacked_three_high_despite_the_persons_changes_to_the_stack():
+@pytest.mark.parametrize("detector", DETECTORS)
+def test_fig10_tower_stacked_three_high_despite_the_persons_changes_to_the_stack(detector):
     """Fig. 10: the robot stacks the tower in W^B (the cell declares ``stack: [bottom, body,
     peak]``). The person builds the body on the bottom (10.4), takes it off the stack while
     the robot carries the peak (10.7), moves the robot's body from the stack back to W^A
@@ -18,7 +19,7 @@ def test_fig10_tower_stacked_three_high_despite_the_persons_changes_to_the_stack
     tower stands three high on the plant: the body resting on the bottom, the peak on the
     body (`tamp.sim.lots.stack.judge_stack`: each level's underside within 1 cm of the top
     of the one below, its centre over that one's footprint, within 10 deg of upright)."""
-    r = run_narrative("fig10")
+    r = run_narrative("fig10", detector)
     assert r.satisfied and r.exit_code == 0
     assert [a.outcome for a in r.person_actions] == ["done"] * 4
     built, taken, moved, car = r.person_actions

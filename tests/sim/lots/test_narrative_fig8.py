@@ -4,17 +4,18 @@ from __future__ import annotations
 
 import pytest
 
-from tests.sim.lots.narratives import kinds, run_narrative
+from tests.sim.lots.narratives import DETECTORS, kinds, run_narrative
 
 
 @pytest.mark.slow
 @pytest.mark.paper  # a whole narrative of the paper (2-5 min): make test-paper
-def test_fig8_scissors_moved_by_the_person_are_used_and_the_robots_pair_is_discarded():
+@pytest.mark.parametrize("detector", DETECTORS)
+def test_fig8_scissors_moved_by_the_person_are_used_and_the_robots_pair_is_discarded(detector):
     """The person moves the other scissors to W^B while the robot carries one; the robot
     drops its pair into the waste basket and brings the hammer. Carrying the hammer, it
     looks at W^B with the person's scissors hidden under the hammer's band: perception keeps
     them (occluded), so the robot places the hammer instead of taking the scissors for gone."""
-    r = run_narrative("fig8")
+    r = run_narrative("fig8", detector)
     assert r.satisfied and r.exit_code == 0
     (moved,) = r.person_actions
     assert moved.outcome == "done" and moved.uid.startswith("scissors")
