@@ -77,7 +77,7 @@ def register(subparsers) -> None:
         "geometric proposals (the shipped detector)",
     )
     p.add_argument("--steps", type=int, default=3000, help="segmentation: optimiser steps")
-    p.add_argument("--epochs", type=int, default=12, help="classifier: passes over the proposals")
+    p.add_argument("--epochs", type=int, default=18, help="classifier: passes over the proposals")
     p.add_argument(
         "--batch-size",
         type=int,

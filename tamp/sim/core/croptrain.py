@@ -49,7 +49,7 @@ OWN_SHARE = 0.5
 
 @dataclass(frozen=True)
 class TrainSettings:
-    epochs: int = 12
+    epochs: int = 18
     batch_size: int = 128
     lr: float = 3e-3
     width: int = 16
