@@ -154,11 +154,21 @@ class Detector:
             return UNKNOWN, score
         return self.outputs[i], score
 
-    def _at_size(self, rgb, depth, intrinsics, X_WC) -> list[tuple[np.ndarray, str, float]]:
+    def _at_size(
+        self, rgb, depth, intrinsics, X_WC, plane=None, exclude=None
+    ) -> list[tuple[np.ndarray, str, float]]:
         """(mask, class, score) of the objects of an image at the trained size (module
         docstring, steps 1-3)."""
         depth = np.where(np.isfinite(depth), depth, 0.0).astype(np.float32)
-        prop = proposals(depth, intrinsics, X_WC, jump=self.jump, min_pixels=self.min_pixels)
+        prop = proposals(
+            depth,
+            intrinsics,
+            X_WC,
+            jump=self.jump,
+            min_pixels=self.min_pixels,
+            plane=plane,
+            exclude=exclude,
+        )
 
         def named(masks):
             inputs = [
@@ -196,14 +206,26 @@ class Detector:
         return out
 
     def detect(
-        self, rgb: np.ndarray, depth: np.ndarray, intrinsics: Sequence[float], X_WC
+        self,
+        rgb: np.ndarray,
+        depth: np.ndarray,
+        intrinsics: Sequence[float],
+        X_WC,
+        *,
+        plane: float | None = None,
+        exclude: np.ndarray | None = None,
     ) -> list[ObjectDetection]:
         """The objects in one view: ``rgb`` (H x W x 3 or 4, uint8), ``depth`` (H x W,
         metres), ``intrinsics`` (fx, fy, cx, cy) of this image, ``X_WC`` the camera pose
-        (4 x 4 or a Drake ``RigidTransform``) from the arm's kinematics. An image ``k`` times
-        the trained size is subsampled; masks come back at its own size."""
+        (4 x 4 or a Drake ``RigidTransform``) from the arm's kinematics; what the cell knows
+        of its fixtures: ``plane``, the support's height when known (else estimated from the
+        view), ``exclude`` (H x W), pixels of fixtures that are never objects. An image ``k``
+        times the trained size is subsampled; masks come back at its own size."""
         k = _factor(depth.shape, self.size)
-        found = self._at_size(rgb[::k, ::k], depth[::k, ::k], _scaled(intrinsics, k), X_WC)
+        small = None if exclude is None else exclude[::k, ::k]
+        found = self._at_size(
+            rgb[::k, ::k], depth[::k, ::k], _scaled(intrinsics, k), X_WC, plane, small
+        )
         h, w = depth.shape
         depth = np.where(np.isfinite(depth), depth, 0.0)
         out = []

@@ -294,16 +294,23 @@ def proposals(
     above: float = ABOVE_PLANE,
     jump: float = DEPTH_JUMP,
     min_pixels: int = MIN_PIXELS,
+    plane: float | None = None,
+    exclude: np.ndarray | None = None,
 ) -> Proposals:
     """Instance candidates from geometry (module docstring): the components of the pixels
-    more than ``above`` over the view's support plane, split where depth jumps by more than
-    ``jump``, each at least ``min_pixels`` large."""
+    more than ``above`` over the support plane, split where depth jumps by more than
+    ``jump``, each at least ``min_pixels`` large. ``plane``: the support's known height (a
+    workcell's tray floor), else estimated from the view (`support_plane`); ``exclude``:
+    pixels of known fixtures (a tray's walls), never part of an object."""
     depth = np.where(np.isfinite(depth), depth, 0.0).astype(np.float32)
     z = world_heights(depth, intrinsics, X_WC)
-    plane = support_plane(z)
+    if plane is None:
+        plane = support_plane(z)
     if plane is None:
         return Proposals([], None, z)
     rel = z - plane
     with np.errstate(invalid="ignore"):
         fg = rel > above
+    if exclude is not None:
+        fg &= ~exclude
     return Proposals(split_at_jumps(fg, depth, jump=jump, min_pixels=min_pixels), plane, rel)

@@ -71,7 +71,7 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import EventStatus, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I, ImageRgba8U
 
-from tamp.grasp.pinhole import camera_to_pixel
+from tamp.grasp.pinhole import camera_to_pixel, pixel_to_camera
 from tamp.sim.core.detection_noise import LEVELS, perturb
 from tamp.sim.core.instances import ObjectDetection, located
 from tamp.sim.core.messages import Detection, Observation, Seen, TargetCrop, ViewRequest
@@ -82,6 +82,8 @@ from tamp.sim.core.tracks import Tracks, update
 OCCLUSION_TOLERANCE = 0.02
 #: half-size of the patch around a remembered point's pixel that is checked for cover (m)
 OCCLUSION_WINDOW = 0.015
+#: how far beyond a fixture's rim (m) pixels are still taken for the rim (depth noise, edges)
+RIM_MARGIN = 0.004
 #: the class reported in hand when the object there is not the grasp's tracked target
 UNKNOWN = "unknown"
 
@@ -102,16 +104,42 @@ class DetectorNoise:
 @dataclass(frozen=True)
 class Region:
     """A workspace's rectangle on the table (world x, y; m): a view of that workspace counts
-    and remembers only the instances whose world centroid lies in it."""
+    and remembers only the instances whose world centroid lies in it. What the cell knows of
+    its fixtures there, for the learned detector: ``floor``, the height objects rest on
+    when it is not the view's own lowest surface (a tray's floor; None: the detector finds
+    the support in the view), and ``rim``, the (inner, outer) sides of a square wall round
+    the rectangle's centre (a tray's walls), whose pixels are never an object's."""
 
     center: tuple[float, float]
     size: tuple[float, float]
+    floor: float | None = None
+    rim: tuple[float, float] | None = None
 
     def contains(self, p) -> bool:
         return bool(
             abs(p[0] - self.center[0]) <= self.size[0] / 2
             and abs(p[1] - self.center[1]) <= self.size[1] / 2
         )
+
+    def fixtures(self, depth: np.ndarray, intrinsics, X_WC) -> dict[str, Any]:
+        """The learned detector's keyword arguments for a view of this region (`floor` as
+        ``plane``, the pixels whose world point lies on the `rim` as ``exclude``): empty
+        when the region has neither."""
+        out: dict[str, Any] = {}
+        if self.floor is not None:
+            out["plane"] = self.floor
+        if self.rim is not None:
+            h, w = depth.shape
+            vs, us = np.mgrid[0:h, 0:w]
+            d = np.where(np.isfinite(depth) & (depth > 0), depth, np.nan)
+            p = X_WC.multiply(pixel_to_camera(us.ravel(), vs.ravel(), d.ravel(), intrinsics))
+            r = np.maximum(np.abs(p[0] - self.center[0]), np.abs(p[1] - self.center[1]))
+            inner, outer = self.rim
+            with np.errstate(invalid="ignore"):
+                out["exclude"] = (
+                    (r >= inner / 2 - RIM_MARGIN) & (r <= outer / 2 + RIM_MARGIN)
+                ).reshape(h, w)
+        return out
 
 
 @dataclass(frozen=True)
@@ -142,12 +170,13 @@ class LabelOracle:
 
 class ImageDetector(Protocol):
     """What a learned detector gives `Perception` (`tamp.sim.core.detector.Detector`): the
-    objects of one colour + depth view placed with the intrinsics and the camera pose."""
+    objects of one colour + depth view placed with the intrinsics and the camera pose
+    (``known``: the workspace's fixtures, `Region.fixtures`)."""
 
     classes: tuple[str, ...]
 
     def detect(
-        self, rgb: np.ndarray, depth: np.ndarray, intrinsics: Sequence[float], X_WC
+        self, rgb: np.ndarray, depth: np.ndarray, intrinsics: Sequence[float], X_WC, **known
     ) -> list[ObjectDetection]: ...
 
 
@@ -543,7 +572,9 @@ class Perception(LeafSystem):
         else:
             # unplaced (no camera pose): detected in the camera's frame, then not placed
             pose = req.camera_pose if req.camera_pose is not None else RigidTransform()
-            found = self._source.detect(image, depth, self._intrinsics, pose)
+            region = self._regions.get(req.side)
+            known = region.fixtures(depth, self._intrinsics, pose) if region else {}
+            found = self._source.detect(image, depth, self._intrinsics, pose, **known)
             raw = on_table(found, depth, intrinsics, X_WC, **kw)
         if self._noise is None:
             return raw

@@ -75,6 +75,7 @@ REACH = (0.25, 0.75)
 BASKET_HALF = 0.12  # lots_waste_basket.sdf: 0.24 x 0.24 m
 TRAY_FLOOR = 0.01  # lots_tray.sdf: its floor's top above the table (m)
 TRAY_INSIDE = 0.24  # lots_tray.sdf: the sides of its floor between the walls (m)
+TRAY_OUTSIDE = 0.26  # lots_tray.sdf: the sides of its outer walls (m)
 #: the sides of a workspace (m): one wrist-camera view covers it
 WORKSPACE_SIDES = (0.1, 0.4)
 #: the ``perturbation`` fields this workcell simulates: start poses of the objects and their

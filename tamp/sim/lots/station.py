@@ -51,7 +51,7 @@ from tamp.sim.lots.kinematics import ArmKinematics
 from tamp.sim.lots.person import add_person, staged_objects
 from tamp.sim.lots.plant import CellPlant, add_cell_plant
 from tamp.sim.lots.safety import SafetyMonitor
-from tamp.sim.lots.scenario import CellScenario
+from tamp.sim.lots.scenario import TRAY_FLOOR, TRAY_INSIDE, TRAY_OUTSIDE, CellScenario, Workspace
 from tamp.sim.lots.skills import PandaSkillController
 
 
@@ -134,6 +134,14 @@ def detector_noise(scenario: CellScenario) -> DetectorNoise | None:
     return DetectorNoise(level, scenario.sample.seed)
 
 
+def region(w: Workspace) -> Region:
+    """What perception knows of workspace ``w``: its rectangle and, with a tray, the tray's
+    floor height and walls (a fixture of the cell, as the arm's own links are)."""
+    if not w.tray:
+        return Region(w.center, w.size)
+    return Region(w.center, w.size, floor=TRAY_FLOOR, rim=(TRAY_INSIDE, TRAY_OUTSIDE))
+
+
 @functools.cache
 def shipped_detector() -> Detector:
     """The learned detector of the shipped weights, loaded once per process (stations of a
@@ -179,7 +187,7 @@ def build_station(
             period=scenario.control.perception_period,
             intrinsics=intrinsics,
             noise=detector_noise(scenario),
-            regions={side: Region(w.center, w.size) for side, w in scenario.workspaces.items()},
+            regions={side: region(w) for side, w in scenario.workspaces.items()},
         )
     )
     depth = noisy_depth(builder, scenario, camera.depth_image_32F_output_port())

@@ -184,3 +184,19 @@ def test_perception_applies_the_seeded_noise_before_tracking():
     noisy = [d for view in runs[0] for d in view]
     assert len({d.track for d in noisy}) > len(clean)  # fresh identities, false positives
     assert any(len(view) != len(clean) for view in runs[0])
+
+
+def test_a_regions_fixtures_give_the_detector_its_floor_and_the_rims_pixels():
+    """`Region.fixtures`: a tray's floor height as the detector's support plane and the
+    pixels whose world point lies on its walls (the rim's square ring) as excluded."""
+    tray = Region((0.5, -0.25), (0.34, 0.34), floor=0.01, rim=(0.24, 0.26))
+    depth = np.full((H, W), TABLE, np.float32)
+    known = tray.fixtures(depth, K, X_LOOK)
+    assert known["plane"] == 0.01
+    ex = known["exclude"]
+    # the camera looks straight down at the centre: 1 px = TABLE / fx metres on the table
+    px = TABLE / K[0]
+    u_wall = int(round(K[2] + 0.125 / px))  # 12.5 cm beside the centre: on the wall
+    assert ex[int(K[3]), u_wall] and not ex[int(K[3]), int(K[2])]  # the floor is not a wall
+    assert not ex[int(K[3]), int(round(K[2] + 0.15 / px))]  # beyond the wall: the table
+    assert Region((0.5, -0.25), (0.34, 0.34)).fixtures(depth, K, X_LOOK) == {}

@@ -128,3 +128,30 @@ def test_the_learned_detector_counts_the_packaged_scenes_looks(tmp_path):
         assert d.run("LookAt(B)").detail == ""
         p = station.perception
         assert p.state(p.GetMyContextFromRoot(d.context)).render_kinds == 4  # colour + depth
+
+
+@pytest.mark.slow
+def test_the_learned_detector_sees_into_example1s_tray_and_not_its_walls(tmp_path):
+    """W^B of Example 1 holds a tray (walls 3 cm high, floor 1 cm up): the cell tells
+    perception the floor's height and where the walls stand (`Region.fixtures`), so the
+    empty tray counts nothing and what lies in it counts by class."""
+    import yaml
+    from pydrake.math import RigidTransform, RotationMatrix
+
+    from tamp.scenarios import resolve
+    from tamp.sim.lots.driver import CellDriver
+
+    data = yaml.safe_load(resolve("example1", "lots_sim").read_text())
+    data["camera"]["detector"] = "learned"
+    path = tmp_path / "example1.yaml"
+    path.write_text(yaml.safe_dump(data))
+    station = build_station(load_cell_scenario(path))
+    d = CellDriver(station)
+    assert d.run("LookAt(B)").detail == ""  # the walls are no screwdrivers
+    pc = d.plant_context()
+    for uid, (x, y) in (("hammer_0", (0.47, -0.27)), ("screw_0", (0.56, -0.18))):
+        X = RigidTransform(RotationMatrix.MakeZRotation(0.3), [x, y, 0.012])
+        station.plant.SetFreeBodyPose(pc, station.cell.bodies[uid], X)
+    d.advance(0.5)
+    assert d.run("LookAt(B)").detail == "hammer=1,screw=1"
+    assert d.run("LookAt(A)").detail == "screw=1,screwdriver=1"
