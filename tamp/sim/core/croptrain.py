@@ -39,7 +39,8 @@ from tamp.sim.core.instances import (
     proposals,
     split_at_jumps,
 )
-from tamp.sim.core.segdata import STUFF, UNKNOWN, read_info, read_scene, scene_file
+from tamp.sim.core.segdata import STUFF, UNKNOWN, read_scene, scene_file
+from tamp.sim.core.segtrain import begin_training
 
 #: an object belongs to a proposal when this share of its pixels lies in it
 MEMBER_SHARE = 0.3
@@ -213,13 +214,7 @@ def train(
     log: Callable[[str], None] | None = None,
 ) -> dict:
     """Train on the training scenes of ``data``; writes ``out/final.pt``; returns a summary."""
-    info = read_info(data)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    if settings.threads > 0:
-        torch.set_num_threads(settings.threads)
-    torch.manual_seed(settings.seed)
-    rng = np.random.default_rng(settings.seed)
+    info, out, rng = begin_training(data, out, settings.threads, settings.seed)
     cpu0, t0 = time.process_time(), time.perf_counter()
     names = list(info.classes)
     outputs = cropnet.output_names([n for n in names if n not in STUFF])

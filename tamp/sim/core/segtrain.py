@@ -31,7 +31,16 @@ import torch
 import torch.nn.functional as F
 
 from tamp.sim.core.instances import IN_HAND_DEPTH
-from tamp.sim.core.segdata import HAND, STUFF, TABLE, UNKNOWN, read_info, read_scene, scene_file
+from tamp.sim.core.segdata import (
+    HAND,
+    STUFF,
+    TABLE,
+    UNKNOWN,
+    DatasetInfo,
+    read_info,
+    read_scene,
+    scene_file,
+)
 from tamp.sim.core.segnet import SegNet, parameter_count, prepare, save
 
 #: a predicted instance matches a true one at this mask IoU or more
@@ -107,6 +116,21 @@ def _batch(views, idx, rng: np.random.Generator, crop: tuple[int, int]):
     return torch.from_numpy(np.stack(xs)), torch.from_numpy(np.stack(ys).astype(np.int64))
 
 
+def begin_training(
+    data: str | Path, out: str | Path, threads: int, seed: int
+) -> tuple[DatasetInfo, Path, np.random.Generator]:
+    """What every detector training starts with (`train`, `tamp.sim.core.croptrain.train`):
+    the rendered set's description, the output folder (made), torch's threads (0: its
+    default) and seed set, and the run's random generator (seeded alike)."""
+    info = read_info(data)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    if threads > 0:
+        torch.set_num_threads(threads)
+    torch.manual_seed(seed)
+    return info, out, np.random.default_rng(seed)
+
+
 def train(
     data: str | Path,
     out: str | Path,
@@ -115,13 +139,7 @@ def train(
     log: Callable[[str], None] | None = None,
 ) -> dict:
     """Train on the training scenes of ``data``; writes ``out/final.pt``; returns a summary."""
-    info = read_info(data)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    if settings.threads > 0:
-        torch.set_num_threads(settings.threads)
-    torch.manual_seed(settings.seed)
-    rng = np.random.default_rng(settings.seed)
+    info, out, rng = begin_training(data, out, settings.threads, settings.seed)
     device = _device(settings.device)
     views = load_views(data, info.train)
     n = len(info.classes)
