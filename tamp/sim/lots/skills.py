@@ -733,11 +733,16 @@ class PandaSkillController(LeafSystem):
         low = abs(p_new[2] - goal[2]) < 0.003
         if low and s.bottom_t is None:
             s.bottom_t = t
+        # stopping where the arm stands takes the joints from last period's velocity (the
+        # one the command stream carries: ``s.v``) to rest in one period; that velocity must
+        # be within one period's acceleration. Near the goal the TCP hardly moves, but the
+        # joint-centring null space can still turn joints (a settle from |v| <= a dt while
+        # |s.v| was larger commanded joint 2 at -8.1 rad/s^2, over Franka's 7.5)
         settled = (
             low
             and float(np.linalg.norm(goal - p_new)) < 0.003
             and float(np.linalg.norm(v_new)) < 0.02
-            and bool(np.all(np.abs(v) <= self.kin.amax * self.dt))
+            and bool(np.all(np.abs(s.v) <= self.kin.amax * self.dt))
         )
         if settled and s.sure is not None:
             s.steps, s.step_t0, s.servo = s.steps[1:], None, None
