@@ -12,6 +12,7 @@ Drake) happen inside the handlers.
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 
 from tamp.commands.output import print_json, progress
@@ -134,8 +135,17 @@ def run_train(args) -> int:
         raise InputError("--steps, --epochs and --batch-size must be >= 1")
     if args.lr <= 0 or args.width < 4:
         raise InputError("--lr must be > 0 and --width >= 4")
-    if args.kind == "classifier":
-        return _train_classifier(args)
+    train, done = _classifier(args) if args.kind == "classifier" else _segmenter(args)
+    summary = train(args.data, args.out, log=None if args.quiet else (lambda m: progress(m)))
+    if args.json:
+        print_json(summary)
+    else:
+        print(f"{done(summary)}; weights {summary['weights']} ({summary['parameters']} parameters)")
+    return 0
+
+
+def _segmenter(args):
+    """(the training call, its summary line) of the segmentation network."""
     from tamp.sim.core.segtrain import TrainSettings, train
 
     settings = TrainSettings(
@@ -148,23 +158,13 @@ def run_train(args) -> int:
         seed=args.seed,
         init=args.init,
     )
-    summary = train(
-        args.data,
-        args.out,
-        settings,
-        log=None if args.quiet else (lambda m: progress(m)),
-    )
-    if args.json:
-        print_json(summary)
-    else:
-        print(
-            f"{summary['steps']} steps in {summary['seconds']:.0f} s on {summary['device']}; "
-            f"weights {summary['weights']} ({summary['parameters']} parameters)"
-        )
-    return 0
+    return partial(
+        train, settings=settings
+    ), lambda r: f"{r['steps']} steps in {r['seconds']:.0f} s on {r['device']}"
 
 
-def _train_classifier(args) -> int:
+def _classifier(args):
+    """(the training call, its summary line) of the crop classifier (``--kind classifier``)."""
     from tamp.sim.core.croptrain import TrainSettings, train
 
     if args.init:
@@ -179,18 +179,13 @@ def _train_classifier(args) -> int:
         threads=args.threads,
         seed=args.seed,
     )
-    summary = train(
-        args.data, args.out, settings, log=None if args.quiet else (lambda m: progress(m))
+    return (
+        partial(train, settings=settings),
+        lambda r: (
+            f"{r['epochs']} epochs ({r['proposals']} proposals) in {r['cpu_seconds']:.0f} s "
+            f"CPU; unknown below {r['unknown_below']}"
+        ),
     )
-    if args.json:
-        print_json(summary)
-    else:
-        print(
-            f"{summary['epochs']} epochs ({summary['proposals']} proposals) in "
-            f"{summary['cpu_seconds']:.0f} s CPU; unknown below {summary['unknown_below']}; "
-            f"weights {summary['weights']} ({summary['parameters']} parameters)"
-        )
-    return 0
 
 
 def run_eval(args) -> int:

@@ -208,6 +208,9 @@ def on_table(
         mask = d.mask & far
         if int(mask.sum()) < min_pixels:
             continue
+        if placed and not (d.mask & ~far).any():  # placed by the detector, nothing cut
+            out.append(d)
+            continue
         where = located(mask, depth, intrinsics if placed else None, X_WC)
         if where is not None:
             out.append(dataclasses.replace(d, mask=mask, **where))
