@@ -17,6 +17,8 @@ CAUSES: dict[str, str] = {
     "unreachable": "no place to stand, no base path, or no arm pose for the skill",
     "area_occupied": "the place to put the object on is occupied",
     "placement_off": "an object does not rest in its goal area on the plant",
+    "disturbed": "an object ended knocked over or on top of another, or moved though the "
+    "robot never picked it (SMP-MRO cell)",
     "collision": "a robot's chassis or lever touched something (refinement workcell)",
     "order_violated": "the measured event order breaks the program's ordering property",
     "task_failed": "the controller gave up with no skill failure to blame",
@@ -24,14 +26,20 @@ CAUSES: dict[str, str] = {
 }
 
 
-def run_cause(status: str, skill_causes: list[str], plant_disagrees: bool) -> str | None:
+def run_cause(
+    status: str, skill_causes: list[str], plant_disagrees: bool, disturbed: bool = False
+) -> str | None:
     """The cause of a run: None on SUCCESS; ``timeout``; ``placement_off`` when the
-    controller succeeded but the plant disagrees; else the last skill failure's cause (the
-    one the controller could not recover from), or ``task_failed``."""
+    controller succeeded but the plant disagrees about the goals; ``disturbed`` when it
+    succeeded, the goals hold, but the plant shows an object left disturbed; else the last
+    skill failure's cause (the one the controller could not recover from), or
+    ``task_failed``."""
     if status == "SUCCESS":
         return None
     if status == "TIMEOUT":
         return "timeout"
     if plant_disagrees:
         return "placement_off"
+    if disturbed:
+        return "disturbed"
     return skill_causes[-1] if skill_causes else "task_failed"

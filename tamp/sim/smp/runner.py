@@ -24,11 +24,15 @@ only be known when the time comes, except at time 0, which the scenario checks r
 
 The run ends when the BtExecutor's tree returns SUCCESS or FAILURE, or at
 ``max_sim_time``. Its status is decided once, by `judge`, from the tree's result AND the
-plant: SUCCESS only when the tree succeeded and every goal object rests in its final goal
+plant: SUCCESS only when the tree succeeded, every goal object rests in its final goal
 area in 3-D (`tamp.sim.smp.placement.why_not_in`: inside the area in the plane and upright
-on the floor, not on top of another object). `SimResult` (a `RunResult`: ``ok`` and the exit
+on the floor, not on top of another object), and no object, goal or not, appeared ones
+included, was left disturbed (`tamp.sim.smp.placement.disturbances`: knocked over, on top
+of another object, or moved though the robot never picked it, measured from where the
+scenario or the person last put it). `SimResult` (a `RunResult`: ``ok`` and the exit
 code follow the status and nothing else) also has the executed actions with sim start/end
-times, final plant poses of the objects, sim time, wall time and the real-time factor.
+times, final plant poses of the objects, the disturbed objects, sim time, wall time and the
+real-time factor.
 """
 
 from __future__ import annotations
@@ -46,10 +50,17 @@ from tamp.sim.core.outcome import run_cause
 from tamp.sim.core.runner import make_simulator, run_in_chunks
 from tamp.sim.core.workcell import RunResult
 from tamp.sim.smp.ik import grasp_transform
-from tamp.sim.smp.placement import Body, blocker, free_spot, why_not_in
+from tamp.sim.smp.placement import (
+    Body,
+    Disturbance,
+    blocker,
+    disturbances,
+    free_spot,
+    why_not_in,
+)
 from tamp.sim.smp.robot import ROBOT
 from tamp.sim.smp.station import SmpStation
-from tamp.world.events import AfterAction, Appear, AtTick, AtTime, format_call
+from tamp.world.events import AfterAction, Appear, AtTick, AtTime, format_call, parse_call
 from tamp.world.interface import Status
 
 
@@ -65,19 +76,37 @@ class ObjectPose:
 
 
 def judge(
-    tree: Status | None, tree_reason: str, goal_failures: list[str], limit: float
+    tree: Status | None,
+    tree_reason: str,
+    goal_failures: list[str],
+    limit: float,
+    disturbed: list[str] | None = None,
 ) -> tuple[str, str]:
     """The run's (status, reason), the one place that decides them: TIMEOUT when the tree
     gave no result within ``limit`` s, FAILURE when it failed, or when it succeeded but the
-    plant disagrees (``goal_failures``: why goal objects do not rest in their areas),
-    else SUCCESS."""
+    plant disagrees (``goal_failures``: why goal objects do not rest in their areas;
+    ``disturbed``: objects left knocked over, on top of another or moved unpicked,
+    `tamp.sim.smp.placement.Disturbance.reason`), else SUCCESS."""
     if tree is None:
         return "TIMEOUT", f"no result within {limit:g} s of sim time"
     if tree is not Status.SUCCESS:
         return "FAILURE", tree_reason or "tree failed"
-    if goal_failures:
-        return "FAILURE", "the tree succeeded but on the plant " + "; ".join(goal_failures)
+    wrong = [*goal_failures, *(disturbed or [])]
+    if wrong:
+        return "FAILURE", "the tree succeeded but on the plant " + "; ".join(wrong)
     return "SUCCESS", tree_reason or "every goal reached"
+
+
+def picked_objects(actions: list[ActionLog]) -> set[str]:
+    """The objects of the executed actions' successful ``Pick``s: what the robot moved on
+    purpose (PA-BT's obstacle relocation included)."""
+    out = set()
+    for a in actions:
+        if a.status == "SUCCESS":
+            name, args = parse_call(a.action)
+            if name == "Pick" and args:
+                out.add(args[0])
+    return out
 
 
 @dataclass(kw_only=True)
@@ -98,6 +127,8 @@ class SimResult(RunResult):
     base_path: list[tuple[float, float, float]] = field(default_factory=list)
     appeared: dict[str, float] = field(default_factory=dict)
     goals: dict[str, bool] = field(default_factory=dict)
+    #: objects left knocked over, on top of another, or moved unpicked (`judge` fails on any)
+    disturbed: list[Disturbance] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     #: every skill failure: (sim time, action, cause, detail), recovered ones included
     failures: list[tuple[float, str, str, str]] = field(default_factory=list)
@@ -118,6 +149,7 @@ class SimResult(RunResult):
             "actions": [a.to_json() for a in self.actions],
             "final_poses": {k: v.to_json() for k, v in sorted(self.final_poses.items())},
             "goals": self.goals,
+            "disturbed": [d.to_json() for d in self.disturbed],
             "appeared": {k: round(v, 3) for k, v in self.appeared.items()},
             "cpu_realtime_factor": round(cpu_rtf, 2) if math.isfinite(cpu_rtf) else None,
             "warnings": list(self.warnings),
@@ -130,8 +162,9 @@ class SimResult(RunResult):
         }
 
     def details_lines(self) -> list[str]:
-        """The plan, the action table, the final plant poses, the goals on the plant,
-        warnings, skill failures and, for a perturbed scenario, what the seed drew."""
+        """The plan, the action table, the final plant poses, the goals on the plant, the
+        disturbed objects, warnings, skill failures and, for a perturbed scenario, what the
+        seed drew."""
         checks = f"(verified: {', '.join(self.verified)})" if self.verified else "(not verified)"
         lines = [
             f"scenario {self.scenario}: order {' -> '.join(self.order)}  {checks}",
@@ -145,6 +178,7 @@ class SimResult(RunResult):
             lines.append(f"  {uid:<4} x={p.x:7.3f} y={p.y:7.3f} z={p.z:6.3f} yaw={p.yaw:6.2f}")
         for goal, inside in self.goals.items():
             lines.append(f"  {goal}: {'inside' if inside else 'NOT inside'}")
+        lines += [f"  disturbed: {d.reason}" for d in self.disturbed]
         lines += [f"warning: {w}" for w in self.warnings]
         for t, action, cause, detail in self.failures:
             lines.append(f"skill failure: t={t:.2f} s {action}: {cause} ({detail})")
@@ -179,6 +213,8 @@ class SimRunner:
         self._handled: set[str] = set()  # appearances done (or impossible)
         self.reach = system.scenario.demo.domain().reach  # IsRobotCloseTo's d (§V-A2)
         self.base_path: list[tuple[float, float, float]] = []
+        #: object -> (x, y) where the scenario or the person last put it (`disturbances`)
+        self.put: dict[str, tuple[float, float]] = {}
 
     # -- between-step work -------------------------------------------------------------------
     def _sync_grasp(self) -> None:
@@ -223,6 +259,7 @@ class SimRunner:
             s.plant.SetFreeBodyPose(self.plant_context, body, X)
             s.plant.SetFreeBodySpatialVelocity(self.plant_context, body, SpatialVelocity.Zero())
             self.appeared[obj.id] = t
+            self.put[obj.id] = spot
 
     def _where_to_put(self, obj, t: float) -> tuple[float, float] | None:
         """The appearance's place, or the nearest free spot when something occupies it (with
@@ -289,6 +326,15 @@ class SimRunner:
             out[uid] = ObjectPose(float(p[0]), float(p[1]), float(p[2]), float(yaw))
         return out
 
+    def object_tilts(self) -> dict[str, float]:
+        """Each object's tilt now (rad between its own vertical axis and the world's)."""
+        s = self.system
+        out = {}
+        for uid, body in s.bodies.items():
+            R = s.plant.EvalBodyPoseInWorld(self.plant_context, body).rotation().matrix()
+            out[uid] = float(math.acos(max(-1.0, min(1.0, R[2, 2]))))
+        return out
+
     def robot_pose(self) -> tuple[float, float, float]:
         q = self.system.plant.GetPositions(self.plant_context, self.system.robot)
         return float(q[0]), float(q[1]), float(q[2])
@@ -304,6 +350,10 @@ class SimRunner:
         s = self.system
         limit = s.scenario.executor.max_sim_time if max_sim_time is None else max_sim_time
         ex_context = s.executor.GetMyContextFromRoot(self.root)
+        start = self.object_poses()
+        self.put = {
+            o.id: (start[o.id].x, start[o.id].y) for o in s.scenario.objects if o.appear is None
+        }
         self._appearances(self.root.get_time(), [])  # what is there from the start (tick 0)
         next_path = self.root.get_time()
 
@@ -332,12 +382,16 @@ class SimRunner:
         poses = self.object_poses()
         why = self.goal_check(poses)
         failures = [w for w in why.values() if w is not None]
-        status, reason = judge(ex.result, tree_reason, failures, limit)
+        disturbed = self.disturbance_check(poses, picked_objects(ex.log))
+        status, reason = judge(
+            ex.result, tree_reason, failures, limit, [d.reason for d in disturbed]
+        )
         skill_failures = list(s.skills.failures(s.skills.GetMyContextFromRoot(self.root)))
         cause = run_cause(
             status,
             [c for _, _, c, _ in skill_failures],
             plant_disagrees=ex.result is Status.SUCCESS and bool(failures),
+            disturbed=ex.result is Status.SUCCESS and bool(disturbed),
         )
         return SimResult(
             scenario=s.scenario.name,
@@ -352,6 +406,7 @@ class SimRunner:
             base_path=list(self.base_path),
             appeared=dict(self.appeared),
             goals={k: w is None for k, w in why.items()},
+            disturbed=disturbed,
             warnings=list(self.warnings),
             cause=cause,
             failures=skill_failures,
@@ -368,12 +423,30 @@ class SimRunner:
         final: dict[str, str] = {}
         for g in s.scenario.demo.goals:
             final[g.object] = g.area.name
-        bodies = [Body(uid, p.x, p.y, p.z, s.scenario.object(uid).kind) for uid, p in poses.items()]
+        bodies = self._bodies(poses)
         by_id = {b.id: b for b in bodies}
         return {
             f"{uid}@{area}": why_not_in(by_id[uid], s.areas[area], bodies)
             for uid, area in final.items()
         }
+
+    def disturbance_check(
+        self, poses: dict[str, ObjectPose], picked: set[str]
+    ) -> list[Disturbance]:
+        """Every object present (put somewhere by the scenario or the person, or inside the
+        workspace), goal or not, left disturbed (`tamp.sim.smp.placement.disturbances`);
+        ``picked``: the objects the robot picked (`picked_objects`)."""
+        s = self.system
+        present = [
+            b for b in self._bodies(poses) if b.id in self.put or s.scenario.in_workspace(b.x, b.y)
+        ]
+        return disturbances(present, self.put, picked)
+
+    def _bodies(self, poses: dict[str, ObjectPose]) -> list[Body]:
+        """``poses`` as `Body`s with the objects' tilts now."""
+        kind = self.system.scenario.object
+        tilts = self.object_tilts()
+        return [Body(u, p.x, p.y, p.z, kind(u).kind, tilts[u]) for u, p in poses.items()]
 
     def goals_on_plant(self, poses: dict[str, ObjectPose] | None = None) -> dict[str, bool]:
         """For each goal object, whether it rests in its final goal area (`goal_check`)."""

@@ -143,3 +143,35 @@ def test_one_diagram_runs_twice_in_two_contexts_alike(tmp_path):
     for key in timing:
         ja.pop(key), jb.pop(key)
     assert a.status == "SUCCESS" and ja == jb
+
+
+def test_an_obstacle_knocked_over_is_a_failure_though_every_goal_holds(tmp_path):
+    """Every object is judged, not only the goal objects: Y, put down by the person at the
+    start and never picked, is found lying 10 cm from where it was put once the tree has
+    succeeded. O0 rests in l_0 (the goal holds); the run fails with cause ``disturbed``,
+    naming Y and what happened to it, in the text report and the JSON."""
+    from pydrake.math import RigidTransform, RollPitchYaw
+
+    path = write_one_bottle(
+        tmp_path, "objects:\n  - {id: Y, model: obstacle}\nappear: ['Y@1.5,-0.5@0']\n"
+    )
+    scenario, system, runner = verified_runner(path)
+    ex_ctx = system.executor.GetMyContextFromRoot(runner.root)
+    radius = scenario.object("Y").kind.radius
+
+    def knock_over_at_the_end(t: float) -> None:
+        if system.executor.state(ex_ctx).result is None:
+            return
+        X = RigidTransform(RollPitchYaw(math.pi / 2, 0.0, 0.0), [1.6, -0.5, radius])
+        system.plant.SetFreeBodyPose(runner.plant_context, system.bodies["Y"], X)
+
+    result = runner.run(on_chunk=knock_over_at_the_end)
+    assert system.executor.state(ex_ctx).result.value == "SUCCESS"  # the tree's view
+    assert result.goals == {"O0@L0": True} and result.appeared == {"Y": 0.0}
+    assert result.status == "FAILURE" and result.cause == "disturbed" and not result.ok
+    why = "Y knocked over (tilt 90°), moved 10.0 cm though the robot never picked it"
+    assert result.reason == f"the tree succeeded but on the plant {why}"
+    (d,) = result.to_json()["disturbed"]
+    assert d["object"] == "Y" and d["reason"] == why and d["tilt_deg"] == pytest.approx(90.0)
+    assert d["moved"] == pytest.approx(0.1, abs=1e-3) and d["on"] == []
+    assert f"  disturbed: {why}" in result.details_lines()

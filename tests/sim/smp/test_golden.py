@@ -15,7 +15,9 @@ Added later (nothing a run does changed; every other value was compared equal be
 the files were rewritten): ``cause`` (None on success), ``task_time``, ``failures`` (the
 lost grasp's ``injected_failure``), ``grasp`` (weld), ``perception`` (truth), ``seed`` (0)
 and ``perturbation`` (nothing drawn: the packaged cases have no section; its
-``detector`` key, null here, came with the noisy-detector perturbation).
+``detector`` key, null here, came with the noisy-detector perturbation). ``disturbed``
+(objects left knocked over, on top of another or moved unpicked: none in these runs) came
+with the judge reading every object, not only the goal objects.
 
 Every workcell's run document now starts with the common keys of
 `tamp.sim.core.workcell.RunResult`: ``schema`` and ``workcell`` are new (checked, not
