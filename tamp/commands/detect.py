@@ -20,8 +20,9 @@ from tamp.errors import InputError
 
 
 def workcell_catalogue():
-    """(the catalogue's `SegClass`es, the gripper and hand `Fixtures`): the LOTS cell's
-    classes with their palettes, then the SMP-MRO cell's packaged object kinds."""
+    """(the catalogue's `SegClass`es, the gripper, hand and tray `Fixtures`): the LOTS
+    cell's classes with their palettes, then the SMP-MRO cell's packaged object kinds; the
+    tray is Example 1's basket in W^B."""
     from tamp.sim.core.models import sdf_path
     from tamp.sim.core.segdata import object_class, read_fixtures
     from tamp.sim.lots.catalogue import ARM, CLASSES, PERSON
@@ -40,6 +41,7 @@ def workcell_catalogue():
         camera_frame=ARM.camera_frame,
         tcp_frame=ARM.tcp_frame,
         person_link=PERSON.hand_body,
+        tray_sdf=sdf_path("lots_tray"),
     )
     return classes, fixtures
 

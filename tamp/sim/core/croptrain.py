@@ -2,10 +2,12 @@
 
 Samples: the instance proposals (`tamp.sim.core.instances.proposals`) of every view of the
 training scenes of a set rendered by ``tamp detect render``, exactly as the detector makes
-them, labelled from the renders' instance images (`label_proposal`): the class of the one
-object that fills it, ``several`` when two or more objects each have 30 % of their pixels in
-it (and then its finer split, as the detector makes it, adds samples too), ``none`` when less
-than half of it is an object. The held-out (test) scenes are never read.
+them (in a view of the tray with its floor as the plane and its walls left out, as the cell
+gives them at run time: `segdata.view_fixtures`), labelled from the renders' instance images
+(`label_proposal`): the class of the one object that fills it, ``several`` when two or more
+objects each have 30 % of their pixels in it (and then its finer split, as the detector makes
+it, adds samples too), ``none`` when less than half of it is an object. The held-out (test)
+scenes are never read.
 
 Training: cross-entropy weighted per output (square root of the median count over the
 output's, clipped to [0.2, 5]: ``several`` and the rarer classes would otherwise be
@@ -39,7 +41,7 @@ from tamp.sim.core.instances import (
     proposals,
     split_at_jumps,
 )
-from tamp.sim.core.segdata import STUFF, UNKNOWN, read_scene, scene_file
+from tamp.sim.core.segdata import STUFF, UNKNOWN, read_scene, scene_file, view_fixtures
 from tamp.sim.core.segtrain import begin_training
 
 #: an object belongs to a proposal when this share of its pixels lies in it
@@ -86,14 +88,16 @@ def label_proposal(mask: np.ndarray, inst: np.ndarray, inst_cls: np.ndarray, out
 
 
 def view_samples(
-    rgb, depth, inst, inst_cls, intrinsics, X_WC, outputs, copies: int = 1, rng=None
+    rgb, depth, inst, inst_cls, intrinsics, X_WC, outputs, copies: int = 1, rng=None, known=None
 ) -> list[tuple[np.ndarray, np.ndarray, int]]:
     """(crop, features, label) of every proposal of one view, and of the finer split of
     those labelled ``several`` (module docstring); ``copies`` crops of each, the first as
     the detector cuts it, the others with the window's margin (1.1-1.5) and centre (up to a
-    tenth of its side) drawn from ``rng``."""
+    tenth of its side) drawn from ``rng``. ``known``: the view's fixtures as the cell gives
+    them at run time (`segdata.view_fixtures`: a tray's floor as the plane, its walls
+    excluded)."""
     depth = np.where(np.isfinite(depth), depth, 0.0).astype(np.float32)
-    prop = proposals(depth, intrinsics, X_WC)
+    prop = proposals(depth, intrinsics, X_WC, **(known or {}))
     several = outputs.index(cropnet.SEVERAL)
     out = []
     for m in prop.masks:
@@ -125,9 +129,10 @@ def collect(data: str | Path, scenes, outputs, copies: int = 1, seed: int = 0) -
         K = s["K"]
         intr = (K[0, 0], K[1, 1], K[0, 2], K[1, 2])
         for v in range(len(s["rgb"])):
+            known = view_fixtures(s, s["depth"][v], intr, s["X_WC"][v])
             for x, f, y in view_samples(
                 s["rgb"][v], s["depth"][v], s["inst"][v], s["inst_cls"][v], intr,
-                s["X_WC"][v], outputs, copies, rng,
+                s["X_WC"][v], outputs, copies, rng, known,
             ):  # fmt: skip
                 xs.append(x.astype(np.float16))
                 fs.append(f)
