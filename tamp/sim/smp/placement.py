@@ -1,13 +1,15 @@
 """Where objects stand, judged in 3-D on plant poses (no Drake import).
 
-Two questions the workcell asks of the plant, answered one way everywhere:
+Three questions the workcell asks of the plant, answered one way everywhere:
 
 - `why_not_in(...)`: does an object *rest in* an area? Its centre lies within the area's
   radius in the floor plane AND it stands upright on the floor (its centre at the object's
-  half height, within `ON_FLOOR_TOL`). An object resting on top of another one is not in
-  the area, whatever its x and y (an O0 pushed onto O_a rests with its centre at z = 0.25 m,
-  not 0.10 m, inside the area's circle: not placed). The Place
-  skill's final check and the run's success (`tamp.sim.smp.runner`) both use it.
+  half height, within `ON_FLOOR_TOL`, and, where the caller knows it, its axis within
+  `TILT_TOL` of the vertical). An object resting on top of another one is not in the
+  area, whatever its x and y (an O0 pushed onto O_a rests with its centre at z = 0.25 m,
+  not 0.10 m, inside the area's circle: not placed). The Place skill's final check
+  (positions only, no tilt) and the run's success (`tamp.sim.smp.runner`, with tilts) both
+  use it.
 - `blocker(...)` / `free_spot(...)`: is a place occupied for an object a person puts down
   there (another object's footprint overlaps its own and the other object is not held high
   above, or the robot's base stands there)? If so, the nearest spot outside every area and
@@ -93,8 +95,10 @@ def under(body: Body, others: Iterable[Body]) -> list[str]:
 
 
 def why_not_in(body: Body, area: Area, others: Iterable[Body] = ()) -> str | None:
-    """None when ``body`` rests in ``area`` (planar centre inside, upright on the floor);
-    else why not, naming the object it stands on when one lies below it."""
+    """None when ``body`` rests in ``area`` (planar centre inside, on the floor, tilted no
+    more than `TILT_TOL`); else why not, naming the object it stands on when one lies
+    below it. The tilt matters on its own: a bottle leaning 32° on its bottom rim has its
+    centre 3 mm above its upright height, on the floor by height alone."""
     if math.hypot(body.x - area.pos.x, body.y - area.pos.y) > area.radius:
         return f"{body.id} ended outside {area.name}"
     if abs(body.z - body.kind.half_height) > ON_FLOOR_TOL:
@@ -104,6 +108,8 @@ def why_not_in(body: Body, area: Area, others: Iterable[Body] = ()) -> str | Non
             f"{body.id} is not resting on the floor (z = {body.z:.3f} m, on the floor "
             f"{body.kind.half_height:.3f} m{on})"
         )
+    if not body.upright:
+        return f"{body.id} is not upright in {area.name} (tilt {math.degrees(body.tilt):.0f}°)"
     return None
 
 

@@ -44,6 +44,18 @@ def test_an_object_on_top_of_another_is_not_in_the_area():
     assert why_not_in(outside, L0) == "O0 ended outside L0"
 
 
+def test_a_bottle_leaning_in_the_area_is_not_in_it():
+    """A bottle tilted 32° on its bottom rim (as a slipped friction grasp leaves it) has its
+    centre 3 mm above its upright height: on the floor by height alone, not upright."""
+    tilt = math.radians(32)
+    z = BOTTLE.half_height * math.cos(tilt) + BOTTLE.radius * math.sin(tilt)
+    assert abs(z - BOTTLE.half_height) < ON_FLOOR_TOL
+    leaning = Body("O1", 1.0, 0.7, z, BOTTLE, tilt=tilt)
+    assert why_not_in(leaning, L0) == "O1 is not upright in L0 (tilt 32°)"
+    assert why_not_in(Body("O1", 1.0, 0.7, z, BOTTLE, tilt=TILT_TOL), L0) is None
+    assert _reasons([leaning], {}, picked={"O1"}) == {"O1": "O1 knocked over (tilt 32°)"}
+
+
 def test_blocker_sees_footprints_the_robot_and_not_what_is_carried_above():
     o1 = Body("O1", 1.0, 0.7, BOTTLE.half_height, BOTTLE)
     assert blocker(1.0, 0.7, BOX, [o1]) == "O1"
