@@ -166,6 +166,11 @@ class Observation:
     #: share of the image the held object covers (it hangs 6.5 cm beside the camera's axis
     #: and hides a patch of the workspace behind it)
     hand_cover: float = 0.0
+    #: pixels that show the workspace's floor bare (full image, bool; from depth and the
+    #: camera pose): where the view saw room. None when the view was not placed
+    floor: np.ndarray | None = None
+    #: pixels the gripper's region covers (nearer than the hand depth: the held object)
+    hidden: np.ndarray | None = None
 
     def __deepcopy__(self, memo: dict) -> Observation:
         return self  # immutable (arrays are read-only): Drake's state copies cost nothing

@@ -73,7 +73,7 @@ from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I, ImageRgba8U
 
 from tamp.grasp.pinhole import camera_to_pixel, pixel_to_camera
 from tamp.sim.core.detection_noise import LEVELS, perturb
-from tamp.sim.core.instances import ObjectDetection, located
+from tamp.sim.core.instances import ObjectDetection, located, world_heights
 from tamp.sim.core.messages import Detection, Observation, Seen, TargetCrop, ViewRequest
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.core.tracks import Tracks, update
@@ -84,6 +84,10 @@ OCCLUSION_TOLERANCE = 0.02
 OCCLUSION_WINDOW = 0.015
 #: how far beyond a fixture's rim (m) pixels are still taken for the rim (depth noise, edges)
 RIM_MARGIN = 0.004
+#: a pixel shows the bare floor when its world height is within this of the floor's (m):
+#: below the lowest object's top (a lying screw's is 8 mm up), above the renderer's depth
+#: error and a mat's 2 mm
+FLOOR_BAND = 0.005
 #: the class reported in hand when the object there is not the grasp's tracked target
 UNKNOWN = "unknown"
 
@@ -114,6 +118,12 @@ class Region:
     size: tuple[float, float]
     floor: float | None = None
     rim: tuple[float, float] | None = None
+
+    @property
+    def base(self) -> float:
+        """The height objects rest on here: the fixture's floor, else the table top (the
+        cells' world z = 0)."""
+        return 0.0 if self.floor is None else self.floor
 
     def contains(self, p) -> bool:
         return bool(
@@ -535,6 +545,12 @@ class Perception(LeafSystem):
                     _frozen(np.nan_to_num(depth[sl], nan=0.0, posinf=0.0)),
                     _frozen(mask[sl]),
                 )
+        floor = None
+        if placed and region is not None:
+            with self.analysis:
+                z = world_heights(depth, self._intrinsics, X_WC)
+                with np.errstate(invalid="ignore"):
+                    floor = (np.abs(z - region.base) < FLOOR_BAND) & ~near & ~occupied
         memory, occluded = s.memory, ()
         if placed and req.side:
             with self.analysis:
@@ -556,6 +572,8 @@ class Perception(LeafSystem):
             _frozen(occupied),
             occluded,
             float(near.mean()) if holding else 0.0,
+            None if floor is None else _frozen(floor),
+            _frozen(near),
         )
         state.get_mutable_abstract_state(self._state).set_value(
             PerceptionState(req.id, obs, s.frames + 1, s.render_kinds + kinds, memory, tracks, held)

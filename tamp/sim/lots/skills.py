@@ -27,9 +27,12 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   fail the attempt, and the next attempt's look, not finding the track either, says so and
   re-acquires the instance of the class nearest the image centre.
 - ``Place(side)``: look at W^side (at the hand's present yaw), put the held object's centre
-  (its offset from the TCP kept at the grasp) on the freest spot seen (away from objects
-  perception remembers there but cannot see; its reach inside the edges), lift, one view
-  from there. In W^B of a cell that declares a stack (``stack:``, `tamp.sim.lots.stack`), an
+  (its offset from the TCP kept at the grasp) on a spot the view saw bare, farthest from
+  the objects seen, those perception remembers there but cannot see, and the floor no view
+  saw (the held object hides part of it: `tamp.sim.lots.room`), its reach inside the edges;
+  when that spot is not clear by the object's reach, up to `PLACE_VIEWS` more views with the
+  camera shifted sideways to where it shows most of the unseen floor; lift, one view from
+  there. In W^B of a cell that declares a stack (``stack:``, `tamp.sim.lots.stack`), an
   object of a stack class above the base goes on the object of the class below it instead:
   centred on where the view shows that one (detected, or remembered and hidden now), its
   underside `STACK_GAP` over that one's top as the depth image measures it, let go along a
@@ -70,7 +73,6 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 
-from tamp.grasp.pinhole import pixel_to_camera
 from tamp.lots.cell import WASTE, lots_domain
 from tamp.sim.core.camera import backproject
 from tamp.sim.core.messages import Observation, SkillCommand, SkillStatus, ViewRequest
@@ -87,6 +89,7 @@ from tamp.sim.lots.descent import (
 )
 from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner, near_grasp
 from tamp.sim.lots.kinematics import ArmKinematics, down, hand_yaw_for_closing, pose_error
+from tamp.sim.lots.room import Room, at_best, empty_room, free_spot, next_look, observed
 from tamp.sim.lots.scenario import CellScenario
 from tamp.sim.lots.stack import STACK_SIDE, below, support
 from tamp.world.interface import Status
@@ -119,6 +122,12 @@ DESCENT_TIMEOUT = 30.0
 TURN_SPEED = 2.0
 #: how far inside a workspace's edges a placed object's centre stays: its reach, but at least
 #: and at most these (a long object kept nearer the centre would leave no room beside it)
+#: a place's spot keeps this much more than the held object's reach from anything (m)
+PLACE_CLEARANCE = 0.01
+#: views a place may add when its view showed no room for the held object
+PLACE_VIEWS = 2
+#: ... only when a spot that much clearer may lie in the floor no view saw yet (m)
+PLACE_GAIN = 0.02
 PLACE_MARGIN = 0.06
 MAX_PLACE_MARGIN = 0.10
 #: the held object's underside this far (m) above where it goes when the fingers open: on
@@ -210,6 +219,9 @@ class SkillState:
     grasp_successes: int = 0
     picks_tried: int = 0  # grasp attempts of network picks (the chance failures' index)
     injected: bool = False  # this attempt fails by the run's drawn chance: the hand stays open
+    #: what the place's views showed of the workspace's floor, and the extra views taken
+    room: Room | None = None
+    place_views: int = 0
     log: list[tuple[float, str]] = field(default_factory=list)
 
     def __deepcopy__(self, memo: dict) -> SkillState:
@@ -368,7 +380,7 @@ class PandaSkillController(LeafSystem):
         elif name == "Place" and len(args) == 1 and args[0] in sides:
             if s.held is None:
                 return self._finish(s, t, Status.FAILURE, "nothing held")
-            s.side = args[0]
+            s.side, s.room, s.place_views = args[0], None, 0
             # at the hand's present yaw (a look while holding may have turned it half round):
             # any yaw serves for looking and putting down, and turning back costs seconds
             yaw = self.kin.tcp_yaw(s.q)
@@ -891,18 +903,46 @@ class PandaSkillController(LeafSystem):
             gap = STACK_GAP
             where = f" on the {on} (its top at {floor:.3f} m)"
         else:
-            # the object's centre goes on the spot, far enough inside the edges for its reach
+            # the object's centre goes on a spot a view saw bare, far enough inside the edges
+            # for its reach and clear of everything (`tamp.sim.lots.room`)
             margin = min(max(PLACE_MARGIN, s.hold_radius + 0.005), MAX_PLACE_MARGIN)
-            cx, cy = free_spot(
-                workspace,
-                obs.occupied,
+            if s.room is None:
+                s.room = empty_room(workspace.center, workspace.floor_size, workspace.floor, margin)
+            s.room = observed(
+                s.room,
                 X_WC,
                 self.planner.intrinsics,
-                margin=margin,
+                occupied=obs.occupied,
+                floor=obs.floor,
                 avoid=tuple(m.position[:2] for m in obs.occluded),
             )
+            (cx, cy), clearance = free_spot(s.room, workspace.center)
+            need = s.hold_radius + PLACE_CLEARANCE
+            more = at_best(s.room) > clearance + PLACE_GAIN  # another view may find better
+            if clearance < need and more and s.place_views < PLACE_VIEWS and obs.hidden is not None:
+                at = next_look(s.room, obs.hidden, X_WC, self.planner.intrinsics)
+                if at is not None:
+                    s.place_views += 1
+                    unseen = int((~s.room.seen).sum())
+                    s.log.append(
+                        (
+                            t,
+                            f"no room seen for the {s.held} ({clearance:.3f} m clear, "
+                            f"{need:.3f} m needed; {unseen} of {len(s.room.grid)} spots unseen): "
+                            f"look again from ({at[0]:.3f}, {at[1]:.3f})",
+                        )
+                    )
+                    yaw = self.kin.tcp_yaw(s.q)
+                    s.steps = (
+                        self._move(self.look_pose(s.side, at=at, yaw=yaw)),
+                        Step("settle"),
+                        Step("view", handler="place"),
+                    )
+                    return
             floor, gap = workspace.floor, RELEASE_GAP
             where = "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
+            if math.isfinite(clearance):
+                where += f", {clearance:.3f} m clear"
         yaw = self.kin.tcp_yaw(s.q)  # the look's yaw: the held object's offset turns with it
         c, w = math.cos(yaw), math.sin(yaw)
         hx, hy = s.hold_offset
@@ -942,43 +982,3 @@ def reach_of(crop, intrinsics, X_WC: RigidTransform, center: tuple[float, float]
     pts = backproject(us[ok] + u0, vs[ok] + v0, z[ok], intrinsics, X_WC)
     d = np.hypot(pts[0] - center[0], pts[1] - center[1])
     return float(np.percentile(d, 95))
-
-
-def free_spot(
-    workspace,
-    occupied: np.ndarray | None,
-    X_WC: RigidTransform,
-    intrinsics,
-    margin: float = 0.06,
-    step: float = 0.02,
-    avoid: tuple[tuple[float, float], ...] = (),
-) -> tuple[float, float]:
-    """The point of ``workspace``'s floor (``margin`` inside its edges, or a tray's walls)
-    farthest from every object pixel of the view and every point of ``avoid`` (objects
-    hidden from the view: their remembered centres), measured in the table plane."""
-    cxw, cyw = workspace.center
-    sx, sy = workspace.floor_size
-    hx, hy = max(sx / 2 - margin, 0.0), max(sy / 2 - margin, 0.0)
-    grid = np.array(
-        [
-            [cxw + dx, cyw + dy]
-            for dx in np.arange(-hx, hx + 1e-9, step)
-            for dy in np.arange(-hy, hy + 1e-9, step)
-        ]
-    )
-    if (occupied is None or not occupied.any()) and not avoid:
-        return workspace.center
-    pts = np.zeros((0, 2))
-    if occupied is not None and occupied.any():
-        vs, us = np.nonzero(occupied)
-        # object pixels on the table plane (z = 0) through the camera
-        R, p = X_WC.rotation().matrix(), X_WC.translation()
-        rays = R @ pixel_to_camera(us, vs, np.ones(len(us)), intrinsics)
-        s_ = -p[2] / rays[2]
-        pts = (p[:2, None] + rays[:2] * s_).T
-        pts = pts[:: max(1, len(pts) // 2000)]
-    if avoid:
-        pts = np.vstack([pts, np.asarray(avoid, float).reshape(-1, 2)])
-    d = np.min(np.linalg.norm(grid[:, None, :] - pts[None, :, :], axis=2), axis=1)
-    best = grid[int(np.argmax(d))]
-    return (float(best[0]), float(best[1]))
