@@ -13,7 +13,9 @@ wrist camera's RGB-D images. Ours is the classic tabletop pipeline (Rusu et al.,
    ``several`` (touching objects: the proposal is split again at 5 mm depth steps and its
    parts classified) or ``none`` (dropped); a task class below the weights' threshold is
    reported ``unknown``, and so is one of a size its class never had in training
-   (`cropnet.size_gate`);
+   (`cropnet.size_gate`); touching parts named alike are one object when their union is
+   named so too (a saw's handle 3 cm over its blade is split by the depth jump, and each
+   part looks like a saw), as touching parts named ``hand`` are one hand;
 3. a part in the gripper's region (median depth under `IN_HAND_DEPTH`) that is not the
    person's hand is the held object: not reported (perception knows what the gripper holds).
 
@@ -195,7 +197,7 @@ class Detector:
                 q = q.copy()
                 q[self._several] = 0.0  # a part not split further is named as one object
                 final.append((part, q / max(float(q.sum()), 1e-9), g))
-        named_parts = [(m, *self.label(p, f)) for m, p, f in final]
+        named_parts = self._joined([(m, *self.label(p, f)) for m, p, f in final], named)
         out = []
         for m, cls, score in _hands_joined(named_parts):
             d = depth[m]
@@ -204,6 +206,25 @@ class Detector:
                 continue
             out.append((m, cls, score))
         return out
+
+    def _joined(self, parts: list, named) -> list[tuple[np.ndarray, str | None, float]]:
+        """(mask, class, score) of named parts with touching parts of one task class joined
+        when the classifier names their union that class too: one object of parts at
+        different heights (a saw's handle over its flat blade) is split by the depth jumps
+        into parts that each look like it; two touching objects of a class are not joined,
+        their union being too large for one (`label`'s size gate)."""
+        groups = _touching_groups([(m, c) for m, c, _ in parts if c not in (None, UNKNOWN, HAND)])
+        if not groups:
+            return parts
+        joined, used = [], set()
+        for members in groups:
+            union = np.logical_or.reduce([m for m, _ in members])
+            ((_, p, f),) = named([union])
+            cls, score = self.label(p, f)
+            if cls == members[0][1]:
+                joined.append((union, cls, score))
+                used |= {id(m) for m, _ in members}
+        return [q for q in parts if id(q[0]) not in used] + joined
 
     def detect(
         self,
@@ -239,6 +260,23 @@ class Detector:
 
 
 _NOT_OBJECTS = (cropnet.SEVERAL, cropnet.NONE)
+
+
+def _touching_groups(parts: list[tuple[np.ndarray, str]]) -> list[list[tuple[np.ndarray, str]]]:
+    """The groups of two or more (mask, class) of one class whose masks touch (8-connected
+    once each is grown by a pixel)."""
+    groups = []
+    for cls in {c for _, c in parts}:
+        mine = [(m, c) for m, c in parts if c == cls]
+        if len(mine) < 2:
+            continue
+        union = np.logical_or.reduce([m for m, _ in mine])
+        labels, n = ndimage.label(ndimage.binary_dilation(union), structure=np.ones((3, 3), bool))
+        for k in range(1, n + 1):
+            group = [(m, c) for m, c in mine if (labels[m] == k).any()]
+            if len(group) > 1:
+                groups.append(group)
+    return groups
 
 
 def _hands_joined(parts: list[tuple[np.ndarray, str | None, float]]) -> list:
