@@ -21,9 +21,17 @@ object held in the gripper is not counted: `segtrain.true_instances`). Rows:
   applied to the same detections: views with every count right, false positives per view;
 - CPU time per frame on one thread (process time of the whole ``detect`` call) at the
   detector's resolution (160 x 90) and for the LOTS wrist camera's 320 x 180 images
-  (subsampled, masks and points at full resolution).
+  (subsampled, masks and points at full resolution);
+- per scene kind (``scene_kinds``): the scores of the views of scenes with a stack of tower
+  parts, with the tray, with an object lying across another, and of the plain ones (a set
+  rendered before those kinds existed is all plain). A view of the tray is given its fixtures
+  as the cell gives them (`segdata.view_fixtures`: the floor as the plane, the walls left out).
 
-Prints the tables and one JSON line; ``--out FILE`` writes the JSON there
+``--baseline FILE`` scores other weights on the same views (``before``: the counts, the
+totals and the scene kinds), ``--candidate FILE`` likewise (``candidate``: weights tried and
+not shipped); ``--also DATA`` scores further held-out sets with each of them
+(``held_out_sets``: ``after`` the ``--weights`` file, ``before``, ``candidate``). Prints
+the tables and one JSON line; ``--out FILE`` writes the JSON there
 (``benchmarks/results/detector.json`` is the committed run).
 """
 
@@ -46,7 +54,7 @@ from scipy import ndimage  # noqa: E402
 from tamp.sim.core.cropnet import WEIGHTS_FILE  # noqa: E402
 from tamp.sim.core.detection_noise import perturb  # noqa: E402
 from tamp.sim.core.detector import Detector  # noqa: E402
-from tamp.sim.core.segdata import read_info, read_scene, scene_file  # noqa: E402
+from tamp.sim.core.segdata import read_info, read_scene, scene_file, view_fixtures  # noqa: E402
 from tamp.sim.core.segtrain import (  # noqa: E402
     Tally,
     predicted_map,
@@ -72,12 +80,35 @@ def on_border(mask: np.ndarray) -> bool:
     return bool(mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
 
 
-def run(data: Path, weights: Path | None, max_views: int, seed: int) -> dict:
+#: the scene kinds scored apart (`segdata.Scene.tags`; ``plain``: none of them)
+SCENE_KINDS = ("plain", "stack", "tray", "across")
+
+
+def compact(tally: Tally) -> dict:
+    """The scores of a tally that a comparison needs: counts per class, views with every count
+    right, task-class instances, false positives, unknown objects given a task class."""
+    r = report(tally)
+    return {
+        "views": r["views"],
+        "counting_accuracy": {k: c["accuracy"] for k, c in r["counting_accuracy"].items()},
+        "views_all_counts_right": r["views_all_counts_right"],
+        "task_instances": r["task_instances"],
+        "false_positives_per_view": r["false_positives_per_view"],
+        "unknown_objects": r["unknown_objects"],
+        "unknown_reported_as_task_class": r["unknown_reported_as_task_class"],
+    }
+
+
+def run(data: Path, weights: Path | None, max_views: int, seed: int, full: bool = True) -> dict:
+    """The benchmark of ``weights`` on the held-out scenes of ``data`` (module docstring);
+    without ``full``, only the per-class counts, totals and scene kinds (no noisy detector,
+    no timing)."""
     torch.set_num_threads(1)
     info = read_info(data)
     det = Detector.load(weights)
     names = list(det.classes)
     tally = Tally(names)
+    kinds = {k: Tally(names) for k in SCENE_KINDS}
     noisy = {level: Tally(names) for level in ("low", "high")}
     inside = Tally(names)
     touch = {}
@@ -91,19 +122,26 @@ def run(data: Path, weights: Path | None, max_views: int, seed: int) -> dict:
             if max_views and views >= max_views:
                 break
             rgb, depth, X_WC = scene["rgb"][v], scene["depth"][v], scene["X_WC"][v]
+            known = view_fixtures(scene, depth, intr, X_WC) if isinstance(det, Detector) else {}
             t0 = time.process_time()
-            found = det.detect(rgb, depth, intr, X_WC)
+            found = det.detect(rgb, depth, intr, X_WC, **known)
             times.append(time.process_time() - t0)
-            if views % 4 == 0:  # the wrist camera's full size: every fourth view
+            truth, small = true_instances(
+                scene["inst"][v], scene["inst_cls"][v], det.min_pixels, depth, names
+            )
+            for kind in [str(t) for t in scene.get("tags", ())] or ["plain"]:
+                score_view(kinds[kind], found, truth, small)
+            if not full:
+                score_view(tally, found, truth, small)
+                views += 1
+                continue
+            if views % 4 == 0 and not known:  # the wrist camera's full size: every fourth view
                 big_rgb = rgb.repeat(2, 0).repeat(2, 1)
                 big_depth = depth.repeat(2, 0).repeat(2, 1)
                 big_intr = (2 * intr[0], 2 * intr[1], 2 * intr[2] + 0.5, 2 * intr[3] + 0.5)
                 t0 = time.process_time()
                 det.detect(big_rgb, big_depth, big_intr, X_WC)
                 times_full.append(time.process_time() - t0)
-            truth, small = true_instances(
-                scene["inst"][v], scene["inst_cls"][v], det.min_pixels, depth, names
-            )
             score_view(tally, found, truth, small, scene["cls"][v],
                        predicted_map(found, names, depth.shape))  # fmt: skip
             cut = [m for _, m in truth if on_border(m)]
@@ -121,6 +159,9 @@ def run(data: Path, weights: Path | None, max_views: int, seed: int) -> dict:
             views += 1
         if max_views and views >= max_views:
             break
+    by_kind = {k: compact(t) for k, t in kinds.items() if t.views}
+    if not full:
+        return {"data": str(data), **compact(tally), "scene_kinds": by_kind}
     doc = {
         "benchmark": "detector",
         "weights": str(weights) if weights else f"tamp/models/weights/{WEIGHTS_FILE}",
@@ -167,6 +208,7 @@ def run(data: Path, weights: Path | None, max_views: int, seed: int) -> dict:
             },
         },
         "machine": f"{os.cpu_count()} cores; process time of this process on one torch thread",
+        "scene_kinds": by_kind,
     }
     return doc
 
@@ -220,6 +262,33 @@ def table(doc: dict) -> str:
     return "\n".join(lines)
 
 
+def kinds_table(after: dict, before: dict | None, title: str, label: str = "before") -> str:
+    """Per scene kind and per class, the counting accuracy of the weights (and of other
+    weights, ``before``, named ``label``), and the views with every count right."""
+    lines = [title]
+    for kind, a in after["scene_kinds"].items():
+        b = (before or {}).get("scene_kinds", {}).get(kind)
+
+        def pct(x):
+            return "-" if x is None else f"{100 * x:.1f} %"
+
+        lines.append(
+            f"  {kind} ({a['views']} views): every count right {pct(a['views_all_counts_right'])}"
+            + (f" ({label} {pct(b['views_all_counts_right'])})" if b else "")
+            + f"; unknown as a task class {a['unknown_reported_as_task_class']} of "
+            f"{a['unknown_objects']}"
+            + (f" ({label} {b['unknown_reported_as_task_class']})" if b else "")
+        )
+        row = []
+        for k, acc in a["counting_accuracy"].items():
+            if acc is None:
+                continue
+            was = b["counting_accuracy"].get(k) if b else None
+            row.append(f"{k} {pct(acc)}" + (f" ({label} {pct(was)})" if b else ""))
+        lines.append("    " + ", ".join(row))
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("data", type=Path, help="a set written by `tamp detect render`")
@@ -227,9 +296,41 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-views", type=int, default=0, help="score at most N views")
     parser.add_argument("--seed", type=int, default=0, help="seed of the noisy detector")
     parser.add_argument("--out", type=Path, help="also write the JSON to this file")
+    parser.add_argument(
+        "--baseline", type=Path, help="weights to compare against on the same views (before)"
+    )
+    parser.add_argument(
+        "--candidate", type=Path, help="weights tried and not shipped, on the same views"
+    )
+    parser.add_argument(
+        "--also", type=Path, action="append", default=[], help="a further held-out set to score"
+    )
     args = parser.parse_args(argv)
     doc = run(args.data, args.weights, args.max_views, args.seed)
+    others = {"before": args.baseline, "candidate": args.candidate}
+    for key, weights in others.items():
+        if weights:
+            doc[key] = {"weights": str(weights)} | run(
+                args.data, weights, args.max_views, args.seed, full=False
+            )
+    doc["held_out_sets"] = [
+        {"after": run(d, args.weights, args.max_views, args.seed, full=False)}
+        | {
+            key: {"weights": str(w)} | run(d, w, args.max_views, args.seed, full=False)
+            for key, w in others.items()
+            if w
+        }
+        for d in args.also
+    ]
     print(table(doc))
+    for key in others:
+        if key in doc:
+            print(kinds_table(doc, doc[key], f"scene kinds of {args.data}:", key))
+    for extra in doc["held_out_sets"]:
+        a = extra["after"]
+        for key in [k for k in others if k in extra] or [None]:
+            title = f"{a['data']} ({a['views']} views):"
+            print(kinds_table(a, extra.get(key), title, key or "before"))
     text = json.dumps(doc)
     print(text)
     if args.out:
