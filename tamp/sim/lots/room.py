@@ -3,15 +3,20 @@
 A wrist camera that carries an object sees past it only in part: the LOTS arm's camera sits
 6.5 cm beside the gripper's axis, and a held hammer fills most of its image, so a workspace's
 middle can stay hidden in every view from above it (what a person put there meanwhile with
-it). A spot is therefore chosen among the candidate spots (a grid over the workspace's floor,
-inset by the object's reach) that a view *saw bare* (perception's ``floor`` pixels: world
-height at the floor's, from depth and the arm's kinematics), farthest from everything it
-must keep clear of: what the views showed on the floor (object pixels taken down to the
-floor's plane), what perception remembers there but cannot see now, and every candidate no
-view saw bare (something may lie there). `Room` gathers that evidence over the place's
-views; when the best spot's clearance is below the object's reach, `next_look` says where a
-view from the same height would show most of what is still unseen (the held object hangs
-at the same place in every image, so the camera moves sideways, not round).
+it). `Room` keeps, on a raster of the workspace's floor (`RES`), which cells some view saw
+bare (perception's ``floor`` pixels: world height at the floor's, from depth and the arm's
+kinematics) and which hold something (object pixels taken down to the floor's plane, and
+perception's remembered objects hidden now). A cell is *free* when seen bare and not
+blocked; every other cell, and everything beyond the floor's edges, must be kept clear of.
+
+`place` puts the held object's footprint (its top-view points round its centre, in the
+hand's frame, measured from the grasp's views) at every candidate centre (`STEP` apart) and
+hand yaw, and takes the pose whose footprint lies farthest inside the free cells (a
+Euclidean distance transform of the raster: the clearance of every footprint point is one
+look-up). `at_best` is the same with every unseen cell taken as bare: what another view
+could gain at most; `next_look` says where a view from the same height would show most of
+the unseen floor (the held object hangs at the same place in every image, so the camera
+moves sideways, not round).
 """
 
 from __future__ import annotations
@@ -21,54 +26,53 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.math import RigidTransform
+from scipy import ndimage
 
 from tamp.grasp.pinhole import camera_to_pixel, pixel_to_camera
 
-#: spacing of the candidate spots (m)
+#: the floor raster's cell (m)
+RES = 0.005
+#: spacing of the candidate centres (m)
 STEP = 0.02
+#: a remembered object that is hidden now blocks this radius round its centre (m)
+HIDDEN_RADIUS = 0.03
 #: the camera's sideways shifts tried for another view of the floor (m; 8 directions each)
 SHIFTS = (0.07, 0.13)
 
 
 @dataclass(frozen=True)
 class Room:
-    """What the place's views showed of one workspace's floor: the candidate spots ``grid``
-    (N x 2, world x, y), which of them some view saw bare (``seen``, N bools), the floor
-    plane's height ``floor`` and the points to keep clear of (``objects``, M x 2)."""
+    """What the place's views showed of one workspace's floor (sides ``size`` round
+    ``center``, at height ``floor``), cell by cell (`RES`): ``seen`` bare by some view,
+    ``blocked`` by something seen or remembered there."""
 
-    grid: np.ndarray
-    seen: np.ndarray
+    center: tuple[float, float]
+    size: tuple[float, float]
     floor: float
-    objects: np.ndarray
+    seen: np.ndarray
+    blocked: np.ndarray
 
     @property
-    def unseen(self) -> np.ndarray:
-        return self.grid[~self.seen]
+    def cells(self) -> np.ndarray:
+        """World x, y of every cell's centre (ny x nx x 2)."""
+        ny, nx = self.seen.shape
+        xs = self.center[0] - self.size[0] / 2 + RES * (np.arange(nx) + 0.5)
+        ys = self.center[1] - self.size[1] / 2 + RES * (np.arange(ny) + 0.5)
+        return np.stack(np.meshgrid(xs, ys), axis=-1)
+
+    def index(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(row, column, inside) of world points (... x 2) on the raster."""
+        ny, nx = self.seen.shape
+        j = np.floor((xy[..., 0] - self.center[0] + self.size[0] / 2) / RES).astype(int)
+        i = np.floor((xy[..., 1] - self.center[1] + self.size[1] / 2) / RES).astype(int)
+        inside = (i >= 0) & (i < ny) & (j >= 0) & (j < nx)
+        return np.clip(i, 0, ny - 1), np.clip(j, 0, nx - 1), inside
 
 
-def floor_grid(
-    center: tuple[float, float], floor_size: tuple[float, float], margin: float, step: float = STEP
-) -> np.ndarray:
-    """Candidate spots every ``step`` over the floor (sides ``floor_size`` round ``center``),
-    ``margin`` inside its edges (the centre alone when the margin leaves no room)."""
-    cx, cy = center
-    hx = max(floor_size[0] / 2 - margin, 0.0)
-    hy = max(floor_size[1] / 2 - margin, 0.0)
-    xs = cx + np.arange(-hx, hx + 1e-9, step)
-    ys = cy + np.arange(-hy, hy + 1e-9, step)
-    return np.array([[x, y] for x in xs for y in ys])
-
-
-def empty_room(
-    center: tuple[float, float],
-    floor_size: tuple[float, float],
-    floor: float,
-    margin: float,
-    step: float = STEP,
-) -> Room:
-    """A room nothing has been seen of yet."""
-    grid = floor_grid(center, floor_size, margin, step)
-    return Room(grid, np.zeros(len(grid), bool), floor, np.zeros((0, 2)))
+def empty_room(center: tuple[float, float], size: tuple[float, float], floor: float) -> Room:
+    """A room of a floor (sides ``size`` round ``center``) nothing has been seen of yet."""
+    n = (max(int(round(size[1] / RES)), 1), max(int(round(size[0] / RES)), 1))
+    return Room(tuple(center), tuple(size), floor, np.zeros(n, bool), np.zeros(n, bool))
 
 
 def _pixels(points: np.ndarray, floor: float, X_WC: RigidTransform, intrinsics) -> tuple:
@@ -82,9 +86,19 @@ def _pixels(points: np.ndarray, floor: float, X_WC: RigidTransform, intrinsics) 
     return np.rint(u).astype(int), np.rint(v).astype(int), front
 
 
+def _in_image(points: np.ndarray, floor: float, X_WC, intrinsics, mask: np.ndarray) -> tuple:
+    """Which floor points fall in the image of ``mask``'s size, and ``mask`` there."""
+    u, v, front = _pixels(points, floor, X_WC, intrinsics)
+    h, w = mask.shape
+    inside = front & (u >= 0) & (u < w) & (v >= 0) & (v < h)
+    value = np.zeros(len(points), bool)
+    value[inside] = mask[v[inside], u[inside]]
+    return inside, value
+
+
 def on_floor_plane(mask: np.ndarray, floor: float, X_WC: RigidTransform, intrinsics) -> np.ndarray:
-    """The pixels of ``mask`` taken along their rays down to the floor's plane (K x 2; at
-    most about 2,000 of them): where the objects they show stand, as seen from above."""
+    """The pixels of ``mask`` taken along their rays down to the floor's plane (K x 2): where
+    the objects they show stand, as seen from above."""
     vs, us = np.nonzero(mask)
     if len(us) == 0:
         return np.zeros((0, 2))
@@ -92,8 +106,7 @@ def on_floor_plane(mask: np.ndarray, floor: float, X_WC: RigidTransform, intrins
     rays = R @ pixel_to_camera(us, vs, np.ones(len(us)), intrinsics)
     down = rays[2] < -1e-6
     s = (floor - p[2]) / np.where(down, rays[2], -1.0)
-    pts = (p[:2, None] + rays[:2] * s)[:, down].T
-    return pts[:: max(1, len(pts) // 2000)]
+    return (p[:2, None] + rays[:2] * s)[:, down].T
 
 
 def observed(
@@ -105,51 +118,73 @@ def observed(
     floor: np.ndarray | None,
     avoid: Sequence[tuple[float, float]] = (),
 ) -> Room:
-    """``room`` with one more view: the candidates this view saw bare join ``seen`` (all of
-    them when the view has no ``floor`` mask: the view is taken to show the whole floor),
-    its object pixels and the hidden objects' centres (``avoid``) join ``objects``."""
+    """``room`` with one more view: the cells this view saw bare join ``seen`` (all of them
+    when the view has no ``floor`` mask: it is taken to show the whole floor); the cells its
+    object pixels fall on, and those within `HIDDEN_RADIUS` of the hidden objects' centres
+    (``avoid``), join ``blocked``."""
+    cells = room.cells.reshape(-1, 2)
     if floor is None:
-        seen = np.ones(len(room.grid), bool)
+        seen = np.ones(room.seen.shape, bool)
     else:
-        u, v, front = _pixels(room.grid, room.floor, X_WC, intrinsics)
-        h, w = floor.shape
-        inside = front & (u >= 0) & (u < w) & (v >= 0) & (v < h)
-        seen = np.zeros(len(room.grid), bool)
-        seen[inside] = floor[v[inside], u[inside]]
-    objects = [room.objects]
+        _, bare = _in_image(cells, room.floor, X_WC, intrinsics, floor)
+        seen = bare.reshape(room.seen.shape)
+    blocked = room.blocked.copy()
     if occupied is not None and occupied.any():
-        objects.append(on_floor_plane(occupied, room.floor, X_WC, intrinsics))
-    if len(avoid):
-        objects.append(np.asarray(avoid, float).reshape(-1, 2))
-    return Room(room.grid, room.seen | seen, room.floor, np.vstack(objects))
+        i, j, inside = room.index(on_floor_plane(occupied, room.floor, X_WC, intrinsics))
+        blocked[i[inside], j[inside]] = True
+    for x, y in avoid:
+        near = np.hypot(cells[:, 0] - x, cells[:, 1] - y) <= HIDDEN_RADIUS
+        blocked |= near.reshape(blocked.shape)
+    return Room(room.center, room.size, room.floor, room.seen | seen, blocked)
 
 
-def free_spot(room: Room, center: tuple[float, float]) -> tuple[tuple[float, float], float]:
-    """The spot to put the object's centre on and its clearance (m): the candidate seen bare
-    farthest from every object point and every candidate not seen bare (``center`` with an
-    infinite clearance when the whole floor was seen bare and nothing lies on it; the best
-    candidate by the objects alone, with clearance 0, when no candidate was seen bare)."""
-    clear = np.vstack([room.objects, room.unseen])
-    if len(clear) == 0:
-        return (float(center[0]), float(center[1])), float("inf")
-    d = np.min(np.linalg.norm(room.grid[:, None, :] - clear[None, :, :], axis=2), axis=1)
-    if room.seen.any():
-        i = int(np.flatnonzero(room.seen)[np.argmax(d[room.seen])])
-        return (float(room.grid[i, 0]), float(room.grid[i, 1])), float(d[i])
-    if len(room.objects) == 0:
-        return (float(center[0]), float(center[1])), 0.0
-    d = np.min(np.linalg.norm(room.grid[:, None, :] - room.objects[None, :, :], axis=2), axis=1)
-    i = int(np.argmax(d))
-    return (float(room.grid[i, 0]), float(room.grid[i, 1])), 0.0
+def clearance(room: Room, *, unseen_bare: bool = False) -> np.ndarray:
+    """Every cell's distance (m) to the nearest cell that is not free, or to the floor's
+    edge (ny x nx); ``unseen_bare``: unseen cells count as free."""
+    free = ~room.blocked & (room.seen | unseen_bare)
+    padded = np.pad(free, 1, constant_values=False)  # beyond the edges: not free
+    return ndimage.distance_transform_edt(padded)[1:-1, 1:-1] * RES - RES / 2
 
 
-def at_best(room: Room) -> float:
-    """The clearance (m) the best candidate could have if every unseen one were bare: how
-    much another view can gain at most."""
-    if len(room.objects) == 0:
-        return float("inf")
-    d = np.min(np.linalg.norm(room.grid[:, None, :] - room.objects[None, :, :], axis=2), axis=1)
-    return float(d.max())
+@dataclass(frozen=True)
+class Placement:
+    """Where to put the held object: its centre (x, y), the hand's yaw and the footprint's
+    clearance there (m; infinite when nothing limits it, negative when it overlaps)."""
+
+    x: float
+    y: float
+    yaw: float
+    clearance: float
+
+
+def _rotated(shape: np.ndarray, yaw: float) -> np.ndarray:
+    c, s = np.cos(yaw), np.sin(yaw)
+    return shape @ np.array([[c, s], [-s, c]])
+
+
+def place(
+    room: Room, shape: np.ndarray, yaws: Sequence[float], *, unseen_bare: bool = False
+) -> Placement:
+    """The centre (every `STEP` over the floor) and hand yaw of ``yaws`` whose footprint
+    (``shape``: K x 2 points round the object's centre in the hand's frame) has the largest
+    clearance (the least of its points' `clearance`; a point beyond the floor counts as
+    overlapping); the first yaw wins a tie. ``unseen_bare``: `clearance`'s."""
+    D = clearance(room, unseen_bare=unseen_bare)
+    cells = room.cells
+    k = max(int(round(STEP / RES)), 1)
+    ny, nx = D.shape
+    centres = cells[k // 2 :: k, k // 2 :: k].reshape(-1, 2)
+    if len(centres) == 0:
+        centres = np.array([room.center])
+    best = Placement(room.center[0], room.center[1], yaws[0], -np.inf)
+    for yaw in yaws:
+        pts = centres[:, None, :] + _rotated(np.asarray(shape, float), yaw)[None, :, :]
+        i, j, inside = room.index(pts)
+        c = np.where(inside, D[i, j], -RES).min(axis=1)
+        b = int(np.argmax(c))
+        if c[b] > best.clearance + 1e-9:
+            best = Placement(float(centres[b, 0]), float(centres[b, 1]), float(yaw), float(c[b]))
+    return best
 
 
 def next_look(
@@ -160,25 +195,31 @@ def next_look(
     shifts: Sequence[float] = SHIFTS,
 ) -> tuple[float, float] | None:
     """Where to put the camera (world x, y; same height and orientation as ``X_WC``) so that
-    a view shows the most candidates no view has seen yet: each sideways shift of ``shifts``
-    in 8 directions is scored by the unseen candidates that would fall in the image (of
-    ``hidden``'s size) and outside its ``hidden`` pixels (the held object hangs there in
-    every view); the smaller
-    shift wins a tie. None when no shift shows any."""
-    todo = room.unseen
+    a view shows the most cells no view has seen yet (and nothing blocks): each sideways
+    shift of ``shifts`` in 8 directions is scored by those cells that would fall in the
+    image (of ``hidden``'s size) and outside its ``hidden`` pixels (the held object hangs
+    there in every view); the smaller shift wins a tie. None when no shift shows any."""
+    todo = room.cells[~room.seen & ~room.blocked]
     if len(todo) == 0:
         return None
-    h, w = hidden.shape
     p = X_WC.translation()
     best, where = 0, None
     for d in shifts:
         for k in range(8):
             a = k * np.pi / 4
             c = p + [d * np.cos(a), d * np.sin(a), 0.0]
-            u, v, front = _pixels(todo, room.floor, RigidTransform(X_WC.rotation(), c), intrinsics)
-            shown = front & (u >= 0) & (u < w) & (v >= 0) & (v < h)
-            shown[shown] = ~hidden[v[shown], u[shown]]
-            n = int(shown.sum())
+            X = RigidTransform(X_WC.rotation(), c)
+            inside, covered = _in_image(todo, room.floor, X, intrinsics, hidden)
+            n = int((inside & ~covered).sum())
             if n > best:
                 best, where = n, (float(c[0]), float(c[1]))
     return where
+
+
+def footprint(points: np.ndarray, center: tuple[float, float], yaw: float, most: int = 64):
+    """The footprint ``shape`` of `place` from an object's top-view world points (N x 2):
+    round its ``center``, in the frame of a hand at ``yaw``, thinned to at most ``most``
+    points (a deterministic stride)."""
+    pts = np.asarray(points, float).reshape(-1, 2) - np.asarray(center, float)
+    pts = pts[:: max(1, -(-len(pts) // most))]
+    return _rotated(pts, -yaw) if len(pts) else np.zeros((1, 2))

@@ -26,12 +26,14 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   ``target lost`` (never another instance in its place), `LOST_VIEWS` such views in a row
   fail the attempt, and the next attempt's look, not finding the track either, says so and
   re-acquires the instance of the class nearest the image centre.
-- ``Place(side)``: look at W^side (at the hand's present yaw), put the held object's centre
-  (its offset from the TCP kept at the grasp) on a spot the view saw bare, farthest from
-  the objects seen, those perception remembers there but cannot see, and the floor no view
-  saw (the held object hides part of it: `tamp.sim.lots.room`), its reach inside the edges;
-  when that spot is not clear by the object's reach, up to `PLACE_VIEWS` more views with the
-  camera shifted sideways to where it shows most of the unseen floor; lift, one view from
+- ``Place(side)``: look at W^side (at the hand's present yaw); put the held object's
+  footprint (its top-view points from the grasp's views, in the hand's frame; its offset
+  from the TCP kept at the grasp) where the views saw the floor bare and nothing lies, at
+  the centre and hand yaw (`PLACE_TURNS`) that keep it farthest inside that floor (the
+  floor no view saw, remembered hidden objects and the edges kept clear of:
+  `tamp.sim.lots.room`); when that clearance is under `PLACE_CLEARANCE`, up to
+  `PLACE_VIEWS` more views with the camera shifted sideways to where it shows most of the
+  unseen floor; lift, one view from
   there. In W^B of a cell that declares a stack (``stack:``, `tamp.sim.lots.stack`), an
   object of a stack class above the base goes on the object of the class below it instead:
   centred on where the view shows that one (detected, or remembered and hidden now), its
@@ -89,7 +91,7 @@ from tamp.sim.lots.descent import (
 )
 from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner, near_grasp
 from tamp.sim.lots.kinematics import ArmKinematics, down, hand_yaw_for_closing, pose_error
-from tamp.sim.lots.room import Room, at_best, empty_room, free_spot, next_look, observed
+from tamp.sim.lots.room import Room, empty_room, footprint, next_look, observed, place
 from tamp.sim.lots.scenario import CellScenario
 from tamp.sim.lots.stack import STACK_SIDE, below, support
 from tamp.world.interface import Status
@@ -120,16 +122,14 @@ DESCENT_TIMEOUT = 30.0
 #: peak TCP angular speed of that turn (rad/s): the wrist alone turns the hand there, and
 #: Franka's last joint allows 2.61 rad/s (the IK plans within 90 %)
 TURN_SPEED = 2.0
-#: how far inside a workspace's edges a placed object's centre stays: its reach, but at least
-#: and at most these (a long object kept nearer the centre would leave no room beside it)
-#: a place's spot keeps this much more than the held object's reach from anything (m)
+#: a place's footprint keeps this far from anything and from the floor's edges (m)
 PLACE_CLEARANCE = 0.01
-#: views a place may add when its view showed no room for the held object
+#: views a place may add when its views showed no room for the held object
 PLACE_VIEWS = 2
+#: hand yaws a place tries, relative to the hand's present one (rad), nearest first
+PLACE_TURNS = tuple(k * math.pi / 4 for k in (0, 1, -1, 2, -2, 3, -3, 4))
 #: ... only when a spot that much clearer may lie in the floor no view saw yet (m)
 PLACE_GAIN = 0.02
-PLACE_MARGIN = 0.06
-MAX_PLACE_MARGIN = 0.10
 #: the held object's underside this far (m) above where it goes when the fingers open: on
 #: the floor, and on a stack's top measured from depth (`STACK_GAP`). An 8 mm drop onto a
 #: stack let the opening fingers drag the tower's body 2 cm across the bottom's top (seen on
@@ -182,7 +182,8 @@ class SkillState:
     track: int | None = None
     target_xy: tuple[float, float] | None = None
     target_top: float = 0.0  # the target's top above the table, from the last view
-    target_radius: float = 0.0  # the target's reach from its centre in the table plane (m)
+    #: the target's top-view points in the table plane (N x 2, world; from the last view)
+    target_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     views_done: int = 0  # views of this attempt (the look's and the descent's)
     #: the descent (`tamp.sim.lots.descent`): the latest views' best grasps, their fusion,
     #: whether the hand committed, the other objects' centres in the latest view, views in a
@@ -214,7 +215,8 @@ class SkillState:
     #: the held object's centre relative to the TCP, in the hand's frame (x, y; m), and its
     #: reach: `Place` puts the object, not the TCP, on the free spot
     hold_offset: tuple[float, float] = (0.0, 0.0)
-    hold_radius: float = 0.0
+    #: ... and its footprint round its centre in the hand's frame (K x 2; `room.footprint`)
+    hold_shape: np.ndarray = field(default_factory=lambda: np.zeros((1, 2)))
     grasp_attempts: int = 0
     grasp_successes: int = 0
     picks_tried: int = 0  # grasp attempts of network picks (the chance failures' index)
@@ -374,7 +376,7 @@ class PandaSkillController(LeafSystem):
                 return self._finish(s, t, Status.FAILURE, f"PickAt needs numbers: {cmd}")
             s.side, s.target_cls, s.track, s.attempt = args[0], "object", None, 1
             s.hold_z = MIN_GRASP_Z
-            s.hold_offset, s.hold_radius = (0.0, 0.0), 0.0  # a scripted grasp: the TCP's spot
+            s.hold_offset, s.hold_shape = (0.0, 0.0), np.zeros((1, 2))  # the TCP's spot
             s.grasp_attempts += 1
             s.steps = self._grasp_steps(x, y, MIN_GRASP_Z, math.radians(yaw), args[0])
         elif name == "Place" and len(args) == 1 and args[0] in sides:
@@ -436,6 +438,17 @@ class PandaSkillController(LeafSystem):
         X_WC = RigidTransform(down(yaw), [x, y, h])
         p = self.kin.tcp_for_camera(X_WC).translation()
         return (float(p[0]), float(p[1]), float(p[2]), float(yaw))
+
+    def place_yaws(self, s: SkillState) -> list[float]:
+        """The hand yaws a place tries (`PLACE_TURNS` from the present one, nearest first),
+        those the wrist reaches (within `WRIST_REACH` of its mid-range yaw)."""
+        now = self.kin.tcp_yaw(s.q)
+        centre = self.kin.wrist_centred_yaw(s.q)
+        return [
+            now + d
+            for d in PLACE_TURNS
+            if abs(math.remainder(now + d - centre, 2 * math.pi)) <= WRIST_REACH
+        ] or [now]
 
     def half_turn(self, s: SkillState) -> float:
         """The yaw about half a turn from the hand's, turning the wrist towards the middle of
@@ -671,7 +684,7 @@ class PandaSkillController(LeafSystem):
         p = backproject(det.u, det.v, det.depth, self.planner.intrinsics, X_WC)
         s.target_xy = (float(p[0]), float(p[1]))
         s.target_top = max(float(p[2]), 0.0)  # median depth of its pixels: about its top
-        s.target_radius = reach_of(crop, self.planner.intrinsics, X_WC, s.target_xy)
+        s.target_points = top_view_points(crop, self.planner.intrinsics, X_WC)
         s.others = tuple(
             (float(q[0]), float(q[1]))
             for o in obs.detections
@@ -803,7 +816,7 @@ class PandaSkillController(LeafSystem):
         c, w = math.cos(yaw), math.sin(yaw)  # the centre's offset from the TCP, hand frame
         dx, dy = s.target_xy[0] - g.x, s.target_xy[1] - g.y
         s.hold_offset = (c * dx + w * dy, -w * dx + c * dy)
-        s.hold_radius = s.target_radius
+        s.hold_shape = footprint(s.target_points, s.target_xy, yaw)
         s.grasp_attempts += 1
         s.picks_tried += 1
         k = s.picks_tried
@@ -901,13 +914,13 @@ class PandaSkillController(LeafSystem):
                 )
             cx, cy, floor = top
             gap = STACK_GAP
+            yaw = self.kin.tcp_yaw(s.q)  # the look's yaw: the held object's offset turns with it
             where = f" on the {on} (its top at {floor:.3f} m)"
         else:
-            # the object's centre goes on a spot a view saw bare, far enough inside the edges
-            # for its reach and clear of everything (`tamp.sim.lots.room`)
-            margin = min(max(PLACE_MARGIN, s.hold_radius + 0.005), MAX_PLACE_MARGIN)
+            # the object's footprint goes where views saw the floor bare and nothing else
+            # lies, inside the edges (`tamp.sim.lots.room`), at one of the hand's yaws
             if s.room is None:
-                s.room = empty_room(workspace.center, workspace.floor_size, workspace.floor, margin)
+                s.room = empty_room(workspace.center, workspace.floor_size, workspace.floor)
             s.room = observed(
                 s.room,
                 X_WC,
@@ -916,34 +929,37 @@ class PandaSkillController(LeafSystem):
                 floor=obs.floor,
                 avoid=tuple(m.position[:2] for m in obs.occluded),
             )
-            (cx, cy), clearance = free_spot(s.room, workspace.center)
-            need = s.hold_radius + PLACE_CLEARANCE
-            more = at_best(s.room) > clearance + PLACE_GAIN  # another view may find better
-            if clearance < need and more and s.place_views < PLACE_VIEWS and obs.hidden is not None:
+            yaws = self.place_yaws(s)
+            best = place(s.room, s.hold_shape, yaws)
+            if (
+                best.clearance < PLACE_CLEARANCE
+                and s.place_views < PLACE_VIEWS
+                and obs.hidden is not None
+                and place(s.room, s.hold_shape, yaws, unseen_bare=True).clearance
+                > best.clearance + PLACE_GAIN  # the unseen floor may hold a better spot
+            ):
                 at = next_look(s.room, obs.hidden, X_WC, self.planner.intrinsics)
                 if at is not None:
                     s.place_views += 1
-                    unseen = int((~s.room.seen).sum())
                     s.log.append(
                         (
                             t,
-                            f"no room seen for the {s.held} ({clearance:.3f} m clear, "
-                            f"{need:.3f} m needed; {unseen} of {len(s.room.grid)} spots unseen): "
+                            f"no room seen for the {s.held} ({best.clearance:.3f} m clear): "
                             f"look again from ({at[0]:.3f}, {at[1]:.3f})",
                         )
                     )
-                    yaw = self.kin.tcp_yaw(s.q)
+                    now = self.kin.tcp_yaw(s.q)
                     s.steps = (
-                        self._move(self.look_pose(s.side, at=at, yaw=yaw)),
+                        self._move(self.look_pose(s.side, at=at, yaw=now)),
                         Step("settle"),
                         Step("view", handler="place"),
                     )
                     return
+            cx, cy, yaw = best.x, best.y, best.yaw
             floor, gap = workspace.floor, RELEASE_GAP
             where = "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
-            if math.isfinite(clearance):
-                where += f", {clearance:.3f} m clear"
-        yaw = self.kin.tcp_yaw(s.q)  # the look's yaw: the held object's offset turns with it
+            if math.isfinite(best.clearance):
+                where += f", {best.clearance:.3f} m clear"
         c, w = math.cos(yaw), math.sin(yaw)
         hx, hy = s.hold_offset
         x, y = cx - (c * hx - w * hy), cy - (w * hx + c * hy)
@@ -967,18 +983,14 @@ class PandaSkillController(LeafSystem):
         )
 
 
-def reach_of(crop, intrinsics, X_WC: RigidTransform, center: tuple[float, float]) -> float:
-    """How far the target's pixels reach from ``center`` in the table plane (m): its mask in
-    the crop back-projected through its depth (the 95th percentile, so a stray edge pixel
-    does not count)."""
+def top_view_points(crop, intrinsics, X_WC: RigidTransform) -> np.ndarray:
+    """The target's mask in the crop back-projected through its depth (N x 2, world x, y):
+    its footprint as the camera sees it from above."""
     vs, us = np.nonzero(crop.mask)
-    if len(us) == 0:
-        return 0.0
-    z = crop.depth[vs, us]
+    z = crop.depth[vs, us] if len(us) else np.zeros(0)
     ok = z > 0
     if not ok.any():
-        return 0.0
+        return np.zeros((0, 2))
     u0, v0 = crop.origin
     pts = backproject(us[ok] + u0, vs[ok] + v0, z[ok], intrinsics, X_WC)
-    d = np.hypot(pts[0] - center[0], pts[1] - center[1])
-    return float(np.percentile(d, 95))
+    return np.asarray(pts[:2]).T

@@ -11,7 +11,7 @@ from pydrake.math import RigidTransform
 from tamp.grasp.rect import GraspRect
 from tamp.sim.lots.grasping import dilate, on_mask, snap_to_mask
 from tamp.sim.lots.kinematics import down
-from tamp.sim.lots.room import at_best, empty_room, free_spot, next_look, observed
+from tamp.sim.lots.room import empty_room, footprint, next_look, observed, place
 from tamp.sim.lots.scenario import Workspace
 
 K = (231.4, 231.4, 159.5, 89.5)
@@ -38,43 +38,77 @@ def test_dilate():
     assert dilate(m, 1).sum() == 9 and dilate(m, 2).sum() == 25
 
 
-def _spot(w, occupied, X_WC, margin=0.06, avoid=(), floor=None):
-    """The place's spot from one view of workspace ``w``."""
-    room = empty_room(w.center, w.floor_size, w.floor, margin)
-    room = observed(room, X_WC, K, occupied=occupied, floor=floor, avoid=avoid)
-    return free_spot(room, w.center)
+def _room(w, occupied, X_WC, floor=None, avoid=()):
+    """What one view of workspace ``w`` showed of its floor."""
+    room = empty_room(w.center, w.floor_size, w.floor)
+    return observed(room, X_WC, K, occupied=occupied, floor=floor, avoid=avoid)
 
 
-def test_free_spot_avoids_objects():
+def _bar(length: float, width: float) -> np.ndarray:
+    """The footprint of a bar along the hand's x (points every 5 mm)."""
+    xs = np.arange(-length / 2, length / 2 + 1e-9, 0.005)
+    ys = np.arange(-width / 2, width / 2 + 1e-9, 0.005)
+    return np.array([(x, y) for x in xs for y in ys])
+
+
+DISC = np.array([(0.03 * math.cos(a), 0.03 * math.sin(a)) for a in np.linspace(0, 6.2, 16)])
+
+
+def test_a_place_keeps_the_footprint_clear_of_objects_seen():
     w = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34))
     occupied = np.zeros((180, 320), bool)
-    assert _spot(w, occupied, X_LOOK) == ((0.5, -0.25), math.inf)
+    empty = place(_room(w, occupied, X_LOOK), DISC, [0.0])
+    assert (empty.x, empty.y) == pytest.approx((0.5, -0.25), abs=0.011)  # the middle
     occupied[60:120, 130:190] = True  # an object in the middle of the view
-    (x, y), clear = _spot(w, occupied, X_LOOK)
-    assert w.contains(x, y, margin=0.05)
-    assert math.hypot(x - 0.5, y + 0.25) > 0.12 and clear > 0.06
+    p = place(_room(w, occupied, X_LOOK), DISC, [0.0])
+    assert w.contains(p.x, p.y, margin=0.03)
+    assert math.hypot(p.x - 0.5, p.y + 0.25) > 0.12 and p.clearance > 0.02
 
 
-def test_free_spot_keeps_away_from_hidden_objects():
+def test_a_place_keeps_away_from_hidden_objects():
     w = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34))
     occupied = np.zeros((180, 320), bool)
-    (x, y), _ = _spot(w, occupied, X_LOOK, avoid=((0.61, -0.36),))
-    assert math.hypot(x - 0.61, y + 0.36) > 0.25
+    p = place(_room(w, occupied, X_LOOK, avoid=((0.61, -0.36),)), DISC, [0.0])
+    assert math.hypot(p.x - 0.61, p.y + 0.36) > 0.1 and p.clearance > 0.05
+    hidden_cell = _room(w, occupied, X_LOOK, avoid=((0.61, -0.36),))
+    i, j, _ = hidden_cell.index(np.array([[0.61, -0.36]]))
+    assert hidden_cell.blocked[i, j].all()
 
 
-def test_free_spot_in_a_tray_keeps_the_object_off_its_walls():
+def test_a_place_in_a_tray_keeps_the_object_off_its_walls():
     """Example 1 in the cell: a screw placed 6 cm inside W^B's edges reached over the tray's
     wall (W^B is 0.34 m, the tray's floor 0.24 m), landed on it and rolled out of W^B. The
-    spot is now measured from the tray's walls."""
+    footprint is kept inside the tray's floor."""
     tray = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34), tray=True)
     assert tray.floor_size == (0.24, 0.24)
     assert Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34)).floor_size == (0.34, 0.34)
     assert tray.on_floor(0.61, -0.25) and not tray.on_floor(0.63, -0.25)
     occupied = np.zeros((180, 320), bool)
-    occupied[80:100, 150:170] = True  # a 4 cm object in the middle: the spot goes to a corner
-    (x, y), _ = _spot(tray, occupied, X_LOOK, margin=0.06)
-    assert max(abs(x - 0.5), abs(y + 0.25)) <= 0.12 - 0.06 + 1e-9  # 6 cm inside the walls
-    assert math.hypot(x - 0.5, y + 0.25) > 0.08
+    occupied[80:100, 150:170] = True  # a 4 cm object in the middle
+    screw = _bar(0.08, 0.012)
+    p = place(_room(tray, occupied, X_LOOK), screw, [0.0, math.pi / 2])
+    assert p.clearance > 0.01
+    c, s_ = math.cos(p.yaw), math.sin(p.yaw)
+    for x, y in screw:
+        assert tray.on_floor(p.x + c * x - s_ * y, p.y + s_ * x + c * y)
+
+
+def test_a_long_object_is_turned_to_fit_beside_another():
+    """A 20 cm hammer in the 24 cm tray with a screwdriver lying across its upper part: at
+    the hand's present yaw (across the screwdriver) it fits nowhere; turned parallel it
+    does."""
+    tray = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34), tray=True)
+    room = empty_room(tray.center, tray.floor_size, tray.floor)
+    room = observed(room, X_LOOK, K, occupied=None, floor=None)  # all seen bare
+    cells = room.cells
+    lying = (np.abs(cells[..., 1] - (-0.25 + 0.07)) < 0.015) & (np.abs(cells[..., 0] - 0.5) < 0.1)
+    room = type(room)(room.center, room.size, room.floor, room.seen, lying)
+    hammer = _bar(0.20, 0.03)
+    across = place(room, hammer, [math.pi / 2])  # the hammer along y: it meets the screwdriver
+    assert across.clearance < 0.0
+    best = place(room, hammer, [math.pi / 2, 0.0])
+    assert best.yaw == 0.0 and best.clearance > 0.005
+    assert best.y < -0.25  # beside it, on the far side of the middle
 
 
 def _held_view():
@@ -85,50 +119,40 @@ def _held_view():
     return hidden, ~hidden, np.zeros((180, 320), bool)
 
 
-def test_a_spot_is_only_where_the_view_saw_bare_floor():
+def test_a_place_is_only_where_the_views_saw_bare_floor():
     """Example 1 with the learned detector: the person put the screwdriver in the tray while
     the robot carried the hammer, which hid the tray's middle in every view; with nothing
-    detected the place took the tray's centre and laid the hammer on the screwdriver. A
-    spot now lies where the view saw the floor bare, away from what it could not see."""
+    detected the place took the tray's centre and laid the hammer on the screwdriver. The
+    footprint now lies where the views saw the floor bare."""
     w = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34), tray=True)
     hidden, floor, occupied = _held_view()
-    room = observed(empty_room(w.center, w.floor_size, w.floor, 0.06), X_LOOK, K,
-                    occupied=occupied, floor=floor)  # fmt: skip
+    room = _room(w, occupied, X_LOOK, floor=floor)
     assert room.seen.any() and not room.seen.all()
-    (x, y), clear = free_spot(room, w.center)
-    assert (x, y) != w.center and math.isfinite(clear)
-    # the spot is a seen one, and its clearance is its distance to the nearest unseen one
-    i = int(np.flatnonzero((room.grid == (x, y)).all(axis=1))[0])
-    assert room.seen[i]
-    assert clear == pytest.approx(np.min(np.linalg.norm(room.unseen - (x, y), axis=1)))
+    small = DISC / 2  # 1.5 cm round: the floor seen bare is a strip 6 cm wide
+    p = place(room, small, [0.0])
+    i, j, inside = room.index(np.array([[p.x, p.y]]) + small)
+    assert inside.all() and room.seen[i, j].all() and p.clearance > 0
+    # taking the unseen floor as bare would put it in the middle
+    q = place(room, small, [0.0], unseen_bare=True)
+    assert q.clearance > p.clearance + 0.02
 
 
 def test_another_view_shifts_the_camera_to_show_what_the_held_object_hid():
     w = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34), tray=True)
     hidden, floor, occupied = _held_view()
-    room = observed(empty_room(w.center, w.floor_size, w.floor, 0.06), X_LOOK, K,
-                    occupied=occupied, floor=floor)  # fmt: skip
-    # nothing seen on the floor: the unseen part may hold a clear spot
-    assert at_best(room) == math.inf
+    room = _room(w, occupied, X_LOOK, floor=floor)
     at = next_look(room, hidden, X_LOOK, K)
     assert at is not None and at != (0.5, -0.25)
     X_next = RigidTransform(X_LOOK.rotation(), [*at, X_LOOK.translation()[2]])
-    # the next view, as predicted: its floor pixels outside the hidden part
     again = observed(room, X_next, K, occupied=occupied, floor=floor)
     assert again.seen.sum() > room.seen.sum()
     # once the whole floor was seen bare there is nothing left to look for
     full = observed(room, X_LOOK, K, occupied=occupied, floor=np.ones((180, 320), bool))
     assert full.seen.all() and next_look(full, hidden, X_LOOK, K) is None
-    assert free_spot(full, w.center) == ((0.5, -0.25), math.inf)
 
 
-def test_no_view_is_added_when_the_unseen_floor_cannot_hold_a_clearer_spot():
-    w = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34))
-    hidden, floor, occupied = _held_view()
-    occupied[:, 300:] = True  # an object along the image's right edge, seen
-    room = observed(empty_room(w.center, w.floor_size, w.floor, 0.06), X_LOOK, K,
-                    occupied=occupied, floor=floor & ~occupied)  # fmt: skip
-    _, clear = free_spot(room, w.center)
-    best = at_best(room)
-    assert clear <= best < math.inf  # the unseen left part is farther from the object
-    assert best > clear + 0.02
+def test_a_footprint_is_the_objects_points_in_the_hands_frame():
+    pts = np.array([[0.6, -0.2], [0.7, -0.2]])  # along world x from the centre (0.65, -0.2)
+    shape = footprint(pts, (0.65, -0.2), math.pi / 2)  # a hand turned to world y
+    assert shape == pytest.approx(np.array([[0.0, 0.05], [0.0, -0.05]]), abs=1e-12)
+    assert len(footprint(np.random.default_rng(0).random((1000, 2)), (0, 0), 0.0)) <= 64
