@@ -196,13 +196,14 @@ def next_look(
 ) -> tuple[float, float] | None:
     """Where to put the camera (world x, y; same height and orientation as ``X_WC``) so that
     a view shows the most cells no view has seen yet (and nothing blocks): each sideways
-    shift of ``shifts`` in 8 directions is scored by those cells that would fall in the
-    image (of ``hidden``'s size) and outside its ``hidden`` pixels (the held object hangs
-    there in every view); the smaller shift wins a tie. None when no shift shows any."""
+    shift of ``shifts`` in 8 directions from over the floor's centre is scored by those
+    cells that would fall in the image (of ``hidden``'s size) and outside its ``hidden``
+    pixels (the held object hangs there in every view); the smaller shift wins a tie. None
+    when no shift shows any."""
     todo = room.cells[~room.seen & ~room.blocked]
     if len(todo) == 0:
         return None
-    p = X_WC.translation()
+    p = np.array([room.center[0], room.center[1], X_WC.translation()[2]])
     best, where = 0, None
     for d in shifts:
         for k in range(8):
@@ -216,10 +217,10 @@ def next_look(
     return where
 
 
-def footprint(points: np.ndarray, center: tuple[float, float], yaw: float, most: int = 64):
-    """The footprint ``shape`` of `place` from an object's top-view world points (N x 2):
-    round its ``center``, in the frame of a hand at ``yaw``, thinned to at most ``most``
+def footprint(points: np.ndarray, yaw: float, most: int = 64):
+    """The footprint ``shape`` of `place` from an object's top-view points round its centre
+    (N x 2, world axes): in the frame of a hand at ``yaw``, thinned to at most ``most``
     points (a deterministic stride)."""
-    pts = np.asarray(points, float).reshape(-1, 2) - np.asarray(center, float)
+    pts = np.asarray(points, float).reshape(-1, 2)
     pts = pts[:: max(1, -(-len(pts) // most))]
     return _rotated(pts, -yaw) if len(pts) else np.zeros((1, 2))

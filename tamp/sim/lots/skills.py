@@ -182,8 +182,9 @@ class SkillState:
     track: int | None = None
     target_xy: tuple[float, float] | None = None
     target_top: float = 0.0  # the target's top above the table, from the last view
-    #: the target's top-view points in the table plane (N x 2, world; from the last view)
-    target_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    #: the target's top-view points in the table plane round its centre (N x 2, world
+    #: axes): the widest of this attempt's views (a low view may show only part of it)
+    target_shape: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     views_done: int = 0  # views of this attempt (the look's and the descent's)
     #: the descent (`tamp.sim.lots.descent`): the latest views' best grasps, their fusion,
     #: whether the hand committed, the other objects' centres in the latest view, views in a
@@ -481,6 +482,7 @@ class PandaSkillController(LeafSystem):
         s.views_done, s.window, s.fused, s.committed, s.others = 0, (), None, False, ()
         s.sure = None
         s.lost, s.explored, s.view_asked, s.bottom_t, s.servo = 0, 0, None, None, None
+        s.target_shape = np.zeros((0, 2))
 
     # ---- step execution ------------------------------------------------------------------
     def _advance(self, s, t, q_meas, v_meas, obs: Observation) -> None:
@@ -684,7 +686,11 @@ class PandaSkillController(LeafSystem):
         p = backproject(det.u, det.v, det.depth, self.planner.intrinsics, X_WC)
         s.target_xy = (float(p[0]), float(p[1]))
         s.target_top = max(float(p[2]), 0.0)  # median depth of its pixels: about its top
-        s.target_points = top_view_points(crop, self.planner.intrinsics, X_WC)
+        shape = top_view_points(crop, self.planner.intrinsics, X_WC) - s.target_xy
+        if len(shape) and (
+            not len(s.target_shape) or np.hypot(*shape.T).max() > np.hypot(*s.target_shape.T).max()
+        ):
+            s.target_shape = shape
         s.others = tuple(
             (float(q[0]), float(q[1]))
             for o in obs.detections
@@ -816,7 +822,7 @@ class PandaSkillController(LeafSystem):
         c, w = math.cos(yaw), math.sin(yaw)  # the centre's offset from the TCP, hand frame
         dx, dy = s.target_xy[0] - g.x, s.target_xy[1] - g.y
         s.hold_offset = (c * dx + w * dy, -w * dx + c * dy)
-        s.hold_shape = footprint(s.target_points, s.target_xy, yaw)
+        s.hold_shape = footprint(s.target_shape, yaw)
         s.grasp_attempts += 1
         s.picks_tried += 1
         k = s.picks_tried
