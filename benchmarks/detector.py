@@ -28,9 +28,10 @@ object held in the gripper is not counted: `segtrain.true_instances`). Rows:
   as the cell gives them (`segdata.view_fixtures`: the floor as the plane, the walls left out).
 
 ``--baseline FILE`` scores other weights on the same views (``before``: the counts, the
-totals and the scene kinds), ``--candidate FILE`` likewise (``candidate``: weights tried and
-not shipped); ``--also DATA`` scores further held-out sets with each of them
-(``held_out_sets``: ``after`` the ``--weights`` file, ``before``, ``candidate``). Prints
+totals and the scene kinds), each ``--candidate FILE`` likewise (``candidate``,
+``candidate_2`` ...: weights tried and not shipped); ``--also DATA`` scores further held-out
+sets with each of them (``held_out_sets``: ``after`` the ``--weights`` file, ``before``,
+the candidates). Prints
 the tables and one JSON line; ``--out FILE`` writes the JSON there
 (``benchmarks/results/detector.json`` is the committed run).
 """
@@ -300,14 +301,20 @@ def main(argv: list[str] | None = None) -> int:
         "--baseline", type=Path, help="weights to compare against on the same views (before)"
     )
     parser.add_argument(
-        "--candidate", type=Path, help="weights tried and not shipped, on the same views"
+        "--candidate",
+        type=Path,
+        action="append",
+        default=[],
+        help="weights tried and not shipped, on the same views (repeatable)",
     )
     parser.add_argument(
         "--also", type=Path, action="append", default=[], help="a further held-out set to score"
     )
     args = parser.parse_args(argv)
     doc = run(args.data, args.weights, args.max_views, args.seed)
-    others = {"before": args.baseline, "candidate": args.candidate}
+    others = {"before": args.baseline} | {
+        "candidate" + (f"_{k + 1}" if k else ""): w for k, w in enumerate(args.candidate)
+    }
     for key, weights in others.items():
         if weights:
             doc[key] = {"weights": str(weights)} | run(

@@ -113,9 +113,10 @@ def _views(scene, catalogue, cfg: sd.DataConfig):
 
 def test_the_shipped_weights_count_scenes_from_an_unseen_seed(detector, catalogue):
     """Eight scenes of seed 99 (training used seed 0): the instances found with their class,
-    how well their masks fit, and how few are invented."""
+    how well their masks fit, and how few are invented. Plain scenes (no stacks, no object
+    lying across another: the shipped weights never saw them; the benchmark scores them)."""
     classes, _ = catalogue
-    cfg = sd.DataConfig(views=2)
+    cfg = sd.DataConfig(views=2, stack_share=0.0, across_share=0.0)
     tally = Tally(list(detector.classes))
     for s in range(8):
         scene = sd.sample_scene(np.random.default_rng((99, s)), classes, cfg, "test")
@@ -187,6 +188,33 @@ def test_an_object_the_detector_never_saw_is_unknown_or_ignored(detector, catalo
                 if (d.mask & mask).sum() > 0.5 * d.mask.sum():
                     reported.append(d.cls)
     assert all(c in (sd.UNKNOWN, sd.HAND) for c in reported), reported
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="the shipped weights were trained without stacks (obstacle/unknown); weights "
+    "retrained with them count 9 of 24 such views right but lose on plain scenes, unshipped",
+)
+def test_the_shipped_detector_counts_a_three_high_tower(detector, catalogue):
+    """Fig. 10's tower (bottom, body on it, peak on that; `tamp.sim.lots.stack`) rendered
+    from four wrist views above it (Drake, ~2 s): each view counts one of each level."""
+    classes, fixtures = catalogue
+    by_name = {c.name: c for c in classes}
+    cfg = sd.DataConfig(views=4)
+    rng = np.random.default_rng(11)
+    tower = [sd.Item("bottom", by_name["bottom"].visuals, 0.02, -0.03, 0.4, kind="bottom")]
+    for name in ("body", "peak"):
+        tower.append(sd.stacked(tower[-1], by_name[name], rng))
+    cams = sd.sample_cameras(rng, tower[:1], cfg, max(it.top for it in tower))
+    scene = sd.Scene(tuple(tower), (), (0.6, 0.55, 0.45, 1.0), ({"direction": [0.2, 0.1, -1.0],
+                     "intensity": 0.9, "color": [1.0, 1.0, 1.0]},), None, tuple(cams))  # fmt: skip
+    counts = []
+    for v in sd.render_scene(scene, classes, fixtures, cfg):
+        K = v.K
+        found = detector.detect(v.rgb, v.depth, (K[0, 0], K[1, 1], K[0, 2], K[1, 2]), v.X_WC)
+        counts.append(sorted(d.cls for d in found))
+    assert counts == [["body", "bottom", "peak"]] * 4, counts
 
 
 @pytest.mark.parametrize("name", ["saw", "hammer", "screwdriver"])
