@@ -33,7 +33,8 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   floor no view saw, remembered hidden objects and the edges kept clear of:
   `tamp.sim.lots.room`); when that clearance is under `PLACE_CLEARANCE`, up to
   `PLACE_VIEWS` more views with the camera shifted sideways to where it shows most of the
-  unseen floor; lift, one view from
+  unseen floor, and if they still saw too little, the unseen floor taken as bare; lift,
+  one view from
   there. In W^B of a cell that declares a stack (``stack:``, `tamp.sim.lots.stack`), an
   object of a stack class above the base goes on the object of the class below it instead:
   centred on where the view shows that one (detected, or remembered and hidden now), its
@@ -937,12 +938,12 @@ class PandaSkillController(LeafSystem):
             )
             yaws = self.place_yaws(s)
             best = place(s.room, s.hold_shape, yaws)
+            hoped = place(s.room, s.hold_shape, yaws, unseen_bare=True)
             if (
                 best.clearance < PLACE_CLEARANCE
                 and s.place_views < PLACE_VIEWS
                 and obs.hidden is not None
-                and place(s.room, s.hold_shape, yaws, unseen_bare=True).clearance
-                > best.clearance + PLACE_GAIN  # the unseen floor may hold a better spot
+                and hoped.clearance > best.clearance + PLACE_GAIN  # the unseen may hold room
             ):
                 at = next_look(s.room, obs.hidden, X_WC, self.planner.intrinsics)
                 if at is not None:
@@ -961,9 +962,15 @@ class PandaSkillController(LeafSystem):
                         Step("view", handler="place"),
                     )
                     return
+            where = ""
+            if best.clearance < PLACE_CLEARANCE and hoped.clearance > best.clearance:
+                # the views saw too little bare floor for it (a held saw hides 88 % of the
+                # image): the floor no view saw is taken as bare, what was seen is avoided
+                best = hoped
+                where = ", partly on floor no view saw"
             cx, cy, yaw = best.x, best.y, best.yaw
             floor, gap = workspace.floor, RELEASE_GAP
-            where = "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
+            where += "".join(f", away from the hidden {m.cls}" for m in obs.occluded)
             if math.isfinite(best.clearance):
                 where += f", {best.clearance:.3f} m clear"
         c, w = math.cos(yaw), math.sin(yaw)
