@@ -29,7 +29,7 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
 - ``Place(side)``: look at W^side (at the hand's present yaw); put the held object's
   footprint (its top-view points from the grasp's views, in the hand's frame; its offset
   from the TCP kept at the grasp) where the views saw the floor bare and nothing lies, at
-  the centre and hand yaw (`PLACE_TURNS`) that keep it farthest inside that floor (the
+  the centre (the hand's yaw kept) that keeps it farthest inside that floor (the
   floor no view saw, remembered hidden objects and the edges kept clear of:
   `tamp.sim.lots.room`); when that clearance is under `PLACE_CLEARANCE`, up to
   `PLACE_VIEWS` more views with the camera shifted sideways to where it shows most of the
@@ -127,8 +127,6 @@ TURN_SPEED = 2.0
 PLACE_CLEARANCE = 0.01
 #: views a place may add when its views showed no room for the held object
 PLACE_VIEWS = 2
-#: hand yaws a place tries, relative to the hand's present one (rad), nearest first
-PLACE_TURNS = tuple(k * math.pi / 4 for k in (0, 1, -1, 2, -2, 3, -3, 4))
 #: ... only when a spot that much clearer may lie in the floor no view saw yet (m)
 PLACE_GAIN = 0.02
 #: the held object's underside this far (m) above where it goes when the fingers open: on
@@ -440,17 +438,6 @@ class PandaSkillController(LeafSystem):
         X_WC = RigidTransform(down(yaw), [x, y, h])
         p = self.kin.tcp_for_camera(X_WC).translation()
         return (float(p[0]), float(p[1]), float(p[2]), float(yaw))
-
-    def place_yaws(self, s: SkillState) -> list[float]:
-        """The hand yaws a place tries (`PLACE_TURNS` from the present one, nearest first),
-        those the wrist reaches (within `WRIST_REACH` of its mid-range yaw)."""
-        now = self.kin.tcp_yaw(s.q)
-        centre = self.kin.wrist_centred_yaw(s.q)
-        return [
-            now + d
-            for d in PLACE_TURNS
-            if abs(math.remainder(now + d - centre, 2 * math.pi)) <= WRIST_REACH
-        ] or [now]
 
     def half_turn(self, s: SkillState) -> float:
         """The yaw about half a turn from the hand's, turning the wrist towards the middle of
@@ -936,7 +923,9 @@ class PandaSkillController(LeafSystem):
                 floor=obs.floor,
                 avoid=tuple(m.position[:2] for m in obs.occluded),
             )
-            yaws = self.place_yaws(s)
+            # at the hand's present yaw: turning the hand with the object held (in 45 degree
+            # steps, to fit a long one beside another) lost objects in two narratives
+            yaws = [self.kin.tcp_yaw(s.q)]
             best = place(s.room, s.hold_shape, yaws)
             hoped = place(s.room, s.hold_shape, yaws, unseen_bare=True)
             if (
