@@ -912,7 +912,7 @@ class PandaSkillController(LeafSystem):
             where = f" on the {on} (its top at {floor:.3f} m)"
         else:
             # the object's footprint goes where views saw the floor bare and nothing else
-            # lies, inside the edges (`tamp.sim.lots.room`), at one of the hand's yaws
+            # lies, inside the edges (`tamp.sim.lots.room`)
             if s.room is None:
                 s.room = empty_room(workspace.center, workspace.floor_size, workspace.floor)
             s.room = observed(
