@@ -167,7 +167,8 @@ class Observation:
     #: and hides a patch of the workspace behind it)
     hand_cover: float = 0.0
     #: pixels that show the workspace's floor bare (full image, bool; from depth and the
-    #: camera pose): where the view saw room. None when the view was not placed
+    #: camera pose): where the view saw room for a place. None for a grasp's view (the
+    #: descent's many views need none) and a view that was not placed
     floor: np.ndarray | None = None
     #: pixels the gripper's region covers (nearer than the hand depth: the held object)
     hidden: np.ndarray | None = None

@@ -546,7 +546,7 @@ class Perception(LeafSystem):
                     _frozen(mask[sl]),
                 )
         floor = None
-        if placed and region is not None:
+        if placed and region is not None and req.target is None:  # not a grasp's view
             with self.analysis:
                 z = world_heights(depth, self._intrinsics, X_WC)
                 with np.errstate(invalid="ignore"):

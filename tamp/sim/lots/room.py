@@ -7,16 +7,17 @@ it). `Room` keeps, on a raster of the workspace's floor (`RES`), which cells som
 bare (perception's ``floor`` pixels: world height at the floor's, from depth and the arm's
 kinematics) and which hold something (object pixels taken down to the floor's plane, and
 perception's remembered objects hidden now). A cell is *free* when seen bare and not
-blocked; every other cell, and everything beyond the floor's edges, must be kept clear of.
+blocked; every other cell must be kept clear of.
 
 `place` puts the held object's footprint (its top-view points round its centre, in the
-hand's frame, measured from the grasp's views) at every candidate centre (`STEP` apart) and
-hand yaw, and takes the pose whose footprint lies farthest inside the free cells (a
-Euclidean distance transform of the raster: the clearance of every footprint point is one
-look-up). `at_best` is the same with every unseen cell taken as bare: what another view
-could gain at most; `next_look` says where a view from the same height would show most of
-the unseen floor (the held object hangs at the same place in every image, so the camera
-moves sideways, not round).
+hand's frame, measured from the grasp's views) at every candidate centre (`STEP` apart)
+and hand yaw given, keeps those whose footprint lies inside the floor's edges (`EDGE`), and
+takes the one farthest from every cell that is not free (a Euclidean distance transform of
+the raster: the clearance of every footprint point is one look-up). With
+``unseen_bare`` every unseen cell counts as bare: what another view could gain at most;
+`next_look` says where a view from the same height would show most of the unseen floor
+(the held object hangs at the same place in every image, so the camera moves sideways,
+not round).
 """
 
 from __future__ import annotations
@@ -34,6 +35,8 @@ from tamp.grasp.pinhole import camera_to_pixel, pixel_to_camera
 RES = 0.005
 #: spacing of the candidate centres (m)
 STEP = 0.02
+#: a footprint's points keep this far inside the floor's edges (m)
+EDGE = 0.01
 #: a remembered object that is hidden now blocks this radius round its centre (m)
 HIDDEN_RADIUS = 0.03
 #: the camera's sideways shifts tried for another view of the floor (m; 8 directions each)
@@ -139,11 +142,13 @@ def observed(
 
 
 def clearance(room: Room, *, unseen_bare: bool = False) -> np.ndarray:
-    """Every cell's distance (m) to the nearest cell that is not free, or to the floor's
-    edge (ny x nx); ``unseen_bare``: unseen cells count as free."""
+    """Every cell's distance (m) to the nearest cell that is not free (ny x nx; negative on
+    such a cell, infinite when every cell is free); ``unseen_bare``: unseen cells count as
+    free. The floor's edges are not in it: `place` keeps a footprint inside them apart."""
     free = ~room.blocked & (room.seen | unseen_bare)
-    padded = np.pad(free, 1, constant_values=False)  # beyond the edges: not free
-    return ndimage.distance_transform_edt(padded)[1:-1, 1:-1] * RES - RES / 2
+    if free.all():
+        return np.full(free.shape, np.inf)
+    return ndimage.distance_transform_edt(free) * RES - RES / 2
 
 
 @dataclass(frozen=True)
@@ -166,24 +171,33 @@ def place(
     room: Room, shape: np.ndarray, yaws: Sequence[float], *, unseen_bare: bool = False
 ) -> Placement:
     """The centre (every `STEP` over the floor) and hand yaw of ``yaws`` whose footprint
-    (``shape``: K x 2 points round the object's centre in the hand's frame) has the largest
-    clearance (the least of its points' `clearance`; a point beyond the floor counts as
-    overlapping); the first yaw wins a tie. ``unseen_bare``: `clearance`'s."""
+    (``shape``: K x 2 points round the object's centre in the hand's frame) lies inside the
+    floor, at least `EDGE` from its edges, with the largest clearance (the least of its
+    points' `clearance`: farthest from everything to keep clear of); among equals the one
+    farthest inside the edges, and the first yaw. When no footprint fits inside, the one
+    whose clearance or edge distance is least bad. ``unseen_bare``: `clearance`'s."""
     D = clearance(room, unseen_bare=unseen_bare)
-    cells = room.cells
     k = max(int(round(STEP / RES)), 1)
-    ny, nx = D.shape
-    centres = cells[k // 2 :: k, k // 2 :: k].reshape(-1, 2)
+    centres = room.cells[k // 2 :: k, k // 2 :: k].reshape(-1, 2)
     if len(centres) == 0:
         centres = np.array([room.center])
-    best = Placement(room.center[0], room.center[1], yaws[0], -np.inf)
+    half = np.asarray(room.size, float) / 2
+    best, best_key = None, None
     for yaw in yaws:
         pts = centres[:, None, :] + _rotated(np.asarray(shape, float), yaw)[None, :, :]
-        i, j, inside = room.index(pts)
-        c = np.where(inside, D[i, j], -RES).min(axis=1)
-        b = int(np.argmax(c))
-        if c[b] > best.clearance + 1e-9:
-            best = Placement(float(centres[b, 0]), float(centres[b, 1]), float(yaw), float(c[b]))
+        i, j, _ = room.index(pts)
+        edge = (half - np.abs(pts - np.asarray(room.center))).min(axis=2).min(axis=1)
+        clear = np.where(edge >= 0, D[i, j].min(axis=1), -RES)
+        fits = edge >= EDGE
+        # inside the edges first, then the clearance, then the distance to the edges
+        key = np.stack([fits, np.where(fits, clear, np.minimum(clear, edge)), edge], axis=1)
+        b = max(range(len(centres)), key=lambda n: tuple(key[n]))
+        if best_key is None or tuple(key[b]) > best_key:
+            best_key = tuple(key[b])
+            best = Placement(
+                float(centres[b, 0]), float(centres[b, 1]), float(yaw), float(clear[b])
+            )
+    assert best is not None
     return best
 
 
@@ -215,6 +229,17 @@ def next_look(
             if n > best:
                 best, where = n, (float(c[0]), float(c[1]))
     return where
+
+
+#: the footprint taken for an object whose extent no view measured (a scripted grasp): a
+#: disc of this radius (m), about a catalogue tool's half width
+UNMEASURED_RADIUS = 0.06
+
+
+def disc(radius: float = UNMEASURED_RADIUS, n: int = 16) -> np.ndarray:
+    """A round footprint of ``radius`` (``n`` points on its rim and its centre)."""
+    a = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    return np.vstack([[0.0, 0.0], radius * np.column_stack([np.cos(a), np.sin(a)])])
 
 
 def footprint(points: np.ndarray, yaw: float, most: int = 64):

@@ -28,10 +28,10 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   re-acquires the instance of the class nearest the image centre.
 - ``Place(side)``: look at W^side (at the hand's present yaw); put the held object's
   footprint (its top-view points from the grasp's views, in the hand's frame; its offset
-  from the TCP kept at the grasp) where the views saw the floor bare and nothing lies, at
-  the centre (the hand's yaw kept) that keeps it farthest inside that floor (the
-  floor no view saw, remembered hidden objects and the edges kept clear of:
-  `tamp.sim.lots.room`); when that clearance is under `PLACE_CLEARANCE`, up to
+  from the TCP kept at the grasp) where the views saw the floor bare and nothing lies,
+  inside the floor's edges, at the centre (the hand's yaw kept) farthest from the floor no
+  view saw, the objects seen and the remembered hidden ones (`tamp.sim.lots.room`); when
+  that clearance is under `PLACE_CLEARANCE`, up to
   `PLACE_VIEWS` more views with the camera shifted sideways to where it shows most of the
   unseen floor, and if they still saw too little, the unseen floor taken as bare; lift,
   one view from
@@ -92,7 +92,7 @@ from tamp.sim.lots.descent import (
 )
 from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner, near_grasp
 from tamp.sim.lots.kinematics import ArmKinematics, down, hand_yaw_for_closing, pose_error
-from tamp.sim.lots.room import Room, empty_room, footprint, next_look, observed, place
+from tamp.sim.lots.room import Room, disc, empty_room, footprint, next_look, observed, place
 from tamp.sim.lots.scenario import CellScenario
 from tamp.sim.lots.stack import STACK_SIDE, below, support
 from tamp.world.interface import Status
@@ -376,7 +376,7 @@ class PandaSkillController(LeafSystem):
                 return self._finish(s, t, Status.FAILURE, f"PickAt needs numbers: {cmd}")
             s.side, s.target_cls, s.track, s.attempt = args[0], "object", None, 1
             s.hold_z = MIN_GRASP_Z
-            s.hold_offset, s.hold_shape = (0.0, 0.0), np.zeros((1, 2))  # the TCP's spot
+            s.hold_offset, s.hold_shape = (0.0, 0.0), disc()  # unmeasured: the TCP's spot
             s.grasp_attempts += 1
             s.steps = self._grasp_steps(x, y, MIN_GRASP_Z, math.radians(yaw), args[0])
         elif name == "Place" and len(args) == 1 and args[0] in sides:
@@ -927,7 +927,12 @@ class PandaSkillController(LeafSystem):
             # steps, to fit a long one beside another) lost objects in two narratives
             yaws = [self.kin.tcp_yaw(s.q)]
             best = place(s.room, s.hold_shape, yaws)
-            hoped = place(s.room, s.hold_shape, yaws, unseen_bare=True)
+            # what the floor no view saw could give, asked only when the seen floor is short
+            hoped = (
+                place(s.room, s.hold_shape, yaws, unseen_bare=True)
+                if best.clearance < PLACE_CLEARANCE
+                else best
+            )
             if (
                 best.clearance < PLACE_CLEARANCE
                 and s.place_views < PLACE_VIEWS
