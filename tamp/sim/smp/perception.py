@@ -16,7 +16,8 @@ kept (the pick check only compares it with the height before the lift). The run'
 m) is added to x and y, drawn from the seed and the frame. Yaw is not estimated (it keeps the
 prior): only the obstacle box has one that matters, and it appears with yaw 0. A detection
 whose size (pixels x depth^2) is below `WHOLE` of the largest seen for that object is partly
-hidden and is not used.
+hidden and is not used, except by the view that confirms the object moved: it is believed
+there all the same, and its size is learnt anew from there (it may stand another way up).
 
 Identity is the estimator's own: the detector reports each object's *class* (its model:
 ``bottle``, ``obstacle``), never which object it is, and `ObjectPoseEstimator._associate`
@@ -193,9 +194,14 @@ class ObjectPoseEstimator(LeafSystem):
                         continue
                 moving.pop(uid, None)
                 size = det.pixels * det.depth**2  # about constant over distance, unoccluded
-                full[uid] = max(full.get(uid, 0.0), size)
+                # an object confirmed moved is believed there even when partly hidden
+                # (centimetres off beats where it was before), and its full size is learnt
+                # anew: it may stand another way up, seen from another side
+                full[uid] = size if moved else max(full.get(uid, 0.0), size)
                 if size < WHOLE * full[uid]:
-                    continue  # partly hidden (by the arm, the held object, the image border)
+                    # partly hidden (by the arm, the held object, the image border): its
+                    # centroid is off by centimetres
+                    continue
                 est = self._estimate(det, X_view, estimates[uid][3], self._kinds[uid])
                 if self._noise > 0:
                     dx, dy = np.clip(rng.standard_normal(2), -3.0, 3.0) * self._noise
@@ -228,7 +234,8 @@ class ObjectPoseEstimator(LeafSystem):
         explains are paired by least total distance whatever it is (moved: an object a
         person put down elsewhere, as Case 3's O_a appears on a place), except where another
         object is believed to stand (within `OCCUPIED` of its estimate: a detection there
-        is that object, seen as the wrong class). A detection left over is no object the
+        is that object, seen as the wrong class; the object in the hand stands nowhere on
+        the floor). A detection left over is no object the
         robot knows: it is ignored."""
         out: list[tuple[str, object, bool]] = []
         by_class: dict[str, list] = {}
@@ -247,7 +254,9 @@ class ObjectPoseEstimator(LeafSystem):
             out += [(uids[j], dets[i], False) for i, j in near]
             free_d = [i for i in range(len(dets)) if i not in {i for i, _ in near}]
             free_u = [j for j in range(len(uids)) if j not in {j for _, j in near}]
-            others = [xy[:2] for u, xy in s.estimates.items() if u not in uids]
+            # the object in the hand is where the hand is (kinematics), above the floor: a
+            # detection under it is another object (Case 3's O_a on the place being served)
+            others = [xy[:2] for u, xy in s.estimates.items() if u not in uids and u != s.following]
             free_d = [
                 i
                 for i in free_d

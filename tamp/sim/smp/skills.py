@@ -364,13 +364,20 @@ class YouBotSkillController(LeafSystem):
                 raise SkillFailure(
                     f"{args[0]} slipped out of the fingers while carried", "grasp_slipped"
                 )
-            area = self._area(st, args[1])
-            for uid in self._bodies:
-                if uid == args[0]:
-                    continue
-                p = self._X(poses, uid).translation()
-                if math.hypot(p[0] - area.pos.x, p[1] - area.pos.y) <= area.radius:
-                    raise SkillFailure(f"area {args[1]} is occupied by {uid}", "area_occupied")
+            self._check_free(st, poses)
+
+    def _check_free(self, st: ControllerState, poses) -> None:
+        """Fail (``area_occupied``) when an object other than the held one is believed in
+        the area a Place is for: at the start, and again before lowering (a person may put
+        one there while the robot drives and reaches: Case 3's O_a)."""
+        held, name = st.cmd.args
+        area = self._area(st, name)
+        for uid in self._bodies:
+            if uid == held:
+                continue
+            p = self._X(poses, uid).translation()
+            if math.hypot(p[0] - area.pos.x, p[1] - area.pos.y) <= area.radius:
+                raise SkillFailure(f"area {name} is occupied by {uid}", "area_occupied")
 
     # -- phases (each returns the segment to track, or None when there is nothing to do) -----
     def _phase_fold(self, st, t, q, poses):
@@ -553,6 +560,7 @@ class YouBotSkillController(LeafSystem):
         if self._friction and not self._in_hand(uid, q):
             st.grasp = GraspRequest()
             raise SkillFailure(f"{uid} slipped out of the fingers above the area", "grasp_slipped")
+        self._check_free(st, poses)
         q1 = st.segment.q1.copy()
         q1[ARM] = st.memo["down"]
         return joint_segment(t, q, q1, 0.8, 0.6)

@@ -68,6 +68,24 @@ def test_an_object_moved_in_the_plant_is_seen_there():
     assert math.isclose(world.objects["Oa"].pos.x, area.pos.x)
 
 
+def _estimator(kinds, prior, K):
+    """An estimator whose camera is body 0 (its pose the camera's), period 0.1 s."""
+    from tamp.sim.smp.perception import ObjectPoseEstimator
+
+    bodies = {uid: i + 1 for i, uid in enumerate(kinds)}
+    return ObjectPoseEstimator(
+        bodies=bodies,
+        kinds=kinds,
+        prior=prior,
+        camera_body=0,
+        X_BC=RigidTransform(),
+        intrinsics=K,
+        palm_body=0,
+        grasp_offset=0.0,
+        period=0.1,
+    )
+
+
 def test_the_pose_estimator_tells_objects_apart_by_position_not_by_label():
     """The detector reports classes only (``bottle``, ``obstacle``); the estimator pairs a
     view's detections with its objects by position: nearest within the gate whatever the
@@ -78,23 +96,13 @@ def test_the_pose_estimator_tells_objects_apart_by_position_not_by_label():
 
     from tamp.grasp.pinhole import camera_to_pixel
     from tamp.sim.core.messages import Detection
-    from tamp.sim.smp.perception import EstimatorState, ObjectPoseEstimator
+    from tamp.sim.smp.perception import EstimatorState
     from tamp.sim.smp.robot import OBJECT_KINDS as KINDS
 
     K = (300.0, 300.0, 160.0, 120.0)
     X_WC = RigidTransform(RotationMatrix(np.diag([1.0, -1.0, -1.0])), [1.0, 0.0, 2.0])
     kinds = {"O0": KINDS["bottle"], "O1": KINDS["bottle"], "Oa": KINDS["obstacle"]}
-    est = ObjectPoseEstimator(
-        bodies={"O0": 1, "O1": 2, "Oa": 3},
-        kinds=kinds,
-        prior={},
-        camera_body=0,
-        X_BC=RigidTransform(),
-        intrinsics=K,
-        palm_body=0,
-        grasp_offset=0.0,
-        period=0.2,
-    )
+    est = _estimator(kinds, {}, K)
 
     def seen_at(cls, x, y):
         p_C = X_WC.inverse().multiply(np.array([x, y, 0.1]))
@@ -124,6 +132,55 @@ def test_the_pose_estimator_tells_objects_apart_by_position_not_by_label():
     assert paired([seen_at("obstacle", 0.81, 0.2)]) == {}
     # a bottle where O0 stands, O0 also seen: a second mask of O0, not O1 moved there
     assert paired([near_o0, seen_at("bottle", 0.83, 0.22)]) == {"O0": (near_o0, False)}
+    # O0 in the hand over the place: an obstacle on the floor under it is O_a put there
+    # (seed 15 of case3_camera: O_a was never believed and the robot put O1 on it)
+    under = seen_at("obstacle", 0.82, 0.19)
+    held = EstimatorState(estimates=s.estimates, seen=s.seen, following="O0")
+    assert {u: m for u, _, m in est._associate([under], X_WC, held)} == {"Oa": True}
+
+
+def test_an_object_put_down_half_hidden_is_believed_there_and_its_size_learnt_anew():
+    """O_a, seen whole (and large) while a person held it outside the workspace, is put
+    on a place where the held object hides half of it: once confirmed there (`CONFIRM`
+    views) it is believed there though partly hidden, and its full size restarts from
+    there, so later whole views of it refine the estimate."""
+    import numpy as np
+    from pydrake.math import RigidTransform, RotationMatrix
+
+    from tamp.grasp.pinhole import camera_to_pixel
+    from tamp.sim.core.messages import Detection, GraspRequest, Observation
+    from tamp.sim.smp.perception import CONFIRM, EstimatorState
+    from tamp.sim.smp.robot import OBJECT_KINDS as KINDS
+
+    K = (300.0, 300.0, 160.0, 120.0)
+    X_WC = RigidTransform(RotationMatrix(np.diag([1.0, -1.0, -1.0])), [1.0, 0.0, 2.0])
+    est = _estimator({"Oa": KINDS["obstacle"]}, {"Oa": (5.0, 5.0, 0.075, 0.0)}, K)
+    context = est.CreateDefaultContext()
+    est.body_poses_in.FixValue(context, [X_WC, RigidTransform()])
+    est.grasp_port.FixValue(context, GraspRequest())
+    est.observation_port.FixValue(context, Observation())
+
+    def view(t, x, pixels):
+        p_C = X_WC.inverse().multiply(np.array([x, 0.1, 0.075]))
+        u, v = camera_to_pixel(p_C, K)
+        det = Detection(0, "obstacle", pixels, float(u), float(v), float(p_C[2]))
+        rendered = Observation(id=round(t * 10), time=round(t - 0.1, 6), detections=(det,))
+        est.observation_port.FixValue(context, rendered)  # rendered at the last update
+        context.SetTime(t)
+        est._update(context, context.get_mutable_state())
+        return est.state(context)
+
+    context.SetTime(0.0)
+    est._update(context, context.get_mutable_state())  # the camera's pose at t = 0
+    s = est.state(context)
+    big = EstimatorState(s.request, s.used, s.estimates, {"Oa": 0.0}, s.cameras, full={"Oa": 1e6})
+    context.get_mutable_abstract_state(0).set_value(big)
+    for k in range(1, CONFIRM + 1):
+        s = view(0.1 * k, 1.0, 400)  # half of what "full" says: partly hidden
+    assert math.hypot(s.estimates["Oa"][0] - 1.0, s.estimates["Oa"][1] - 0.1) < 0.05
+    assert s.full["Oa"] == pytest.approx(400 * 1.925**2, rel=0.01)
+    s = view(0.1 * (CONFIRM + 1), 1.03, 800)  # seen whole: refines the estimate
+    assert s.estimates["Oa"][0] > 1.02 and s.full["Oa"] > 400 * 1.925**2
 
 
 def test_an_object_seen_away_from_its_estimate_moves_once_seen_there_again():
@@ -134,3 +191,32 @@ def test_an_object_seen_away_from_its_estimate_moves_once_seen_there_again():
     again = seen_moved(first, (1.02, 0.11))
     assert again[2] == 2 == CONFIRM
     assert seen_moved(first, (1.0 + 2 * GATE, 0.1))[2] == 1  # elsewhere: counting restarts
+
+
+def test_a_place_stops_before_lowering_onto_an_object_put_there_meanwhile():
+    """The Place skill checks its area at the start and again before it lowers: an object
+    believed there since (a person put it down while the robot reached) stops the skill
+    with ``area_occupied`` instead of the held object being set down on it."""
+    from tamp.sim.core.messages import SkillCommand
+    from tamp.sim.smp.skills import ControllerState, SkillFailure
+
+    scenario = load_scenario(packaged("case3.yaml"))
+    system = build_station(scenario, Idle())
+    root = system.diagram.CreateDefaultContext()
+    plant_ctx = system.plant.GetMyContextFromRoot(root)
+    skills = system.skills
+    st = ControllerState(cmd=SkillCommand(1, "Place", ("O1", "L1")))
+    area = system.areas["L1"]
+
+    def poses():
+        return list(system.plant.get_body_poses_output_port().Eval(plant_ctx))
+
+    skills._check_free(st, poses())  # O_a waits outside the workspace: L1 is free
+    system.plant.SetFreeBodyPose(
+        system.plant.GetMyMutableContextFromRoot(root),
+        system.bodies["Oa"],
+        RigidTransform([area.pos.x + 0.02, area.pos.y, 0.075]),
+    )
+    with pytest.raises(SkillFailure) as failure:
+        skills._check_free(st, poses())
+    assert failure.value.cause == "area_occupied" and "Oa" in str(failure.value)
