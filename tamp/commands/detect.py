@@ -169,8 +169,6 @@ def _classifier(args):
     """(the training call, its summary line) of the crop classifier (``--kind classifier``)."""
     from tamp.sim.core.croptrain import TrainSettings, train
 
-    if args.init:
-        raise InputError("--init: only with --kind segmentation")
     if args.device not in ("auto", "cpu"):
         raise InputError(f"--device: the classifier trains on the CPU, not {args.device!r}")
     settings = TrainSettings(
@@ -180,6 +178,7 @@ def _classifier(args):
         width=args.width,
         threads=args.threads,
         seed=args.seed,
+        init=args.init,
     )
     return (
         partial(train, settings=settings),

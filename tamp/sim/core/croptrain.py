@@ -17,7 +17,10 @@ Each proposal of the fit gives `TrainSettings.copies` crops: the detector's wind
 jittered ones. A tenth of the training scenes (`TrainSettings.val_fraction`, drawn from the
 seed) is kept out of the fit; on them the ``unknown`` threshold is chosen (`choose_threshold`)
 and the classifier is scored. The sizes each class spans in the fit (`size_ranges`) are the
-size gate (`cropnet.size_gate`). The weights file records the outputs, the threshold, the
+size gate (`cropnet.size_gate`). Fine-tuning (`TrainSettings.init`) starts from earlier
+weights of the same outputs and keeps their size gate widened by the new fit's (`widest`),
+so weights that learn stacks and trays from a new set still accept what the old set showed.
+The weights file records the outputs, the threshold, the
 sizes, the split (`DatasetInfo.split_record`) and the CPU time.
 """
 
@@ -63,6 +66,9 @@ class TrainSettings:
     val_fraction: float = 0.1
     #: crops per proposal in the fit (the detector's window, then jittered ones)
     copies: int = 2
+    #: start from these weights (fine-tuning: same outputs and width); the size gate then
+    #: spans both the start's sizes and the new fit's
+    init: str | None = None
 
 
 def label_proposal(mask: np.ndarray, inst: np.ndarray, inst_cls: np.ndarray, outputs) -> int:
@@ -188,6 +194,35 @@ def size_ranges(features: np.ndarray, labels: np.ndarray, outputs) -> dict:
     return out
 
 
+def widest(a: dict | None, b: dict) -> dict:
+    """The size gate spanning both ``a`` and ``b`` (per class, the lower lows and higher
+    highs; a class in one only keeps its own)."""
+    out = {k: {"low": list(v["low"]), "high": list(v["high"])} for k, v in (a or {}).items()}
+    for name, v in b.items():
+        if name not in out:
+            out[name] = {"low": list(v["low"]), "high": list(v["high"])}
+            continue
+        out[name]["low"] = [min(x, y) for x, y in zip(out[name]["low"], v["low"], strict=True)]
+        out[name]["high"] = [max(x, y) for x, y in zip(out[name]["high"], v["high"], strict=True)]
+    return out
+
+
+def _start(settings: TrainSettings, outputs: list[str]) -> tuple[cropnet.CropNet, dict]:
+    """(the model to train, the meta of the weights it starts from: {} for a fresh one)."""
+    if not settings.init:
+        return cropnet.CropNet(len(outputs), settings.width), {}
+    model, meta = cropnet.load(settings.init)
+    if list(meta["outputs"]) != list(outputs) or int(meta["width"]) != settings.width:
+        from tamp.errors import InputError
+
+        raise InputError(
+            f"--init: outputs {meta['outputs']} width {meta['width']}, this run's "
+            f"{outputs} width {settings.width}",
+            file=settings.init,
+        )
+    return model.train(), meta
+
+
 def choose_threshold(probs: np.ndarray, labels: np.ndarray, outputs) -> float:
     """The ``unknown`` threshold: the probability below which a proposal given a task class
     is reported ``unknown``, chosen on held-back training scenes to maximise the proposals
@@ -241,7 +276,7 @@ def train(
             f"in {time.process_time() - cpu0:.0f} s CPU")  # fmt: skip
     n = len(outputs)
     weights = torch.tensor(output_weights(samples["y"][fit], n), dtype=torch.float32)
-    model = cropnet.CropNet(n, settings.width)
+    model, start = _start(settings, outputs)
     opt = torch.optim.AdamW(model.parameters(), lr=settings.lr, weight_decay=settings.weight_decay)
     x_all = torch.from_numpy(samples["x"])
     f_all = torch.from_numpy(samples["f"])
@@ -281,7 +316,9 @@ def train(
         "width": settings.width,
         "size": [int(info.config["width"]), int(info.config["height"])],
         "unknown_below": threshold,
-        "sizes": size_ranges(samples["f"][fit], samples["y"][fit], outputs),
+        "sizes": widest(
+            start.get("sizes"), size_ranges(samples["f"][fit], samples["y"][fit], outputs)
+        ),
         "split": info.split_record(),
         "training": asdict(settings) | {"proposals": int(len(fit))},
         "held_back": {"proposals": int(len(vi)), "accuracy": accuracy},

@@ -66,9 +66,21 @@ def test_a_tiny_model_trains_and_is_scored_through_the_command_line(tmp_path, ca
     crops = torch.load(tmp_path / "crops" / "final.pt", weights_only=True)["meta"]
     assert crops["kind"] == "crop_classifier" and crops["outputs"][-2:] == ["several", "none"]
     assert 0.3 <= crops["unknown_below"] < 1.0
-    assert tamp_main(["detect", "train", str(data), "--kind", "classifier", "--init",
-                      str(weights), "--quiet"]) == 2  # fmt: skip
-    assert "--init: only with --kind segmentation" in capsys.readouterr().err
+    # fine-tuning the classifier (--init): its size gate spans the start's and the fit's
+    start = tmp_path / "crops" / "final.pt"
+    assert tamp_main(["detect", "train", str(data), "--out", str(tmp_path / "tuned"),
+                      "--kind", "classifier", "--epochs", "1", "--width", "4", "--init",
+                      str(start), "--threads", "1", "--quiet"]) == 0  # fmt: skip
+    capsys.readouterr()
+    tuned = torch.load(tmp_path / "tuned" / "final.pt", weights_only=True)["meta"]
+    assert tuned["training"]["init"] == str(start)
+    for name, span in crops["sizes"].items():
+        assert all(a <= b for a, b in zip(tuned["sizes"][name]["low"], span["low"]))
+        assert all(a >= b for a, b in zip(tuned["sizes"][name]["high"], span["high"]))
+    # segmentation weights (or another width) cannot start a classifier: exit 2, the file
+    assert tamp_main(["detect", "train", str(data), "--kind", "classifier", "--width", "4",
+                      "--init", str(weights), "--quiet"]) == 2  # fmt: skip
+    assert "final.pt: " in capsys.readouterr().err
     # score on the training scenes too (the test part of 3 scenes may be empty)
     info = sd.read_info(data)
     assert len(info.train) + len(info.test) == 3
