@@ -90,6 +90,13 @@ def register(subparsers) -> None:
     p.add_argument("--lr", type=float, default=3e-3, help="peak learning rate (default 3e-3)")
     p.add_argument("--width", type=int, default=16, help="channels of the first stage")
     p.add_argument("--init", help="start from these weights (same classes and --width)")
+    p.add_argument(
+        "--unknown-below",
+        type=float,
+        default=None,
+        help="classifier: this unknown threshold (0-1) instead of the one chosen on the "
+        "held-back scenes (default: chosen)",
+    )
     p.add_argument("--device", default="auto", help="auto (a GPU when present), cpu, cuda ...")
     p.add_argument("--threads", type=int, default=0, help="torch CPU threads (0: default)")
     p.add_argument("--seed", type=int, default=0, help="initialisation and batch seed")
@@ -169,6 +176,8 @@ def _classifier(args):
     """(the training call, its summary line) of the crop classifier (``--kind classifier``)."""
     from tamp.sim.core.croptrain import TrainSettings, train
 
+    if args.unknown_below is not None and not 0.0 < args.unknown_below < 1.0:
+        raise InputError(f"must lie in (0, 1), got {args.unknown_below}", field="--unknown-below")
     if args.device not in ("auto", "cpu"):
         raise InputError(f"--device: the classifier trains on the CPU, not {args.device!r}")
     settings = TrainSettings(
@@ -179,6 +188,7 @@ def _classifier(args):
         threads=args.threads,
         seed=args.seed,
         init=args.init,
+        unknown_below=args.unknown_below,
     )
     return (
         partial(train, settings=settings),

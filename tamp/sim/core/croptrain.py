@@ -20,6 +20,8 @@ and the classifier is scored. The sizes each class spans in the fit (`size_range
 size gate (`cropnet.size_gate`). Fine-tuning (`TrainSettings.init`) starts from earlier
 weights of the same outputs and keeps their size gate widened by the new fit's (`widest`),
 so weights that learn stacks and trays from a new set still accept what the old set showed.
+`TrainSettings.unknown_below` records a given threshold instead of the chosen one (the chosen
+one is kept in ``meta["held_back"]["chosen"]``).
 The weights file records the outputs, the threshold, the
 sizes, the split (`DatasetInfo.split_record`) and the CPU time.
 """
@@ -69,6 +71,8 @@ class TrainSettings:
     #: start from these weights (fine-tuning: same outputs and width); the size gate then
     #: spans both the start's sizes and the new fit's
     init: str | None = None
+    #: the ``unknown`` threshold to record instead of the one `choose_threshold` picks
+    unknown_below: float | None = None
 
 
 def label_proposal(mask: np.ndarray, inst: np.ndarray, inst_cls: np.ndarray, outputs) -> int:
@@ -306,7 +310,8 @@ def train(
     vi = np.flatnonzero(val)
     probs = cropnet.classify(model, samples["x"][vi].astype(np.float32), samples["f"][vi])
     labels = samples["y"][vi]
-    threshold = choose_threshold(probs, labels, outputs) if len(vi) else 0.5
+    chosen = choose_threshold(probs, labels, outputs) if len(vi) else 0.5
+    threshold = chosen if settings.unknown_below is None else settings.unknown_below
     accuracy = float((probs.argmax(1) == labels).mean()) if len(vi) else None
     cpu = time.process_time() - cpu0
     meta = {
@@ -321,7 +326,7 @@ def train(
         ),
         "split": info.split_record(),
         "training": asdict(settings) | {"proposals": int(len(fit))},
-        "held_back": {"proposals": int(len(vi)), "accuracy": accuracy},
+        "held_back": {"proposals": int(len(vi)), "accuracy": accuracy, "chosen": chosen},
         "seconds": round(time.perf_counter() - t0, 1),
         "cpu_seconds": round(cpu, 1),
         "parameters": sum(p.numel() for p in model.parameters()),

@@ -70,10 +70,12 @@ def test_a_tiny_model_trains_and_is_scored_through_the_command_line(tmp_path, ca
     start = tmp_path / "crops" / "final.pt"
     assert tamp_main(["detect", "train", str(data), "--out", str(tmp_path / "tuned"),
                       "--kind", "classifier", "--epochs", "1", "--width", "4", "--init",
-                      str(start), "--threads", "1", "--quiet"]) == 0  # fmt: skip
+                      str(start), "--unknown-below", "0.85", "--threads", "1",
+                      "--quiet"]) == 0  # fmt: skip
     capsys.readouterr()
     tuned = torch.load(tmp_path / "tuned" / "final.pt", weights_only=True)["meta"]
     assert tuned["training"]["init"] == str(start)
+    assert tuned["unknown_below"] == 0.85 and 0.3 <= tuned["held_back"]["chosen"] < 1.0
     for name, span in crops["sizes"].items():
         assert all(a <= b for a, b in zip(tuned["sizes"][name]["low"], span["low"]))
         assert all(a >= b for a, b in zip(tuned["sizes"][name]["high"], span["high"]))
@@ -81,6 +83,9 @@ def test_a_tiny_model_trains_and_is_scored_through_the_command_line(tmp_path, ca
     assert tamp_main(["detect", "train", str(data), "--kind", "classifier", "--width", "4",
                       "--init", str(weights), "--quiet"]) == 2  # fmt: skip
     assert "final.pt: " in capsys.readouterr().err
+    assert tamp_main(["detect", "train", str(data), "--kind", "classifier",
+                      "--unknown-below", "1.5", "--quiet"]) == 2  # fmt: skip
+    assert "--unknown-below" in capsys.readouterr().err
     # score on the training scenes too (the test part of 3 scenes may be empty)
     info = sd.read_info(data)
     assert len(info.train) + len(info.test) == 3
