@@ -11,9 +11,10 @@ blocked; every other cell must be kept clear of.
 
 `place` puts the held object's footprint (its top-view points round its centre, in the
 hand's frame, measured from the grasp's views) at every candidate centre (`STEP` apart)
-and hand yaw given, keeps those whose footprint lies inside the floor's edges (`EDGE`), and
-takes the one farthest from every cell that is not free (a Euclidean distance transform of
-the raster: the clearance of every footprint point is one look-up). With
+and hand yaw given, keeps those whose footprint lies inside the floor's edges (`EDGE`),
+prefers, in a tray, those a margin (`WALL_MARGIN`) off its walls, and of them takes the one
+farthest from every cell that is not free (a Euclidean distance
+transform of the raster: the clearance of every footprint point is one look-up). With
 ``unseen_bare`` every unseen cell counts as bare: what another view could gain at most;
 `next_look` says where a view from the same height would show most of the unseen floor
 (the held object hangs at the same place in every image, so the camera moves sideways,
@@ -37,6 +38,10 @@ RES = 0.005
 STEP = 0.02
 #: a footprint's points keep this far inside the floor's edges (m)
 EDGE = 0.01
+#: the room a footprint wants first from walls round the floor (a tray's), beyond `EDGE`
+#: (m); past it, only the clearance from objects counts: a screw put as far from the hammer
+#: as it could go, 2 cm from the tray's wall, went over the wall
+WALL_MARGIN = 0.03
 #: a remembered object that is hidden now blocks this radius round its centre (m)
 HIDDEN_RADIUS = 0.03
 #: the camera's sideways shifts tried for another view of the floor (m; 8 directions each)
@@ -168,14 +173,21 @@ def _rotated(shape: np.ndarray, yaw: float) -> np.ndarray:
 
 
 def place(
-    room: Room, shape: np.ndarray, yaws: Sequence[float], *, unseen_bare: bool = False
+    room: Room,
+    shape: np.ndarray,
+    yaws: Sequence[float],
+    *,
+    unseen_bare: bool = False,
+    walls: bool = False,
 ) -> Placement:
     """The centre (every `STEP` over the floor) and hand yaw of ``yaws`` whose footprint
     (``shape``: K x 2 points round the object's centre in the hand's frame) lies inside the
-    floor, at least `EDGE` from its edges, with the largest clearance (the least of its
-    points' `clearance`: farthest from everything to keep clear of); among equals the one
-    farthest inside the edges, and the first yaw. When no footprint fits inside, the one
-    whose clearance or edge distance is least bad. ``unseen_bare``: `clearance`'s."""
+    floor, at least `EDGE` from its edges; of those (``walls``: the floor's edges are walls,
+    a tray's) the ones `WALL_MARGIN` farther inside (or as near it as any), then the largest
+    clearance (the least of its points' `clearance`: farthest from everything to keep clear
+    of); among equals the one farthest inside the edges, and the first yaw. When no
+    footprint fits inside, the one whose clearance or edge distance is least bad.
+    ``unseen_bare``: `clearance`'s."""
     D = clearance(room, unseen_bare=unseen_bare)
     k = max(int(round(STEP / RES)), 1)
     centres = room.cells[k // 2 :: k, k // 2 :: k].reshape(-1, 2)
@@ -189,8 +201,12 @@ def place(
         edge = (half - np.abs(pts - np.asarray(room.center))).min(axis=2).min(axis=1)
         clear = np.where(edge >= 0, D[i, j].min(axis=1), -RES)
         fits = edge >= EDGE
-        # inside the edges first, then the clearance, then the distance to the edges
-        key = np.stack([fits, np.where(fits, clear, np.minimum(clear, edge)), edge], axis=1)
+        # inside the edges first, then off the walls, then the clearance, then the
+        # distance to the edges
+        off_walls = np.where(fits, np.minimum(edge - EDGE, WALL_MARGIN if walls else 0.0), 0.0)
+        key = np.stack(
+            [fits, off_walls, np.where(fits, clear, np.minimum(clear, edge)), edge], axis=1
+        )
         b = max(range(len(centres)), key=lambda n: tuple(key[n]))
         if best_key is None or tuple(key[b]) > best_key:
             best_key = tuple(key[b])

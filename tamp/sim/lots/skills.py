@@ -926,10 +926,11 @@ class PandaSkillController(LeafSystem):
             # at the hand's present yaw: turning the hand with the object held (in 45 degree
             # steps, to fit a long one beside another) lost objects in two narratives
             yaws = [self.kin.tcp_yaw(s.q)]
-            best = place(s.room, s.hold_shape, yaws)
+            walls = workspace.tray  # keep off a tray's walls first (`room.WALL_MARGIN`)
+            best = place(s.room, s.hold_shape, yaws, walls=walls)
             # what the floor no view saw could give, asked only when the seen floor is short
             hoped = (
-                place(s.room, s.hold_shape, yaws, unseen_bare=True)
+                place(s.room, s.hold_shape, yaws, unseen_bare=True, walls=walls)
                 if best.clearance < PLACE_CLEARANCE
                 else best
             )

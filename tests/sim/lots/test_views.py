@@ -93,6 +93,32 @@ def test_a_place_in_a_tray_keeps_the_object_off_its_walls():
         assert tray.on_floor(p.x + c * x - s_ * y, p.y + s_ * x + c * y)
 
 
+def test_a_place_keeps_off_a_trays_walls_before_keeping_away_from_objects():
+    """Example 1 with the learned detector: with the hammer in the tray's lower part, the
+    screw went as far from it as it could, 2 cm from the upper wall, and went over the wall.
+    In a tray it now keeps `WALL_MARGIN` off the walls (beyond `EDGE`), and only then as far
+    from the hammer as it can; on a floor without walls the edges stay a constraint only."""
+    from tamp.sim.lots.room import EDGE, WALL_MARGIN
+
+    tray = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34), tray=True)
+    room = observed(empty_room(tray.center, tray.floor_size, tray.floor), X_LOOK, K,
+                    occupied=None, floor=None)  # fmt: skip
+    cells = room.cells
+    hammer = (np.abs(cells[..., 1] - (-0.25 - 0.07)) < 0.015) & (np.abs(cells[..., 0] - 0.5) < 0.1)
+    room = type(room)(room.center, room.size, room.floor, room.seen, hammer)
+    screw = _bar(0.08, 0.012)
+    half = np.asarray(tray.floor_size) / 2
+
+    def edge(p):
+        pts = np.array([p.x, p.y]) + screw
+        return float((half - np.abs(pts - np.asarray(tray.center))).min())
+
+    p = place(room, screw, [0.0], walls=True)
+    assert edge(p) >= EDGE + WALL_MARGIN - 0.005 and p.y > -0.25  # far side from the hammer
+    flat = place(room, screw, [0.0])  # no walls: as far from the hammer as the edges allow
+    assert EDGE <= edge(flat) < EDGE + 0.02 and flat.clearance > p.clearance
+
+
 def test_a_long_object_is_turned_to_fit_beside_another():
     """A 20 cm hammer in the 24 cm tray with a screwdriver lying across its upper part: at
     the hand's present yaw (across the screwdriver) it fits nowhere; turned parallel it
