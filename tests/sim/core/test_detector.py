@@ -77,8 +77,8 @@ def test_a_tiny_model_trains_and_is_scored_through_the_command_line(tmp_path, ca
     assert tuned["training"]["init"] == str(start)
     assert tuned["unknown_below"] == 0.85 and 0.3 <= tuned["held_back"]["chosen"] < 1.0
     for name, span in crops["sizes"].items():
-        assert all(a <= b for a, b in zip(tuned["sizes"][name]["low"], span["low"]))
-        assert all(a >= b for a, b in zip(tuned["sizes"][name]["high"], span["high"]))
+        assert all(a <= b for a, b in zip(tuned["sizes"][name]["low"], span["low"], strict=True))
+        assert all(a >= b for a, b in zip(tuned["sizes"][name]["high"], span["high"], strict=True))
     # segmentation weights (or another width) cannot start a classifier: exit 2, the file
     assert tamp_main(["detect", "train", str(data), "--kind", "classifier", "--width", "4",
                       "--init", str(weights), "--quiet"]) == 2  # fmt: skip
