@@ -122,29 +122,20 @@ def test_an_injected_friction_grasp_failure_is_seen_and_retried(tmp_path, percep
     ]
 
 
-def test_a_goal_reached_by_toppling_an_unseen_obstacle_is_a_failure(tmp_path, capsys):
-    """Case 3 with the camera read through the noisy detector (``high``), seed 5: the robot
-    never believes O_a has appeared on l_1 and puts O1 down on it. O1 rests in l_1 and O0 in
-    l_0, so a goals-only judge called this a success; O_a, never picked, ends on its side
-    away from where the person put it, and the run fails with cause ``disturbed``. (The
-    seed reproduces it with the detector as it draws now; a change to the detector's draws
-    may need another seed of the same campaign.)"""
-    import yaml
-
-    from tamp.scenarios import resolve
-
-    src = resolve("case3_camera", "sim")
-    data = yaml.safe_load(src.read_text())
-    data["demonstration"] = str((src.parent / data["demonstration"]).resolve())
-    data["perturbation"]["sensor"]["detector"] = "high"
-    path = tmp_path / "case3_camera_high.yaml"
-    path.write_text(yaml.safe_dump(data, sort_keys=False))
-    out = _cli(capsys, str(path), "--seed", "5")
+def test_a_goal_reached_with_the_obstacle_left_on_its_side_is_a_failure(capsys):
+    """Case 3 with the camera, seed 14: the robot sets O1 aside, moves O_a (the box a person
+    put on l_1) to a free place and puts O1 on l_1; O_a slid down and turned in the fingers
+    and was let go leaning past its tipping angle. O0 and O1 rest in their areas, so a
+    goals-only judge called this a success; O_a ends on its side and the run fails with
+    cause ``disturbed``. (Until the estimator saw O_a under the held O1, the noisy
+    detector's seed 5 put O1 down on an O_a never believed there; the judge's "never
+    picked, moved" branch is unit-tested in test_placement and test_appear.)"""
+    out = _cli(capsys, "case3_camera", "--seed", "14")
     assert out["goals"] == {"O0@L0": True, "O1@L1": True}
     executed = [a["action"] for a in out["actions"] if a["status"] == "SUCCESS"]
-    assert "Pick(Oa)" not in executed and executed[-1] == "Place(O1, L1)"
+    assert "Pick(Oa)" in executed and executed[-1] == "Place(O1, L1)"
     assert out["status"] == "FAILURE" and out["cause"] == "disturbed"
     (d,) = out["disturbed"]
-    assert d["object"] == "Oa" and d["tilt_deg"] > 45 and d["moved"] > 0.03
+    assert d["object"] == "Oa" and d["tilt_deg"] > 45 and d["moved"] is None
     assert d["reason"].startswith("Oa knocked over (tilt ")
     assert "on the plant Oa knocked over" in out["reason"]
