@@ -13,8 +13,8 @@ blocked; every other cell must be kept clear of.
 hand's frame, measured from the grasp's views) at every candidate centre (`STEP` apart)
 and hand yaw given, keeps those whose footprint lies inside the floor's edges (`EDGE`),
 prefers, in a tray, those a margin (`WALL_MARGIN`) off its walls, and of them takes the one
-farthest from every cell that is not free (a Euclidean distance
-transform of the raster: the clearance of every footprint point is one look-up). With
+farthest from every cell that is not free (a Euclidean distance transform of the raster:
+the clearance of every footprint point is one look-up). With
 ``unseen_bare`` every unseen cell counts as bare: what another view could gain at most;
 `next_look` says where a view from the same height would show most of the unseen floor
 (the held object hangs at the same place in every image, so the camera moves sideways,
@@ -207,7 +207,7 @@ def place(
         key = np.stack(
             [fits, off_walls, np.where(fits, clear, np.minimum(clear, edge)), edge], axis=1
         )
-        b = max(range(len(centres)), key=lambda n: tuple(key[n]))
+        b = int(np.lexsort(-key.T[::-1])[0])  # the largest key; the first among equals
         if best_key is None or tuple(key[b]) > best_key:
             best_key = tuple(key[b])
             best = Placement(
