@@ -227,11 +227,15 @@ class BasePlanner:
 
         After putting an object down the base stands 0.4 m from it, inside its inflated
         disc. Backing away radially only ever increases that distance (so the rotating
-        corners stay clear); the result is a point outside every inflated disc, or None.
+        corners stay clear); the result is the goal itself when the straight move there
+        backs away (`_backs_away`), else a point outside every inflated disc, or None.
         """
         close = [(x, y, r) for x, y, r in discs if math.hypot(start[0] - x, start[1] - y) < r]
         if not close:
             return start
+        others = [d for d in discs if d not in close]
+        if self._backs_away(start, goal, close, others, footprint):
+            return goal  # the way out is the way there: no detour past the goal
         dx = sum(
             (start[0] - x) / max(math.hypot(start[0] - x, start[1] - y), 1e-9) for x, y, _ in close
         )
@@ -239,7 +243,6 @@ class BasePlanner:
             (start[1] - y) / max(math.hypot(start[0] - x, start[1] - y), 1e-9) for x, y, _ in close
         )
         base = math.atan2(dy, dx)
-        others = [d for d in discs if d not in close]
         found = []
         for turn in (0.0, 0.4, -0.4, 0.8, -0.8, 1.2, -1.2):  # |turn| < pi/2: never closer
             ang = base + turn
@@ -254,6 +257,22 @@ class BasePlanner:
         if found:  # the way out that leaves the base nearest its goal
             return min(found, key=lambda p: math.hypot(p[0] - goal[0], p[1] - goal[1]))
         return None
+
+    def _backs_away(self, start, goal, close, others, footprint: float) -> bool:
+        """Whether the straight move to ``goal`` only ever increases the distance to every
+        disc the base starts inside (``(start - c) . (goal - start) >= 0``: the distance
+        along a segment is convex, so it grows all the way), ends outside them and passes
+        clear of the rest. Escaping along a fixed direction instead overshot such a goal
+        by up to a step and, with the target not an obstacle, ran the base into the object
+        it was going to pick (Case 3 camera, O_a pushed 3 cm, the grasp planned on the
+        estimate before the push missed)."""
+        vx, vy = goal[0] - start[0], goal[1] - start[1]
+        for x, y, r in close:
+            if (start[0] - x) * vx + (start[1] - y) * vy < 0:
+                return False
+            if math.hypot(goal[0] - x, goal[1] - y) < r + 0.01:
+                return False
+        return self._segment_free(others, start, goal, footprint)
 
     def _blocked(self, discs, start, footprint: float) -> np.ndarray:
         occ = self._border(footprint)
@@ -279,6 +298,8 @@ class BasePlanner:
         esc = self._escape(start, goal, discs, footprint)
         if esc is None:
             return None
+        if esc == goal:
+            return [start, goal]
         if esc != start:
             rest = self.plan(esc, goal, obstacles, footprint)
             return None if rest is None else [start, *rest]

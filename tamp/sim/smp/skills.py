@@ -275,6 +275,14 @@ class YouBotSkillController(LeafSystem):
         here[FING] = st.segment.q1[FING]
         return here
 
+    def _move(self, st: ControllerState, t, q, q1, speed: float, min_time: float) -> Segment:
+        """A smooth move from the measured joints to ``q1``, the fingers' reference going on
+        from where it was (`_here`): started from the fingers' measured opening, a friction
+        grasp's reference would jump back to where the object stops them and the squeeze
+        would vanish at the start of every move (the held object slipped down and turned in
+        the fingers as the arm left for the pre-place pose: Case 3, O_a)."""
+        return joint_segment(t, self._here(st, q), q1, speed, min_time)
+
     def failures(self, context) -> tuple[tuple[float, str, str, str], ...]:
         """Every skill failure of the run in ``context``: (time, action, cause, detail)."""
         return self._st(context).failures
@@ -388,7 +396,7 @@ class YouBotSkillController(LeafSystem):
         q1[FING] = ROBOT.finger_open
         if np.abs(q1 - q)[3:].max() < 0.02:
             return None
-        return joint_segment(t, q, q1, ARM_SPEED, 0.4)
+        return self._move(st, t, q, q1, ARM_SPEED, 0.4)
 
     def _phase_drive(self, st, t, q, poses):
         ref = st.cmd.args[0] if st.cmd.name != "Place" else st.cmd.args[1]
@@ -443,7 +451,7 @@ class YouBotSkillController(LeafSystem):
         q1 = q.copy()
         q1[ARM] = pre[0]
         q1[FING] = ROBOT.finger_open
-        return joint_segment(t, q, q1, ARM_SPEED, 0.6)
+        return self._move(st, t, q, q1, ARM_SPEED, 0.6)
 
     def _first(self, q, point, heights, R_WG=None, nominal=None):
         """(arm joints, height) for the first height above ``point`` that IK can reach."""
@@ -457,7 +465,7 @@ class YouBotSkillController(LeafSystem):
         q1 = q.copy()
         q1[ARM] = st.memo["grasp"]
         q1[FING] = ROBOT.finger_open
-        return joint_segment(t, q, q1, 0.8, 0.6)
+        return self._move(st, t, q, q1, 0.8, 0.6)
 
     def _phase_close(self, st, t, q, poses):
         # whether this attempt fails by script (``fail``) or by the drawn chance (``skills``)
@@ -471,7 +479,7 @@ class YouBotSkillController(LeafSystem):
             q1[FING] = ROBOT.finger_open  # an injected failure: the hand does not close
         else:
             q1[FING] = SQUEEZE  # the PD force on the fingers holds it by friction
-        return joint_segment(t, q, q1, 0.2, 0.3)
+        return self._move(st, t, q, q1, 0.2, 0.3)
 
     def _phase_weld(self, st, t, q, poses):
         if not st.memo["lost"]:  # friction grasps ask for no weld (the system has none)
@@ -505,7 +513,7 @@ class YouBotSkillController(LeafSystem):
     def _phase_lift(self, st, t, q, poses):
         q1 = st.segment.q1.copy()
         q1[ARM] = st.memo["lift"]
-        return joint_segment(t, q, q1, ARM_SPEED, 0.6)
+        return self._move(st, t, q, q1, ARM_SPEED, 0.6)
 
     def _phase_check_pick(self, st, t, q, poses):
         uid = st.cmd.args[0]
@@ -553,7 +561,7 @@ class YouBotSkillController(LeafSystem):
         st.memo.update(pre=pre, down=down)
         q1 = st.segment.q1.copy()
         q1[ARM] = pre
-        return joint_segment(t, q, q1, ARM_SPEED, 0.6)
+        return self._move(st, t, q, q1, ARM_SPEED, 0.6)
 
     def _phase_lower(self, st, t, q, poses):
         uid = st.cmd.args[0]
@@ -563,7 +571,7 @@ class YouBotSkillController(LeafSystem):
         self._check_free(st, poses)
         q1 = st.segment.q1.copy()
         q1[ARM] = st.memo["down"]
-        return joint_segment(t, q, q1, 0.8, 0.6)
+        return self._move(st, t, q, q1, 0.8, 0.6)
 
     def _phase_release(self, st, t, q, poses):
         st.grasp = GraspRequest(holding=st.grasp.holding)
@@ -572,12 +580,12 @@ class YouBotSkillController(LeafSystem):
     def _phase_open(self, st, t, q, poses):
         q1 = st.segment.q1.copy()
         q1[FING] = ROBOT.finger_open
-        return joint_segment(t, q, q1, 0.2, 0.25)
+        return self._move(st, t, q, q1, 0.2, 0.25)
 
     def _phase_retreat(self, st, t, q, poses):
         q1 = st.segment.q1.copy()
         q1[ARM] = st.memo["pre"]
-        return joint_segment(t, q, q1, ARM_SPEED, 0.5)
+        return self._move(st, t, q, q1, ARM_SPEED, 0.5)
 
     def _phase_check_place(self, st, t, q, poses):
         uid, area = st.cmd.args

@@ -19,6 +19,13 @@ and ``perturbation`` (nothing drawn: the packaged cases have no section; its
 (objects left knocked over, on top of another or moved unpicked: none in these runs) came
 with the judge reading every object, not only the goal objects.
 
+Changed on purpose (2026-11-28, what runs do): every arm move starts the fingers'
+reference where it was (a friction grasp's squeeze no longer vanishes at the start of each
+move), and a base that starts inside an object's margin goes straight to its goal when
+that move only backs away (no detour past the goal). Case 2 and Case 3 then end 0.1 and
+0.2 s sooner with the same actions, verdicts and final positions (a bottle's yaw on its
+place differs); Case 1 and the failed grasp are unchanged.
+
 Every workcell's run document now starts with the common keys of
 `tamp.sim.core.workcell.RunResult`: ``schema`` and ``workcell`` are new (checked, not
 recorded); every other key and value is as recorded.

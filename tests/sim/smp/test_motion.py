@@ -110,3 +110,22 @@ def test_base_backs_away_from_what_it_just_put_down():
             x, y = a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1])
             # never closer than where it stood (the rotating corners reach 0.345 m)
             assert math.hypot(x - placed.x, y - placed.y) >= d0 - 1e-6
+
+
+def test_a_base_inside_a_margin_goes_straight_to_a_goal_it_backs_away_to():
+    """Case 3 after O1 is set aside at free2: the base stands 0.4 m from it (inside its
+    margin) and its goal is the stand-off before O_a, which is the target and so no
+    obstacle. Straight there only backs away from O1, so the base goes straight; escaping
+    along a fixed direction first overshot the goal by 5 cm towards O_a and pushed it."""
+    set_aside = Disc(2.0, 1.6, 0.04)
+    target = (2.2, 0.8)
+    start = (2.0 - 0.4 * math.cos(1.047), 1.6 - 0.4 * math.sin(1.047))
+    goal = (target[0] - 0.4 * math.cos(-0.786), target[1] - 0.4 * math.sin(-0.786))
+    path = BasePlanner((-1.0, 4.0, -2.2, 2.8)).plan(start, goal, [set_aside], 0.45)
+    assert path == [start, goal]
+    closest = min(
+        math.hypot(a[0] + u * (b[0] - a[0]) - target[0], a[1] + u * (b[1] - a[1]) - target[1])
+        for a, b in zip(path, path[1:], strict=False)
+        for u in np.linspace(0, 1, 101)
+    )
+    assert closest >= 0.4 - 1e-6  # never nearer the target than the stand-off

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -53,25 +54,46 @@ def test_run_seeded_is_the_campaign_entry_point(tmp_path):
 
 
 def test_a_friction_grasp_slips_and_says_so(tmp_path):
-    """With almost no friction the fingers cannot hold the bottle: the pick fails, detected
-    by the gripper, and the run's cause says which."""
+    """With almost no friction the fingers cannot hold the bottle: it slips out while lifted
+    or carried, the gripper detects it (the fingers close past its width), and the run's
+    cause says which."""
     path = write_one_bottle(
         tmp_path,
         "grasp: friction\nplant: {time_step: 0.005}\nperturbation: {friction: [0.05, 0.05]}\n",
     )
     out = run_seeded("smp-mro", str(path), 0, verify=False, max_sim_time=20)
     assert out["status"] != "SUCCESS"
-    assert out["failures"] and out["failures"][0]["action"] == "Pick(O0)"
+    assert out["failures"] and out["failures"][0]["action"] in ("Pick(O0)", "Place(O0, L0)")
     assert out["failures"][0]["cause"] in ("grasp_slipped", "grasp_missed")
     assert out["cause"] in ("grasp_slipped", "grasp_missed", "timeout")
 
 
 def test_a_friction_grasp_lifts_carries_and_places(tmp_path):
+    """The fingers' reference stays at the squeeze for as long as the bottle is held (every
+    arm move starts it where it was), and the bottle does not move in the hand."""
+    from tamp.sim.smp.robot import ROBOT
+    from tamp.sim.smp.skills import FING, SQUEEZE
+
     path = write_one_bottle(tmp_path, "grasp: friction\nplant: {time_step: 0.005}\n")
     scenario, system, runner = verified_runner(path)
     assert system.welds == {}  # no weld constraint exists at all
-    result = runner.run()
+    palm = system.plant.GetBodyByName(ROBOT.palm_body, system.robot)
+    held = []  # (finger references, the bottle's height in the palm's frame) while carried
+
+    def check(t: float) -> None:
+        st = system.skills._st(system.skills.GetMyContextFromRoot(runner.root))
+        if st.grasp.holding == "O0" and st.phase in ("lift", "drive", "preplace", "lower"):
+            X_WG = system.plant.EvalBodyPoseInWorld(runner.plant_context, palm)
+            X_WO = system.plant.EvalBodyPoseInWorld(runner.plant_context, system.bodies["O0"])
+            z = X_WG.inverse().multiply(X_WO).translation()[2]
+            held.append((tuple(st.segment.sample(t)[0][FING]), z))
+
+    result = runner.run(on_chunk=check)
     assert result.status == "SUCCESS", result.reason
+    assert len(held) > 50
+    assert all(ref == (SQUEEZE, SQUEEZE) for ref, _ in held)
+    heights = [z for _, z in held]
+    assert max(heights) - min(heights) < 0.003  # no slip down the fingers (was 2-3 cm)
     assert result.final_poses["O0"].z == pytest.approx(0.1, abs=0.005)  # upright on the floor
 
 
@@ -122,18 +144,23 @@ def test_an_injected_friction_grasp_failure_is_seen_and_retried(tmp_path, percep
     ]
 
 
-def test_a_goal_reached_with_the_obstacle_left_on_its_side_is_a_failure(capsys):
-    """Case 3 with the camera, seed 14: the robot sets O1 aside, moves O_a (the box a person
-    put on l_1) to a free place and puts O1 on l_1; O_a slid down and turned in the fingers
-    and was let go leaning past its tipping angle. O0 and O1 rest in their areas, so a
-    goals-only judge called this a success; O_a ends on its side and the run fails with
-    cause ``disturbed``. (Until the estimator saw O_a under the held O1, the noisy
-    detector's seed 5 put O1 down on an O_a never believed there; the judge's "never
-    picked, moved" branch is unit-tested in test_placement and test_appear.)"""
-    out = _cli(capsys, "case3_camera", "--seed", "14")
+def test_a_goal_reached_with_the_obstacle_left_on_its_side_is_a_failure(capsys, tmp_path):
+    """Case 3 with the camera, every object's friction 0.2 (the packaged draw is 0.5-0.9),
+    seed 1: the robot sets O1 aside, moves O_a (the box a person put on l_1) to a free place
+    and puts O1 on l_1; the box, held by too little friction, ends on its side. O0 and O1
+    rest in their areas, so a goals-only judge called this a success; the run fails with
+    cause ``disturbed``. (With the packaged friction all 50 seeds of the campaign now
+    succeed; the judge's "never picked, moved" branch is unit-tested in test_placement and
+    test_appear.)"""
+    packaged = Path(__file__).resolve().parents[3] / "tamp/scenarios/sim/case3_camera.yaml"
+    text = packaged.read_text().replace("demonstration: ../case3.yaml", "demonstration: case3")
+    path = tmp_path / "slippery.yaml"
+    path.write_text(text.replace("friction: [0.5, 0.9]", "friction: [0.2, 0.2]"))
+    out = _cli(capsys, str(path), "--seed", "1")
+    assert out["perturbation"]["friction"] == 0.2
     assert out["goals"] == {"O0@L0": True, "O1@L1": True}
     executed = [a["action"] for a in out["actions"] if a["status"] == "SUCCESS"]
-    assert "Pick(Oa)" in executed and executed[-1] == "Place(O1, L1)"
+    assert "Place(Oa, free1)" in executed and executed[-1] == "Place(O1, L1)"
     assert out["status"] == "FAILURE" and out["cause"] == "disturbed"
     (d,) = out["disturbed"]
     assert d["object"] == "Oa" and d["tilt_deg"] > 45 and d["moved"] is None
