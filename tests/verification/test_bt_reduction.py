@@ -95,7 +95,9 @@ def _both(case):
     return fast, slow
 
 
-@pytest.mark.parametrize("max_steps", [2, 4, 6])
+@pytest.mark.parametrize(
+    "max_steps", [2, 4, pytest.param(6, marks=pytest.mark.slow)]  # 6: 9 s, `make test` only
+)
 def test_reduced_verdicts_equal_the_explicit_exploration(max_steps) -> None:
     seen: set[str] = set()
 
