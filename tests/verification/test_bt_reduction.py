@@ -96,7 +96,8 @@ def _both(case):
 
 
 @pytest.mark.parametrize(
-    "max_steps", [2, 4, pytest.param(6, marks=pytest.mark.slow)]  # 6: 9 s, `make test` only
+    "max_steps",
+    [2, 4, pytest.param(6, marks=pytest.mark.slow)],  # 6: 9 s, `make test` only
 )
 def test_reduced_verdicts_equal_the_explicit_exploration(max_steps) -> None:
     seen: set[str] = set()
