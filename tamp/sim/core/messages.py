@@ -159,7 +159,9 @@ class Observation:
     #: grasp picked, or ``unknown``
     in_hand: tuple[str, ...] = ()
     target: TargetCrop | None = None
-    occupied: np.ndarray | None = None  # object pixels on the table (full image, bool)
+    #: object pixels on the table (full image, bool): the detections' masks and, in a
+    #: place's views, every pixel above the floor that is not the gripper's (detected or not)
+    occupied: np.ndarray | None = None
     #: remembered instances of this workspace not seen now because something hides them
     #: (counted in ``counts``, not in ``detections``)
     occluded: tuple[Seen, ...] = ()

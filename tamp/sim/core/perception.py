@@ -551,6 +551,10 @@ class Perception(LeafSystem):
                 z = world_heights(depth, self._intrinsics, X_WC)
                 with np.errstate(invalid="ignore"):
                     floor = (np.abs(z - region.base) < FLOOR_BAND) & ~near & ~occupied
+                    # anything standing up from the floor is kept clear of, detected or
+                    # not (class-agnostic, like safety): a hammer the detector merged
+                    # with the screwdriver beside it had its handle taken for bare floor
+                    occupied = occupied | ((z >= region.base + FLOOR_BAND) & ~near)
         memory, occluded = s.memory, ()
         if placed and req.side:
             with self.analysis:

@@ -224,6 +224,9 @@ class SkillState:
     #: what the place's views showed of the workspace's floor, and the extra views taken
     room: Room | None = None
     place_views: int = 0
+    #: (workspace, its floor as the looks while holding showed it): a `Place` there next
+    #: starts from it (a look's other pose showed what the held object hides in the place's)
+    looked: tuple[str, Room] | None = None
     log: list[tuple[float, str]] = field(default_factory=list)
 
     def __deepcopy__(self, memo: dict) -> SkillState:
@@ -358,6 +361,8 @@ class PandaSkillController(LeafSystem):
         s.log.append((t, f"start {cmd}"))
         name, args = cmd.name, cmd.args
         sides = self.scenario.workspaces
+        if name not in ("LookAt", "Place") or s.held is None:
+            s.looked = None  # only the looks of the carry since the pick count
         if name == "LookAt" and len(args) == 1 and args[0] in sides:
             s.side = args[0]
             s.steps = (*self._look(args[0]), Step("view", handler="counted"))
@@ -382,7 +387,8 @@ class PandaSkillController(LeafSystem):
         elif name == "Place" and len(args) == 1 and args[0] in sides:
             if s.held is None:
                 return self._finish(s, t, Status.FAILURE, "nothing held")
-            s.side, s.room, s.place_views = args[0], None, 0
+            looked = s.looked[1] if s.looked is not None and s.looked[0] == args[0] else None
+            s.side, s.room, s.place_views, s.looked = args[0], looked, 0, None
             # at the hand's present yaw (a look while holding may have turned it half round):
             # any yaw serves for looking and putting down, and turning back costs seconds
             yaw = self.kin.tcp_yaw(s.q)
@@ -604,6 +610,7 @@ class PandaSkillController(LeafSystem):
 
     # ---- view handlers -------------------------------------------------------------------
     def _on_counted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
+        self._look_room(s, obs, q_meas)
         if s.held is not None and obs.hand_cover > LOOK_AGAIN_COVER:
             # the held object hides a patch of the workspace (what the person put there while
             # the robot carried it may lie behind it): look again with the camera on the
@@ -618,9 +625,38 @@ class PandaSkillController(LeafSystem):
                 Step("view", handler="recounted"),
             )
             return
-        self._on_recounted(s, t, obs, q_meas)
+        self._report_counts(s, t, obs)
 
     def _on_recounted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
+        self._look_room(s, obs, q_meas)
+        self._report_counts(s, t, obs)
+
+    def _look_room(self, s: SkillState, obs: Observation, q_meas) -> None:
+        """A look while holding adds what it shows of the workspace's floor to
+        `SkillState.looked`, for the `Place` there next."""
+        if s.held is None or obs.floor is None:
+            return
+        ws = self.scenario.workspaces[s.side]
+        if s.looked is not None and s.looked[0] == s.side:
+            room = s.looked[1]
+        else:
+            room = empty_room(ws.center, ws.floor_size, ws.floor)
+        s.looked = (s.side, self._room_seen(room, obs, self.kin.camera_pose(q_meas[:7])))
+
+    def _room_seen(self, room: Room, obs: Observation, X_WC) -> Room:
+        """``room`` with what view ``obs`` (taken at ``X_WC``) shows of the floor: bare
+        cells, the pixels of what stands on it, the remembered hidden objects
+        (`tamp.sim.lots.room.observed`)."""
+        return observed(
+            room,
+            X_WC,
+            self.planner.intrinsics,
+            occupied=obs.occupied,
+            floor=obs.floor,
+            avoid=tuple(m.position[:2] for m in obs.occluded),
+        )
+
+    def _report_counts(self, s: SkillState, t: float, obs: Observation) -> None:
         detail = ",".join(f"{k}={v}" for k, v in sorted(obs.counts.items()))
         if obs.occluded:  # counted, but remembered rather than seen: say so
             detail += "; occluded " + ",".join(sorted(m.cls for m in obs.occluded))
@@ -915,14 +951,7 @@ class PandaSkillController(LeafSystem):
             # lies, inside the edges (`tamp.sim.lots.room`)
             if s.room is None:
                 s.room = empty_room(workspace.center, workspace.floor_size, workspace.floor)
-            s.room = observed(
-                s.room,
-                X_WC,
-                self.planner.intrinsics,
-                occupied=obs.occupied,
-                floor=obs.floor,
-                avoid=tuple(m.position[:2] for m in obs.occluded),
-            )
+            s.room = self._room_seen(s.room, obs, X_WC)
             # at the hand's present yaw: turning the hand with the object held (in 45 degree
             # steps, to fit a long one beside another) lost objects in two narratives
             yaws = [self.kin.tcp_yaw(s.q)]

@@ -182,3 +182,49 @@ def test_a_footprint_is_the_objects_points_in_the_hands_frame():
     shape = footprint(pts, math.pi / 2)  # a hand turned to world y
     assert shape == pytest.approx(np.array([[0.0, 0.05], [0.0, -0.05]]), abs=1e-12)
     assert len(footprint(np.random.default_rng(0).random((1000, 2)), 0.0)) <= 64
+
+
+def test_a_place_starts_from_the_looks_taken_while_carrying():
+    """The look at W^B while carrying saw the floor bare but for an object in its middle;
+    the place's own view, the held object hiding all but a strip, sees too little floor.
+    The place's floor starts from the carry's look (its bare floor and what stood on it),
+    so the object goes where that look saw room, clear of the object; started empty (as
+    before), the unseen floor was taken as bare and the object put in the middle, on it."""
+    from types import SimpleNamespace
+
+    from tamp.sim.core.messages import Observation, SkillCommand
+    from tamp.sim.lots.catalogue import READY
+    from tamp.sim.lots.kinematics import ArmKinematics
+    from tamp.sim.lots.scenario import load_cell_scenario
+    from tamp.sim.lots.skills import PLACE_VIEWS, PandaSkillController, SkillState
+
+    class LookingAtB(ArmKinematics):  # the camera over W^B's middle, whatever the joints
+        def camera_pose(self, q7):
+            return X_LOOK
+
+    scenario = load_cell_scenario("tower")
+    q0 = np.array([*READY[:7], 0.04, 0.04])
+    kin = LookingAtB(scenario.control.period)
+    skills = PandaSkillController(scenario, kin, SimpleNamespace(intrinsics=K), q0, list(range(9)))
+    s = SkillState(q=q0[:7].copy(), held="screwdriver", side="B", hold_shape=DISC)
+    thing = np.zeros((180, 320), bool)
+    thing[75:105, 145:175] = True  # an object in the middle of the look's image
+    look = Observation(side="B", occupied=thing, floor=~thing, hidden=np.zeros_like(thing))
+    skills._on_recounted(s, 1.0, look, q0)
+    skills._start(s, SkillCommand(id=2, name="Place", args=("B",)), 2.0)
+    assert s.looked is None and s.room is not None and s.room.blocked.any()
+    hidden = np.ones_like(thing)
+    hidden[:, 300:] = False  # the held object hides all but a strip at the image's edge
+    s.place_views = PLACE_VIEWS  # no more views: the unseen floor is taken as bare
+    view = Observation(side="B", occupied=np.zeros_like(thing), floor=~hidden, hidden=hidden)
+    skills._on_place(s, 3.0, view, q0)
+    line = next(text for _, text in reversed(s.log) if text.startswith("place the"))
+    x, y = (float(v) for v in line.split("at (")[1].split(")")[0].split(", "))
+    assert math.hypot(x - 0.5, y + 0.25) > 0.06  # clear of the object the look saw
+    # a pick in between: the looks of an earlier carry do not count
+    s.looked = ("B", s.room)
+    skills._start(s, SkillCommand(id=3, name="LookAt", args=("A",)), 4.0)
+    assert s.looked is not None
+    s.held = None
+    skills._start(s, SkillCommand(id=4, name="LookAt", args=("A",)), 5.0)
+    assert s.looked is None
