@@ -200,3 +200,21 @@ def test_a_regions_fixtures_give_the_detector_its_floor_and_the_rims_pixels():
     assert ex[int(K[3]), u_wall] and not ex[int(K[3]), int(K[2])]  # the floor is not a wall
     assert not ex[int(K[3]), int(round(K[2] + 0.15 / px))]  # beyond the wall: the table
     assert Region((0.5, -0.25), (0.34, 0.34)).fixtures(depth, K, X_LOOK) == {}
+
+
+def test_a_place_view_keeps_clear_of_what_stands_on_the_floor_detected_or_not():
+    """A place's view (no target): ``occupied`` holds the detections' pixels and every pixel
+    above the floor that is not the gripper's, so an object the detector missed (no label
+    here) is not taken for bare floor; the held object's pixels are neither."""
+    rig = Rig(regions={"B": Region((0.5, -0.25), (0.34, 0.34))})
+    label, depth = images()
+    missed = (slice(60, 90), slice(200, 260))
+    depth[missed] = TABLE - 0.03  # 3 cm tall, no label: the detector does not report it
+    held = (slice(150, 180), slice(0, 40))
+    depth[held] = 0.08
+    obs = rig.look(label, depth)
+    assert obs.floor is not None and obs.occupied is not None
+    assert obs.occupied[missed].all() and not obs.floor[missed].any()
+    assert not obs.occupied[held].any() and not obs.floor[held].any()
+    assert obs.occupied[BLOCKS[7]].all()  # the hammer, detected
+    assert obs.floor[100:110, 200:300].all()  # the bare table is floor
