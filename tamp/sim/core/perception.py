@@ -552,8 +552,8 @@ class Perception(LeafSystem):
                 with np.errstate(invalid="ignore"):
                     floor = (np.abs(z - region.base) < FLOOR_BAND) & ~near & ~occupied
                     # anything standing up from the floor is kept clear of, detected or
-                    # not (class-agnostic, like safety): a hammer the detector merged
-                    # with the screwdriver beside it had its handle taken for bare floor
+                    # not (class-agnostic, like safety): an object no detection covers
+                    # (missed, or merged into another's) is no room for a place
                     occupied = occupied | ((z >= region.base + FLOOR_BAND) & ~near)
         memory, occluded = s.memory, ()
         if placed and req.side:

@@ -636,17 +636,16 @@ class PandaSkillController(LeafSystem):
         `SkillState.looked`, for the `Place` there next."""
         if s.held is None or obs.floor is None:
             return
-        ws = self.scenario.workspaces[s.side]
-        if s.looked is not None and s.looked[0] == s.side:
-            room = s.looked[1]
-        else:
-            room = empty_room(ws.center, ws.floor_size, ws.floor)
-        s.looked = (s.side, self._room_seen(room, obs, self.kin.camera_pose(q_meas[:7])))
+        room = s.looked[1] if s.looked is not None and s.looked[0] == s.side else None
+        s.looked = (s.side, self._room_seen(s.side, room, obs, self.kin.camera_pose(q_meas[:7])))
 
-    def _room_seen(self, room: Room, obs: Observation, X_WC) -> Room:
-        """``room`` with what view ``obs`` (taken at ``X_WC``) shows of the floor: bare
-        cells, the pixels of what stands on it, the remembered hidden objects
-        (`tamp.sim.lots.room.observed`)."""
+    def _room_seen(self, side: str, room: Room | None, obs: Observation, X_WC) -> Room:
+        """``room`` (None: workspace ``side``'s floor, nothing seen yet) with what view
+        ``obs`` (taken at ``X_WC``) shows of the floor: bare cells, the pixels of what
+        stands on it, the remembered hidden objects (`tamp.sim.lots.room.observed`)."""
+        if room is None:
+            ws = self.scenario.workspaces[side]
+            room = empty_room(ws.center, ws.floor_size, ws.floor)
         return observed(
             room,
             X_WC,
@@ -949,9 +948,7 @@ class PandaSkillController(LeafSystem):
         else:
             # the object's footprint goes where views saw the floor bare and nothing else
             # lies, inside the edges (`tamp.sim.lots.room`)
-            if s.room is None:
-                s.room = empty_room(workspace.center, workspace.floor_size, workspace.floor)
-            s.room = self._room_seen(s.room, obs, X_WC)
+            s.room = self._room_seen(s.side, s.room, obs, X_WC)
             # at the hand's present yaw: turning the hand with the object held (in 45 degree
             # steps, to fit a long one beside another) lost objects in two narratives
             yaws = [self.kin.tcp_yaw(s.q)]
