@@ -10,9 +10,11 @@ Sections (``--only``):
   perturbed cell ``tower_perturbed`` over 20 seeds (target >= 90 %); ``--lots-scenario``,
   ``--lots-cell`` and ``--lots-interference`` change them.
 - ``perception``: the same campaigns read by another perception, each beside the one it
-  changes: the seeded noisy detector (``perturbation.sensor.detector: low`` and ``high``,
-  `tamp.sim.core.detection_noise`) over the label oracle, and (LOTS) the learned detector
-  (``camera.detector: learned``). ``--perception-cells`` picks ``smp`` and/or ``lots``
+  changes: the learned detector (SMP-MRO ``detector: learned``, the mast camera's weights;
+  LOTS ``camera.detector: learned``) and the seeded noisy detector
+  (``perturbation.sensor.detector: low`` and ``high``, `tamp.sim.core.detection_noise`) over
+  the label oracle or (SMP-MRO) over the learned detector; ``--smp-readings`` picks the
+  SMP-MRO rows. ``--perception-cells`` picks ``smp`` and/or ``lots``
   (default ``smp``: a LOTS tower campaign costs about 280 CPU s per run); each variant is
   the packaged file with that one field changed, written into the output folder.
 - ``overhead``: Ray's own cost per run, without a simulation's noise: runs that only sleep
@@ -118,7 +120,8 @@ def campaign(scenario: str, runs: int, workers: int, out: Path, *extra: str) -> 
 
 def variant(name: str, folder: str, out: Path, tag: str, **sections) -> Path:
     """The packaged scenario ``name`` (in ``folder``) with the given fields changed
-    (``sections``: section -> {field: value}, merged one level down), written to
+    (``sections``: section -> {field: value}, merged one level down, or a top-level field ->
+    its value), written to
     ``out/<stem>_<tag>.yaml``; a relative ``demonstration`` is made absolute."""
     import yaml
 
@@ -129,6 +132,9 @@ def variant(name: str, folder: str, out: Path, tag: str, **sections) -> Path:
     if isinstance(data.get("demonstration"), str) and data["demonstration"].startswith("."):
         data["demonstration"] = str((src.parent / data["demonstration"]).resolve())
     for section, fields in sections.items():
+        if not isinstance(fields, dict):
+            data[section] = fields
+            continue
         node = data.setdefault(section, {})
         for key, value in fields.items():
             if isinstance(value, dict):
@@ -142,15 +148,27 @@ def variant(name: str, folder: str, out: Path, tag: str, **sections) -> Path:
     return path
 
 
-def perception(cells: list[str], runs: dict[str, int], workers: int, out: Path, lots) -> list:
-    """The ``perception`` section (module docstring): one row per cell and reading."""
+def perception(
+    cells: list[str], runs: dict[str, int], workers: int, out: Path, lots, readings: list[str]
+) -> list:
+    """The ``perception`` section (module docstring): one row per cell and reading (SMP-MRO:
+    those of ``readings``)."""
     rows = []
     noisy = {lvl: {"perturbation": {"sensor": {"detector": lvl}}} for lvl in ("low", "high")}
     if "smp" in cells:
-        for tag, change in noisy.items():
-            path = variant("case3_camera", "sim", out / "perception", f"detector_{tag}", **change)
+        learned = {"detector": "learned"}
+        smp = {
+            "learned": learned,
+            "oracle, low": noisy["low"],
+            "oracle, high": noisy["high"],
+            "learned, low": {**learned, **noisy["low"]},
+            "learned, high": {**learned, **noisy["high"]},
+        }
+        for reading in readings:
+            tag = "detector_" + reading.replace(", ", "_")
+            path = variant("case3_camera", "sim", out / "perception", tag, **smp[reading])
             doc = campaign(str(path), runs["smp"], workers, out / f"perception_smp_{tag}")
-            rows.append({**row("perception", doc), "cell": "smp", "reading": f"oracle, {tag}"})
+            rows.append({**row("perception", doc), "cell": "smp", "reading": reading})
     if "lots" in cells:
         scenario, cell, interference = lots
         readings = {"learned": {"camera": {"detector": "learned"}}, **noisy}
@@ -214,6 +232,15 @@ def main() -> int:
         "--only", nargs="+", choices=("smp", "lots", "perception", "overhead", "throughput")
     )
     ap.add_argument("--perception-cells", nargs="+", choices=("smp", "lots"), default=["smp"])
+    smp_readings = ("learned", "oracle, low", "oracle, high", "learned, low", "learned, high")
+    ap.add_argument(
+        "--smp-readings",
+        nargs="+",
+        choices=smp_readings,
+        default=list(smp_readings),
+        help="the SMP-MRO perception rows: the learned detector (`detector: learned`) and the "
+        "seeded noisy detector's levels over the oracle or the learned detector (default: all)",
+    )
     ap.add_argument("--out", default="build/bench_campaign", help="campaign folders")
     args = ap.parse_args()
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
@@ -238,7 +265,7 @@ def main() -> int:
     if "perception" in only:
         runs = {"smp": args.runs or args.smp_runs, "lots": args.runs or args.lots_runs}
         lots = (args.lots_scenario, args.lots_cell, args.lots_interference)
-        rows += perception(args.perception_cells, runs, args.workers, out, lots)
+        rows += perception(args.perception_cells, runs, args.workers, out, lots, args.smp_readings)
     engine_cost = overhead(args.runs or args.overhead_runs) if "overhead" in only else None
     scaling = None
     if "throughput" in only:

@@ -1,6 +1,7 @@
 """`tamp detect`: the workcells' object detector: render its data, train it, evaluate it.
 
     tamp detect render OUT --scenes N            Drake renders of both cells' catalogues
+    tamp detect render OUT --camera mast         the SMP-MRO youBot's mast camera's views
     tamp detect train DATA --out DIR --kind classifier    the proposal classifier (CPU)
     tamp detect train DATA --out DIR             a small segmentation network (CPU or GPU)
     tamp detect eval WEIGHTS DATA                held-out scenes: counts, IoU, confusion, time
@@ -66,6 +67,13 @@ def register(subparsers) -> None:
     p.add_argument("--views", type=int, default=4, help="viewpoints per scene (default 4)")
     p.add_argument("--seed", type=int, default=0, help="seed of the scenes and split (default 0)")
     p.add_argument("--jobs", type=int, default=1, help="render in N processes (same files)")
+    p.add_argument(
+        "--camera",
+        choices=("wrist", "mast"),
+        default="wrist",
+        help="wrist: the LOTS arm's wrist camera over a table (default); mast: the SMP-MRO "
+        "youBot's mast camera over the floor, its own arm in view (`tamp.sim.smp.mast_data`)",
+    )
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.set_defaults(func=run_render)
 
@@ -119,8 +127,18 @@ def run_render(args) -> int:
     if args.scenes < 1 or args.views < 1 or args.jobs < 1:
         raise InputError("--scenes, --views and --jobs must be >= 1")
     classes, fixtures = workcell_catalogue()
-    cfg = DataConfig(views=args.views, seed=args.seed)
-    info = generate(args.out, args.scenes, classes, fixtures, cfg, jobs=args.jobs)
+    if args.camera == "mast":
+        from tamp.sim.smp import mast_data
+
+        if args.jobs != 1:
+            raise InputError(
+                "--jobs: the mast camera's scenes render in one process", field="--jobs"
+            )
+        mast = mast_data.MastDataConfig(views=args.views, seed=args.seed)
+        info = mast_data.generate(args.out, args.scenes, classes, mast)
+    else:
+        cfg = DataConfig(views=args.views, seed=args.seed)
+        info = generate(args.out, args.scenes, classes, fixtures, cfg, jobs=args.jobs)
     summary = {
         "out": args.out,
         "scenes": info.scenes,

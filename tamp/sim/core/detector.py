@@ -35,6 +35,7 @@ and depths are taken from the image's own depth at its own resolution.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -59,6 +60,16 @@ from tamp.sim.core.instances import (
 )
 from tamp.sim.core.segdata import HAND, STUFF
 from tamp.sim.core.segnet import SegNet, load, prepare
+
+
+@functools.cache
+def shipped(name: str = cropnet.WEIGHTS_FILE) -> Detector | SegmentationDetector:
+    """The detector of a shipped weights file (``tamp/models/weights/NAME``; default: the
+    LOTS wrist camera's), loaded once per process: the stations of a campaign share it (it
+    holds no state between views)."""
+    from tamp.sim.core.models import models_dir
+
+    return Detector.load(models_dir() / "weights" / name)
 
 
 def _factor(shape: tuple[int, int], size: tuple[int, int]) -> int:
@@ -157,7 +168,7 @@ class Detector:
         return self.outputs[i], score
 
     def _at_size(
-        self, rgb, depth, intrinsics, X_WC, plane=None, exclude=None
+        self, rgb, depth, intrinsics, X_WC, plane=None, exclude=None, above=None
     ) -> list[tuple[np.ndarray, str, float]]:
         """(mask, class, score) of the objects of an image at the trained size (module
         docstring, steps 1-3)."""
@@ -170,6 +181,7 @@ class Detector:
             min_pixels=self.min_pixels,
             plane=plane,
             exclude=exclude,
+            **({} if above is None else {"above": above}),
         )
 
         def named(masks):
@@ -235,17 +247,20 @@ class Detector:
         *,
         plane: float | None = None,
         exclude: np.ndarray | None = None,
+        above: float | None = None,
     ) -> list[ObjectDetection]:
         """The objects in one view: ``rgb`` (H x W x 3 or 4, uint8), ``depth`` (H x W,
         metres), ``intrinsics`` (fx, fy, cx, cy) of this image, ``X_WC`` the camera pose
         (4 x 4 or a Drake ``RigidTransform``) from the arm's kinematics; what the cell knows
         of its fixtures: ``plane``, the support's height when known (else estimated from the
-        view), ``exclude`` (H x W), pixels of fixtures that are never objects. An image ``k``
+        view), ``exclude`` (H x W), pixels of fixtures that are never objects, ``above``, how
+        far over the support a pixel must be to be an object's (default `ABOVE_PLANE`; a far
+        floor seen from a mast needs more). An image ``k``
         times the trained size is subsampled; masks come back at its own size."""
         k = _factor(depth.shape, self.size)
         small = None if exclude is None else exclude[::k, ::k]
         found = self._at_size(
-            rgb[::k, ::k], depth[::k, ::k], _scaled(intrinsics, k), X_WC, plane, small
+            rgb[::k, ::k], depth[::k, ::k], _scaled(intrinsics, k), X_WC, plane, small, above
         )
         h, w = depth.shape
         depth = np.where(np.isfinite(depth), depth, 0.0)

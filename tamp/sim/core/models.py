@@ -38,6 +38,12 @@ def package_xml() -> Path:
     return models_dir() / "package.xml"
 
 
+#: what reads a workcell camera's views: the renderer's label image as a perfect detector
+#: (``oracle``: ground truth, for judging and comparing), or the learned detector on colour +
+#: depth (``learned``: `tamp.sim.core.detector`, the camera's shipped weights)
+DETECTORS = ("oracle", "learned")
+
+
 def sdf_path(name: str) -> Path:
     """The file of model ``name`` (``tamp/models/sdf/<name>.sdf``), for text substitution."""
     return models_dir() / "sdf" / f"{name}.sdf"

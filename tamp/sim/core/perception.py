@@ -112,12 +112,15 @@ class Region:
     its fixtures there, for the learned detector: ``floor``, the height objects rest on
     when it is not the view's own lowest surface (a tray's floor; None: the detector finds
     the support in the view), and ``rim``, the (inner, outer) sides of a square wall round
-    the rectangle's centre (a tray's walls), whose pixels are never an object's."""
+    the rectangle's centre (a tray's walls), whose pixels are never an object's; ``above``,
+    how far over the support a pixel must be to be an object's (None: the detector's default,
+    `tamp.sim.core.instances.ABOVE_PLANE`; the SMP-MRO mast camera's far floor needs more)."""
 
     center: tuple[float, float]
     size: tuple[float, float]
     floor: float | None = None
     rim: tuple[float, float] | None = None
+    above: float | None = None
 
     @property
     def base(self) -> float:
@@ -133,11 +136,13 @@ class Region:
 
     def fixtures(self, depth: np.ndarray, intrinsics, X_WC) -> dict[str, Any]:
         """The learned detector's keyword arguments for a view of this region (`floor` as
-        ``plane``, the pixels whose world point lies on the `rim` as ``exclude``): empty
-        when the region has neither."""
+        ``plane``, the pixels whose world point lies on the `rim` as ``exclude``, `above`):
+        empty when the region has none of them."""
         out: dict[str, Any] = {}
         if self.floor is not None:
             out["plane"] = self.floor
+        if self.above is not None:
+            out["above"] = self.above
         if self.rim is not None:
             h, w = depth.shape
             vs, us = np.mgrid[0:h, 0:w]

@@ -910,11 +910,14 @@ def render_scene(
         table_body = renderer.table_body
         for v, X_WC in enumerate(group_cams):
             rgb, depth, label = renderer.render(v)
-            views.append(_targets(rgb, depth, label, lut, table_body, renderer.K, X_WC))
+            views.append(view_targets(rgb, depth, label, lut, table_body, renderer.K, X_WC))
     return views
 
 
-def _targets(rgb, depth, label, lut, table_body, K, X_WC) -> View:
+def view_targets(rgb, depth, label, lut, table_body, K, X_WC) -> View:
+    """One view's targets from its label image: per-pixel classes (``lut``: render label ->
+    class index; the table body is ``table``; a stuff class sets the class only) and one
+    instance id per object body (its class in ``inst_cls``)."""
     cls = np.zeros(label.shape, np.uint8)
     inst = np.zeros(label.shape, np.uint8)
     inst_cls = np.full(256, -1, np.int16)
@@ -938,12 +941,16 @@ def scene_file(out: Path, i: int) -> Path:
 
 
 def write_scene(path: Path, views: Sequence[View], scene: Scene | None = None,
-                tray: Tray | None = None) -> None:  # fmt: skip
+                tray: Tray | None = None,
+                plane: tuple[float, float] | None = None) -> None:  # fmt: skip
     """One scene's views stacked in one compressed ``.npz`` (module docstring), with the
-    scene's kinds and its tray (`scene_record`)."""
+    scene's kinds and its tray (`scene_record`), and ``plane``, the support's height and how
+    far over it an object's pixels are when the cell knows them (the SMP-MRO floor:
+    `tamp.sim.smp.mast_data`)."""
     np.savez_compressed(
         path,
         **scene_record(scene, tray),
+        plane=np.zeros(0) if plane is None else np.array([float(x) for x in plane]),
         rgb=np.stack([v.rgb for v in views]),
         depth=np.stack([v.depth for v in views]),
         cls=np.stack([v.cls for v in views]),
@@ -966,11 +973,16 @@ def scene_record(scene: Scene | None, tray: Tray | None) -> dict[str, np.ndarray
 def view_fixtures(record: dict[str, np.ndarray], depth: np.ndarray, intrinsics, X_WC) -> dict:
     """The fixtures a view of a scene file shows, as the cell gives them to the detector at
     run time (`tamp.sim.core.perception.Region.fixtures`: the tray's floor as ``plane``, the
-    pixels on its walls as ``exclude``); empty without a tray (and for the files rendered
-    before trays were)."""
+    pixels on its walls as ``exclude``; the support's recorded height and threshold as
+    ``plane`` and ``above``); empty without either (and for the files rendered before they
+    were recorded)."""
+    plane = record.get("plane")
+    known = {}
+    if plane is not None and len(plane) == 2:
+        known = {"plane": float(plane[0]), "above": float(plane[1])}
     tray = record.get("tray")
     if tray is None or len(tray) == 0:
-        return {}
+        return known
     from pydrake.math import RigidTransform
 
     from tamp.sim.core.perception import Region
@@ -1093,10 +1105,16 @@ def generate(
                     bar.update(n)
                     for i in range(s, s + n) if on_scene else ():
                         on_scene(i)
-    parts = {s: split_of(s, cfg.seed, cfg.test_fraction) for s in range(scenes)}
+    return write_info(out, class_names(classes), asdict(cfg), scenes, views)
+
+
+def write_info(out: Path, classes: Sequence[str], config: dict, scenes: int, views: int):
+    """Write ``OUT/dataset.json`` of a rendered set of ``scenes`` scenes (their split drawn
+    from the ``config``'s seed and test share: `split_of`) and return it."""
+    parts = {s: split_of(s, config["seed"], config["test_fraction"]) for s in range(scenes)}
     info = DatasetInfo(
-        class_names(classes),
-        asdict(cfg),
+        tuple(classes),
+        config,
         scenes,
         tuple(i for i in range(scenes) if parts[i] == "train"),
         tuple(i for i in range(scenes) if parts[i] == "test"),

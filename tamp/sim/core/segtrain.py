@@ -40,6 +40,7 @@ from tamp.sim.core.segdata import (
     read_info,
     read_scene,
     scene_file,
+    view_fixtures,
 )
 from tamp.sim.core.segnet import SegNet, parameter_count, prepare, save
 
@@ -424,6 +425,14 @@ def evaluate(
         note = "the weights were trained with another split seed or test share than this set's"
     tally = Tally(names)
     times: list[float] = []
+
+    def known(scene: dict, v: int, intr) -> dict:
+        """What the cell gives the proposal detector of this view (`view_fixtures`: a tray,
+        a known floor); a segmentation network takes none."""
+        if not isinstance(det, Detector):
+            return {}
+        return view_fixtures(scene, scene["depth"][v], intr, scene["X_WC"][v])
+
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
@@ -436,7 +445,7 @@ def evaluate(
                     break
                 rgb, depth = scene["rgb"][v], scene["depth"][v]
                 t0 = time.process_time()
-                found = det.detect(rgb, depth, intr, scene["X_WC"][v])
+                found = det.detect(rgb, depth, intr, scene["X_WC"][v], **known(scene, v, intr))
                 times.append(time.process_time() - t0)
                 truth, small = true_instances(
                     scene["inst"][v], scene["inst_cls"][v], det.min_pixels, depth, names

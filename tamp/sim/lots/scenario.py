@@ -61,13 +61,12 @@ from tamp.grasp.networks import DEFAULT_NETWORK, NETWORKS
 from tamp.lots.task import CLASS_NAME
 from tamp.perturbation import NONE, Applied, Perturbation, check_seed, parse_perturbation
 from tamp.schema import load_dataclass, spec
-from tamp.sim.core.models import model_path
+from tamp.sim.core.models import DETECTORS, model_path
 from tamp.sim.lots.catalogue import ARM, CLASSES, ObjectClass, read_object_class
 
 CONTACT_MODELS = ("point", "hydroelastic_with_fallback", "hydroelastic")
 SIDES = ("A", "B")
 #: what reads the wrist camera's views (`CameraSettings.detector`)
-DETECTORS = ("oracle", "learned")
 #: Where each network's shipped weights are (relative to the repository's models/ folder).
 DEFAULT_WEIGHTS = {name: net.weights for name, net in NETWORKS.items()}
 #: The arm's comfortable reach on the table (Franka: 0.855 m from joint 2; keep a margin).

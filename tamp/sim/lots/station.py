@@ -25,7 +25,6 @@ camera's answers only (a test checks the diagram's connections).
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -38,7 +37,7 @@ from pydrake.systems.sensors import CameraConfig, RgbdSensor
 
 from tamp.lots.task import Event
 from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config
-from tamp.sim.core.detector import Detector
+from tamp.sim.core.detector import Detector, shipped
 from tamp.sim.core.perception import DetectorNoise, LabelOracle, Perception, Region
 from tamp.sim.core.recording import add_visualizer
 from tamp.sim.core.timing import Stopwatch
@@ -142,11 +141,10 @@ def region(w: Workspace) -> Region:
     return Region(w.center, w.size, floor=TRAY_FLOOR, rim=(TRAY_INSIDE, TRAY_OUTSIDE))
 
 
-@functools.cache
 def shipped_detector() -> Detector:
-    """The learned detector of the shipped weights, loaded once per process (stations of a
-    campaign share it: it holds no state between views)."""
-    return Detector.load()
+    """The learned detector of the wrist camera's shipped weights (`detector.shipped`:
+    loaded once per process)."""
+    return shipped()
 
 
 def view_source(scenario: CellScenario, cell: CellPlant) -> LabelOracle | Detector:

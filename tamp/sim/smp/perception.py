@@ -67,6 +67,8 @@ GATE = 0.15
 FIRST_GATE = 0.25
 #: a detection this near (m) another object's estimate is that object: no object moves there
 OCCUPIED = 0.08
+#: the name of what the mast camera looks at (perception's workspace: the cell's floor)
+VIEW_SIDE = "floor"
 #: views in a row an object must be seen away from its estimate before it is believed moved
 #: there (a lone false detection or class swap moves nothing)
 CONFIRM = 2
@@ -134,11 +136,14 @@ class ObjectPoseEstimator(LeafSystem):
         self._state = self.DeclareAbstractState(AbstractValue.Make(init))
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
         only_state = {self.abstract_state_ticket(self._state)}
+        # the request carries the camera's pose when it is served (the base's pose and the
+        # mast's mount: the robot's own kinematics), as a learned detector needs it
         self.view_request_port = self.DeclareAbstractOutputPort(
             "view_request",
             lambda: AbstractValue.Make(ViewRequest()),
             self._calc_request,
-            prerequisites_of_calc=only_state,
+            prerequisites_of_calc=only_state
+            | {self.input_port_ticket(self.body_poses_in.get_index())},
         )
         self.body_poses_port = self.DeclareAbstractOutputPort(
             "body_poses",
@@ -152,7 +157,8 @@ class ObjectPoseEstimator(LeafSystem):
         return context.get_abstract_state(self._state).get_value()
 
     def _calc_request(self, context, output) -> None:
-        output.set_value(ViewRequest(self.state(context).request, "floor"))
+        X_WC = self.body_poses_in.Eval(context)[self._camera_body].multiply(self._X_BC)
+        output.set_value(ViewRequest(self.state(context).request, VIEW_SIDE, camera_pose=X_WC))
 
     def _calc_poses(self, context, output) -> None:
         poses = list(self.body_poses_in.Eval(context))

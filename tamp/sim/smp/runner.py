@@ -134,6 +134,8 @@ class SimResult(RunResult):
     failures: list[tuple[float, str, str, str]] = field(default_factory=list)
     grasp: str
     perception: str
+    #: what read the camera's views (``perception: camera``): oracle or learned
+    detector: str = "oracle"
     order: list[str] = field(default_factory=list)
     #: the scenario has a perturbation section (the report says what this seed drew)
     perturbed: bool = False
@@ -159,6 +161,7 @@ class SimResult(RunResult):
             ],
             "grasp": self.grasp,
             "perception": self.perception,
+            "detector": self.detector if self.perception == "camera" else None,
         }
 
     def details_lines(self) -> list[str]:
@@ -189,6 +192,7 @@ class SimResult(RunResult):
                 f"seed {self.seed}: perturbation size {p['size']:.3f} m (largest object "
                 f"displacement), robot moved {p['robot_displacement']:.3f} m, friction "
                 f"{mu}, grasp {self.grasp}, perception {self.perception}"
+                + (f" ({self.detector} detector)" if self.perception == "camera" else "")
             )
         return lines
 
@@ -412,6 +416,7 @@ class SimRunner:
             failures=skill_failures,
             grasp=s.scenario.grasp,
             perception=s.scenario.perception,
+            detector=s.scenario.detector,
             perturbed=bool(s.scenario.perturbation.fields()),
         )
 

@@ -33,6 +33,7 @@ from flags. An object's ``model`` is a packaged one (``bottle``, ``obstacle``:
     fail: []                           # as --fail, e.g. "Pick(O2)" or "Pick(O2)x2"
     grasp: weld                        # weld | friction (the fingers hold it, SAP contact)
     perception: truth                  # truth (plant poses) | camera (RGB-D on the robot)
+    detector: oracle                   # camera: oracle (label image) | learned (colour + depth)
     perturbation: {objects: {xy: 0.02}}   # tamp.perturbation, drawn per --seed
 """
 
@@ -52,6 +53,7 @@ from tamp.fileio import Fields, load_yaml
 from tamp.perturbation import NONE, Perturbation, parse_perturbation
 from tamp.rg.costs import COST_MODELS
 from tamp.schema import load_dataclass, spec
+from tamp.sim.core.models import DETECTORS
 from tamp.sim.smp.object_models import ObjectModel, declared_kinds
 from tamp.sim.smp.placement import Body, blocker
 from tamp.sim.smp.robot import OBJECT_KINDS, ROBOT, ObjectKind
@@ -181,6 +183,44 @@ def _perturbation(raw: Any, f: Fields, key: str) -> Perturbation:
     return parse_perturbation(f, key)
 
 
+#: the learned detector needs the camera
+NO_CAMERA = "the learned detector reads the camera: set 'perception: camera'"
+
+
+def unlearned(model: str) -> str | None:
+    """Why ``detector: learned`` cannot find an object of ``model`` (None: it can): it names
+    only the packaged models it was trained on (`OBJECT_KINDS`); a model a file declares
+    would be ``unknown`` to it and never found."""
+    if model in OBJECT_KINDS:
+        return None
+    return (
+        f"the learned detector was not trained on model {model!r} (it knows "
+        f"{', '.join(OBJECT_KINDS)}): use 'detector: oracle'"
+    )
+
+
+def check_learned(sf: ScenarioFile, f: Fields) -> None:
+    """``detector: learned`` needs ``perception: camera`` and objects of the models it knows
+    (`unlearned`; `InputError` naming the field)."""
+    if sf.perception != "camera":
+        raise f.error("detector", NO_CAMERA)
+    for entry, where in zip(sf.objects, f.items("objects", []), strict=True):
+        if (why := unlearned(entry.model)) is not None:
+            raise where.error("model", why)
+
+
+def with_detector(scenario: SimScenario, detector: str) -> SimScenario:
+    """``scenario`` read by ``detector`` (the ``--detector`` flag; checked as the file's
+    field is: `InputError` naming the flag)."""
+    if detector == "learned":
+        if scenario.perception != "camera":
+            raise InputError(NO_CAMERA, file=scenario.source or None, field="--detector")
+        for o in scenario.objects:
+            if (why := unlearned(o.kind.name)) is not None:
+                raise InputError(why, file=scenario.source or None, field="--detector")
+    return dataclasses.replace(scenario, detector=detector)
+
+
 @dataclass(frozen=True, kw_only=True)
 class ScenarioFile:
     """A scenario file as written (module docstring), before it is resolved against its
@@ -205,6 +245,13 @@ class ScenarioFile:
     grasp: str = spec("weld", choices=GRASPS, help="weld | friction (the fingers hold it)")
     perception: str = spec(
         "truth", choices=PERCEPTIONS, help="truth (plant poses) | camera (RGB-D on the robot)"
+    )
+    detector: str = spec(
+        "oracle",
+        choices=DETECTORS,
+        help="what reads the mast camera's views (perception: camera): the renderer's labels "
+        "as a perfect detector (oracle), or the learned detector on colour + depth "
+        "(`tamp.sim.core.detector`, the mast camera's shipped weights)",
     )
     perturbation: Perturbation = spec(NONE, parse=_perturbation, help="tamp.perturbation")
 
@@ -235,6 +282,8 @@ class ScenarioFile:
                     "model", f"unknown model {entry.model!r} (known: {', '.join(known)})"
                 )
         self.perturbation.require(PERTURBED, "SMP-MRO")
+        if self.detector == "learned":
+            check_learned(self, f)
         if self.perturbation.detector is not None and self.perception != "camera":
             raise f.error(
                 "perturbation.sensor.detector",
@@ -303,6 +352,7 @@ class SimScenario:
     grasp: str  # weld | friction
     perception: str  # truth | camera
     perturbation: Perturbation
+    detector: str = "oracle"  # what reads the camera's views (perception: camera)
     conditions: RunConditions = RunConditions()
 
     def object(self, uid: str) -> SimObject:
@@ -391,6 +441,7 @@ def load_scenario(path: str | Path) -> SimScenario:
         grasp=sf.grasp,
         perception=sf.perception,
         perturbation=sf.perturbation,
+        detector=sf.detector,
     )
     scenario = _appearances(scenario, sf, file)
     for i, fail in enumerate(sf.fail):

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tamp.errors import InputError
+from tamp.sim.core.models import DETECTORS
 from tamp.sim.core.workcell import Option
 
 if TYPE_CHECKING:  # imported where used: listing the workcells (`tamp --help`) stays light
@@ -170,6 +171,12 @@ class SmpMroWorkcell:
             metavar="ACTION[(ARGS)][xTIMES]",
         ),
         Option(
+            "detector",
+            "what reads the mast camera's views (perception: camera): the renderer's labels as "
+            "a perfect detector or the learned detector (default: the scenario's detector)",
+            choices=DETECTORS,
+        ),
+        Option(
             "verify_budget",
             "states the tree gate may explore before its verdict is unknown (exit 1) "
             "(default 200000)",
@@ -193,10 +200,12 @@ class SmpMroWorkcell:
         case: int | None = None,
         appear: Sequence[str] = (),
         fail: Sequence[str] = (),
+        detector: str | None = None,
     ) -> SimScenario:
         """The scenario file (or packaged name; none: packaged case ``case``, default 1)
-        with the ``--appear`` / ``--fail`` entries applied (`SimScenario.with_events`)."""
-        from tamp.sim.smp.scenario import load_scenario
+        with the ``--appear`` / ``--fail`` entries applied (`SimScenario.with_events`) and
+        read by ``detector`` (None: the file's; `with_detector`)."""
+        from tamp.sim.smp.scenario import load_scenario, with_detector
         from tamp.world.events import check_events, parse_appear, parse_fail
 
         scenario = load_scenario(name_or_path or f"case{case or 1}")
@@ -212,6 +221,8 @@ class SmpMroWorkcell:
                 domain=demo.domain(),
             )
             scenario = scenario.with_events(flags, fails)
+        if detector is not None:
+            scenario = with_detector(scenario, detector)
         return scenario
 
     def perturbed(self, scenario: SimScenario, seed: int) -> tuple[SimScenario, Any]:

@@ -76,7 +76,9 @@ class SmpStation:
     perception: Any = None  # ObjectPoseEstimator (perception: camera), else None
 
 
-def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
+def area_marker_sdf(name: str, radius: float, free: bool) -> str:
+    """The SDF of an area's floor marker: a translucent disc of ``radius``, grey for a free
+    area, green for a goal (also rendered for the mast camera's detector data)."""
     text = sdf_path("area_marker").read_text()
     text = text.replace('<model name="area_marker">', f'<model name="area_{name}">')
     text = re.sub(r"<radius>[^<]*</radius>", f"<radius>{radius:.4f}</radius>", text, count=1)
@@ -88,8 +90,11 @@ def _area_marker_sdf(name: str, radius: float, free: bool) -> str:
 def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodies, kinds, palm):
     """The mast camera, depth noise, the detector and the pose estimator (wired)."""
     from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config, look_at
-    from tamp.sim.core.perception import DetectorNoise, LabelOracle, Perception
-    from tamp.sim.smp.perception import ObjectPoseEstimator, prior_poses
+    from tamp.sim.core.detector import shipped
+    from tamp.sim.core.perception import DetectorNoise, LabelOracle, Perception, Region
+    from tamp.sim.smp.mast_data import ABOVE_FLOOR, FLOOR
+    from tamp.sim.smp.mast_data import WEIGHTS_FILE as MAST_WEIGHTS
+    from tamp.sim.smp.perception import VIEW_SIDE, ObjectPoseEstimator, prior_poses
 
     base = plant.GetBodyByName(ROBOT.base_body, robot)
     X_BC = look_at(CAMERA.position, CAMERA.target)
@@ -98,15 +103,30 @@ def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodie
     )
     camera, K = add_rgbd_camera(builder, plant, scene_graph, base, X_BC, config)
     run = scenario.conditions
-    # the oracle's classes are the object models' (identity is the estimator's: by position)
-    labels = {int(b.index()): kinds[uid].name for uid, b in bodies.items()}
+    # the classes are the object models' (identity is the estimator's: by position)
+    task_classes = sorted({k.name for k in kinds.values()})
+    noise = None if run.detector is None else DetectorNoise(run.detector, run.seed)
+    if scenario.detector == "learned":  # colour + depth + the camera's pose: no label input
+        xmin, xmax, ymin, ymax = scenario.workspace
+        # the floor is the known support (`mast_data.FLOOR`, `ABOVE_FLOOR`), as in training
+        floor = Region(
+            ((xmin + xmax) / 2, (ymin + ymax) / 2),
+            (xmax - xmin, ymax - ymin),
+            floor=FLOOR,
+            above=ABOVE_FLOOR,
+        )
+        source = dict(source=shipped(MAST_WEIGHTS), intrinsics=K, regions={VIEW_SIDE: floor})
+    else:
+        labels = {int(b.index()): kinds[uid].name for uid, b in bodies.items()}
+        source = dict(source=LabelOracle(labels))
     detector = builder.AddSystem(
         Perception(
-            LabelOracle(labels),
+            **source,
             width=CAMERA.width,
             height=CAMERA.height,
             period=CAMERA.period,
-            noise=None if run.detector is None else DetectorNoise(run.detector, run.seed),
+            noise=noise,
+            task_classes=task_classes,
         )
     )
     depth = camera.depth_image_32F_output_port()
@@ -123,7 +143,8 @@ def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodie
         builder.Connect(depth, noise.depth_in)
         depth = noise.depth_out
     builder.Connect(depth, detector.depth_port)
-    builder.Connect(camera.label_image_output_port(), detector.label_port)
+    if detector.label_port is not None:
+        builder.Connect(camera.label_image_output_port(), detector.label_port)
     builder.Connect(camera.color_image_output_port(), detector.color_port)
     shown = {uid: (x, y, yaw) for uid, x, y, yaw in run.nominal}
     objects = [
@@ -163,7 +184,7 @@ def build_station(scenario: SimScenario, policy: Policy, *, meshcat: Any = None)
     free_names = {a.name for a in scenario.demo.free_areas}
     for name, area in areas.items():
         (m,) = parser.AddModelsFromString(
-            _area_marker_sdf(name, area.radius, name in free_names), "sdf"
+            area_marker_sdf(name, area.radius, name in free_names), "sdf"
         )
         plant.WeldFrames(
             plant.world_frame(),

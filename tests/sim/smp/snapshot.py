@@ -50,6 +50,9 @@ def recorded_layout(scenario: dict[str, Any]) -> dict[str, Any]:
     conditions = dict(out["conditions"])
     assert conditions.pop("detector") is None  # a loaded file draws nothing: exact
     out["conditions"] = conditions
+    # what reads the camera's views came with the learned mast detector: the oracle, as
+    # every packaged file was read when recorded
+    assert out.pop("detector") == "oracle"
     return out
 
 
