@@ -13,9 +13,10 @@ every time:
   nearer (`occlusion`; without a depth image the image edge alone);
 - **class swaps**: with probability ``swap`` the class becomes another task class;
 - **mask jitter**: the mask grows or shrinks by one pixel (binary dilation or erosion) with
-  probability ``jitter``, and its points and centroid follow;
-- **fresh identities**: with probability ``fresh`` the centroid and points jump
-  ``fresh_jump`` metres in a random horizontal direction, beyond the tracker's first gate
+  probability ``jitter``, and its pixel centroid, depth, points and centroid follow;
+- **fresh identities**: with probability ``fresh`` the centroid and points (and the pixel
+  centroid and depth, where the view is placed) jump ``fresh_jump`` metres in a random
+  horizontal direction, beyond the tracker's first gate
   (`tamp.sim.core.tracks.GATE`); its second round (``REGATE``, 15 cm) matches most of them
   back to their track when no other detection claims it, so fresh track ids under this
   noise come mostly from false positives and from jumps another detection takes over;
@@ -38,8 +39,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from tamp.grasp.pinhole import camera_to_pixel, pixel_to_camera
 from tamp.perturbation import stream
-from tamp.sim.core.instances import ObjectDetection, backproject_mask
+from tamp.sim.core.instances import ObjectDetection, as_matrix, backproject_mask, located
 
 NOT_TASK = ("unknown", "hand")
 
@@ -84,6 +86,17 @@ def occlusion(mask: np.ndarray, depth: np.ndarray | None, tolerance: float = 0.0
     return min(1.0, hidden / total)
 
 
+def _moved(pixel: tuple[float, float, float], shift: np.ndarray, intrinsics, X_WC) -> tuple:
+    """(u, v, depth) of the world point seen at ``pixel`` moved by ``shift`` (m)."""
+    X = as_matrix(X_WC)
+    p_W = X[:3, :3] @ pixel_to_camera(*pixel, intrinsics) + X[:3, 3] + shift
+    p_C = X[:3, :3].T @ (p_W - X[:3, 3])
+    if p_C[2] <= 0:
+        return pixel
+    u, v = camera_to_pixel(p_C, intrinsics)
+    return float(u), float(v), float(p_C[2])
+
+
 def perturb(
     detections: Sequence[ObjectDetection],
     *,
@@ -114,23 +127,35 @@ def perturb(
         if u[2] < lv.swap and cls not in NOT_TASK and len(task) > 1:
             others = [c for c in task if c != cls]
             cls = others[int(u[3] * len(others)) % len(others)]
-        mask, points = d.mask, d.points
+        mask, points, pixel = d.mask, d.points, (d.u, d.v, d.depth)
         if u[4] < lv.jitter:
             grow = rng.random() < 0.5
             new = ndimage.binary_dilation(mask) if grow else ndimage.binary_erosion(mask)
             if new.sum() > 0:
                 mask = new
-                if depth is not None and intrinsics is not None and X_WC is not None:
-                    points = backproject_mask(mask, depth, intrinsics, X_WC)
+                where = None if depth is None else located(mask, depth, intrinsics, X_WC)
+                if where is not None:  # the mask's pixel, depth (and points) follow it
+                    pixel = (where["u"], where["v"], where["depth"])
+                    if where["points"].shape[1]:
+                        points = where["points"]
         centroid = np.median(points, axis=1) if points.shape[1] else np.array(d.centroid)
         if u[5] < lv.fresh:
             a = rng.uniform(-math.pi, math.pi)
             shift = lv.fresh_jump * np.array([math.cos(a), math.sin(a), 0.0])
             points = points + shift[:, None]
             centroid = centroid + shift
+            if intrinsics is not None and X_WC is not None:  # the pixel moves with it
+                pixel = _moved(pixel, shift, intrinsics, X_WC)
         out.append(
             dataclasses.replace(
-                d, cls=cls, mask=mask, points=points, centroid=tuple(float(x) for x in centroid)
+                d,
+                cls=cls,
+                mask=mask,
+                points=points,
+                centroid=tuple(float(x) for x in centroid),
+                u=pixel[0],
+                v=pixel[1],
+                depth=pixel[2],
             )
         )
     if depth is not None and intrinsics is not None and X_WC is not None and task:

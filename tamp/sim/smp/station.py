@@ -115,13 +115,16 @@ def _add_camera(builder, plant, scene_graph, scenario: SimScenario, robot, bodie
             floor=FLOOR,
             above=ABOVE_FLOOR,
         )
-        source = dict(source=shipped(MAST_WEIGHTS), intrinsics=K, regions={VIEW_SIDE: floor})
+        source = dict(source=shipped(MAST_WEIGHTS), regions={VIEW_SIDE: floor})
     else:
         labels = {int(b.index()): kinds[uid].name for uid, b in bodies.items()}
         source = dict(source=LabelOracle(labels))
+    # with the intrinsics and each request's camera pose perception places what it sees (a
+    # noisy detector's jumps and false positives too, whichever detector reads the views)
     detector = builder.AddSystem(
         Perception(
             **source,
+            intrinsics=K,
             width=CAMERA.width,
             height=CAMERA.height,
             period=CAMERA.period,

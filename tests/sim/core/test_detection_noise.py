@@ -119,3 +119,23 @@ def test_occlusion_counts_the_image_edge_and_nearer_things():
     edge = np.zeros((20, 20), bool)
     edge[0:5, 0:5] = True
     assert occlusion(edge, None) > 0.3
+
+
+def test_the_pixel_and_depth_follow_a_jitter_and_a_jump():
+    """A consumer that places detections from their pixel centroid and depth (the SMP-MRO
+    pose estimator) sees the same errors as one that reads the world centroid."""
+    from tamp.grasp.pinhole import pixel_to_camera
+
+    dets, depth = _view()
+    kw = dict(seed=3, frame=0, classes=CLASSES, depth=depth, intrinsics=INTR, X_WC=np.eye(4))
+    grow = dataclasses.replace(NONE, jitter=1.0)
+    for d, g in zip(dets, perturb(dets, level=grow, **kw), strict=True):
+        vs, us = np.nonzero(g.mask)
+        assert g.pixels != d.pixels and (g.u, g.v) == pytest.approx((us.mean(), vs.mean()))
+    jump = dataclasses.replace(NONE, fresh=1.0, fresh_jump=0.08)
+    for d, j in zip(dets, perturb(dets, level=jump, **kw), strict=True):
+        before = pixel_to_camera(d.u, d.v, d.depth, INTR)
+        after = pixel_to_camera(j.u, j.v, j.depth, INTR)
+        moved = after - before
+        assert np.linalg.norm(moved[:2]) == pytest.approx(0.08, abs=1e-9) and moved[2] == 0.0
+        assert np.subtract(j.centroid, d.centroid) == pytest.approx(moved)

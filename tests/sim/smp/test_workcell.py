@@ -26,6 +26,7 @@ def test_the_cell_declares_the_contract():
         "case": "load",
         "appear": "load",
         "fail": "load",
+        "detector": "load",
         "verify_budget": "run",
         "rate": "run",
     }
