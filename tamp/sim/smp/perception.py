@@ -13,7 +13,10 @@ kinematics; kept per render time), pushed away from the camera by 0.8 of the obj
 below the top of the resting object), set to the known height of its model (a known object
 on a known support plane); higher, the object is off the floor and the centroid's height is
 kept (the pick check only compares it with the height before the lift). The run's pose noise (sigma,
-m) is added to x and y, drawn from the seed and the frame. Yaw is not estimated (it keeps the
+m) is added to x and y, drawn from the seed and the frame. The estimate on the floor is the
+median of the object's last `FUSED` whole views since it last moved (a filter over frames, as a
+tracker's: a noisy detector's one-frame jump or a mask a pixel too wide does not move it);
+its height is the last view's. Yaw is not estimated (it keeps the
 prior): only the obstacle box has one that matters, and it appears with yaw 0. A detection
 whose size (pixels x depth^2) is below `WHOLE` of the largest seen for that object is partly
 hidden and is not used, except by the view that confirms the object moved: it is believed
@@ -67,6 +70,11 @@ GATE = 0.15
 FIRST_GATE = 0.25
 #: a detection this near (m) another object's estimate is that object: no object moves there
 OCCUPIED = 0.08
+#: an object's place on the floor (x, y) is the per-axis median of its last this many whole
+#: views since it last moved (its height is the last view's: a lift must show at once): one
+#: view's error (a detector's mask a pixel off, a centroid that jumps for a frame) does not
+#: move it
+FUSED = 5
 #: the name of what the mast camera looks at (perception's workspace: the cell's floor)
 VIEW_SIDE = "floor"
 #: views in a row an object must be seen away from its estimate before it is believed moved
@@ -91,6 +99,8 @@ class EstimatorState:
     full: dict = field(default_factory=dict)
     #: per object seen away from its estimate: (x, y, views in a row there), until confirmed
     moving: dict = field(default_factory=dict)
+    #: per object, its last `FUSED` whole views' places (x, y) since it last moved
+    views: dict = field(default_factory=dict)
 
     def __deepcopy__(self, memo: dict) -> EstimatorState:
         return self  # replaced, never changed in place
@@ -183,6 +193,7 @@ class ObjectPoseEstimator(LeafSystem):
         seen = dict(s.seen)
         full = dict(s.full)
         moving = dict(s.moving)
+        views = dict(s.views)
         cameras = {k: v for k, v in s.cameras.items() if k >= _key(t - 1.0)}
         X_WC = plant_poses[self._camera_body].multiply(self._X_BC)
         cameras[_key(t)] = X_WC
@@ -199,6 +210,8 @@ class ObjectPoseEstimator(LeafSystem):
                     if moving[uid][2] < CONFIRM:
                         continue
                 moving.pop(uid, None)
+                if moved:  # it stands somewhere else now: the views before are of there
+                    views.pop(uid, None)
                 size = det.pixels * det.depth**2  # about constant over distance, unoccluded
                 # an object confirmed moved is believed there even when partly hidden
                 # (centimetres off beats where it was before), and its full size is learnt
@@ -212,7 +225,9 @@ class ObjectPoseEstimator(LeafSystem):
                 if self._noise > 0:
                     dx, dy = np.clip(rng.standard_normal(2), -3.0, 3.0) * self._noise
                     est = (est[0] + float(dx), est[1] + float(dy), est[2], est[3])
-                estimates[uid] = est
+                views[uid] = (*views.get(uid, ()), est[:2])[-FUSED:]
+                x, y = np.median(np.array(views[uid]), axis=0)
+                estimates[uid] = (float(x), float(y), est[2], est[3])
                 seen[uid] = obs.time
         grasp: GraspRequest = self.grasp_port.Eval(context)
         held = grasp.holding
@@ -221,12 +236,15 @@ class ObjectPoseEstimator(LeafSystem):
         # release and opening take longer than one period), is where the hand is
         for uid in {following, s.following} - {None}:
             estimates[uid] = self._in_hand(plant_poses, uid, estimates[uid][3])
+            views.pop(uid, None)  # carried: where it was seen is no longer where it is
         if s.following is not None and following is None:  # let go just above the floor:
             x, y, z, yaw = estimates[s.following]  # it rests on it (the arm lowered it there)
             hh = self._kinds[s.following].half_height
             estimates[s.following] = (x, y, hh if z < hh + LET_GO else z, yaw)
         state.get_mutable_abstract_state(self._state).set_value(
-            EstimatorState(s.request + 1, used, estimates, seen, cameras, following, full, moving)
+            EstimatorState(
+                s.request + 1, used, estimates, seen, cameras, following, full, moving, views
+            )
         )
         return EventStatus.Succeeded()
 
