@@ -129,6 +129,10 @@ class IsRobotCloseTo(Predicate):
         return (self.ref,) if self.d == DEFAULT_REACH else (self.ref, self.d)
 
     def holds(self, state: WorldState) -> bool:
+        # an object the world no longer holds (a camera lost sight of one it had believed
+        # in) is nowhere to be close to, as `IsObjectAt` is in no area
+        if self.ref not in state.objects and self.ref not in state.areas:
+            return False
         return state.robot.pos.planar_distance(state.position_of(self.ref)) <= self.d + 1e-9
 
     def achieve(self, state: WorldState) -> WorldState:

@@ -173,3 +173,15 @@ def test_unknown_packaged_domain_is_bad_input() -> None:
     with pytest.raises(InputError) as err:
         packaged_domain("spaceship")
     assert "lots_arm" in str(err.value) and "youbot" in str(err.value)
+
+
+def test_an_object_the_world_no_longer_holds_is_nowhere_to_be_close_to() -> None:
+    """A camera cell's world drops an object it loses sight of for good (a noisy detector's
+    false sighting made it believed, then nothing confirmed it): the tree's conditions on
+    it are false, as `IsObjectAt` is, instead of a crash (Case 3 camera, noise `high`,
+    seed 11)."""
+    s = _world()
+    assert IsRobotCloseTo("O1", 1.5).holds(s)
+    gone = WorldState(robot=s.robot, objects={}, areas=s.areas)
+    assert not IsRobotCloseTo("O1", 1.5).holds(gone) and not IsObjectAt("O1", "L1").holds(gone)
+    assert IsRobotCloseTo("F", 1.5).holds(gone)  # areas stay
