@@ -161,7 +161,8 @@ class SimResult(RunResult):
             ],
             "grasp": self.grasp,
             "perception": self.perception,
-            "detector": self.detector if self.perception == "camera" else None,
+            # what read the camera (only with one: the truth cells' output is unchanged)
+            **({"detector": self.detector} if self.perception == "camera" else {}),
         }
 
     def details_lines(self) -> list[str]:

@@ -145,19 +145,21 @@ def test_an_injected_friction_grasp_failure_is_seen_and_retried(tmp_path, percep
 
 
 def test_a_goal_reached_with_the_obstacle_left_on_its_side_is_a_failure(capsys, tmp_path):
-    """Case 3 with the camera, every object's friction 0.2 (the packaged draw is 0.5-0.9),
-    seed 5: the robot sets O1 aside and picks O_a (the box a person put on l_1), which,
+    """Case 3 with the camera, every object's friction 0.25 (the packaged draw is 0.5-0.9),
+    seed 1: the robot sets O1 aside and picks O_a (the box a person put on l_1), which,
     held by too little friction, slips out of the fingers on the way to a free place and
     lies on its side; the robot puts O1 on l_1. O0 and O1 rest in their areas, so a
     goals-only judge called this a success; the run fails with cause ``disturbed``. (With
     the packaged friction all 50 seeds of the campaign succeed; the judge's "never picked,
-    moved" branch is unit-tested in test_placement and test_appear.)"""
+    moved" branch is unit-tested in test_placement and test_appear. Until the estimator
+    fused five views this was friction 0.2, seed 5; at 0.2 seeds 0-9 now end
+    ``grasp_missed``, re-picking the fallen O_a.)"""
     packaged = Path(__file__).resolve().parents[3] / "tamp/scenarios/sim/case3_camera.yaml"
     text = packaged.read_text().replace("demonstration: ../case3.yaml", "demonstration: case3")
     path = tmp_path / "slippery.yaml"
-    path.write_text(text.replace("friction: [0.5, 0.9]", "friction: [0.2, 0.2]"))
-    out = _cli(capsys, str(path), "--seed", "5")
-    assert out["perturbation"]["friction"] == 0.2
+    path.write_text(text.replace("friction: [0.5, 0.9]", "friction: [0.25, 0.25]"))
+    out = _cli(capsys, str(path), "--seed", "1")
+    assert out["perturbation"]["friction"] == 0.25
     assert out["goals"] == {"O0@L0": True, "O1@L1": True}
     executed = [a["action"] for a in out["actions"] if a["status"] == "SUCCESS"]
     assert "Pick(Oa)" in executed and executed[-1] == "Place(O1, L1)"
