@@ -75,6 +75,7 @@ from tamp.grasp.pinhole import camera_to_pixel, pixel_to_camera
 from tamp.sim.core.detection_noise import LEVELS, perturb
 from tamp.sim.core.instances import ObjectDetection, located, world_heights
 from tamp.sim.core.messages import Detection, Observation, Seen, TargetCrop, ViewRequest
+from tamp.sim.core.threads import torch_threads
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.core.tracks import Tracks, update
 
@@ -604,7 +605,8 @@ class Perception(LeafSystem):
             pose = req.camera_pose if req.camera_pose is not None else RigidTransform()
             region = self._regions.get(req.side)
             known = region.fixtures(depth, self._intrinsics, pose) if region else {}
-            found = self._source.detect(image, depth, self._intrinsics, pose, **known)
+            with torch_threads():  # one thread: campaigns run a simulation per core
+                found = self._source.detect(image, depth, self._intrinsics, pose, **known)
             raw = on_table(found, depth, intrinsics, X_WC, **kw)
         if self._noise is None:
             return raw

@@ -17,7 +17,6 @@ descent (`tamp.sim.lots.descent`) fuses the best grasp of each view over views.
 from __future__ import annotations
 
 import math
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,15 +28,11 @@ from tamp.grasp.predict import PredictedGrasp, to_world
 from tamp.grasp.rect import GraspRect, angle_difference
 from tamp.sim.core.messages import TargetCrop
 from tamp.sim.core.models import models_dir
+from tamp.sim.core.threads import INFERENCE_THREADS, torch_threads
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.lots.scenario import DEFAULT_WEIGHTS, GraspSettings
 
 MAX_OPENING = 0.08  # the gripper's opening (2 x 0.04 m)
-#: torch intra-op threads for the network inside the workcell. The simulation runs in the
-#: same process and the machine has 2 shared cores: with 2 threads, OpenMP's second thread
-#: spin-waits for a core, and one HRG-Net call on a 180 px crop took 6-9 s of wall time
-#: and 1.0-1.4 s of CPU (load average 14) against 0.5-0.7 s and 63-75 ms with 1 thread.
-INFERENCE_THREADS = 1
 #: the object's top must stand this high above the table where the fingers close: the pads
 #: stop 2 mm above the table, so a 6 mm saw blade gives them nothing to squeeze
 MIN_TOP = 0.008
@@ -239,21 +234,6 @@ def mask_axis_grasps(mask: np.ndarray, n: int, samples: int = 9) -> list[Predict
         )
     out.sort(key=lambda g: -g.quality)
     return out[:n]
-
-
-@contextmanager
-def torch_threads(n: int):
-    """Run the block with ``n`` torch intra-op threads, then restore the previous number."""
-    import torch
-
-    before = torch.get_num_threads()
-    if before != n:
-        torch.set_num_threads(n)
-    try:
-        yield
-    finally:
-        if before != n:
-            torch.set_num_threads(before)
 
 
 def on_mask(rect: GraspRect, mask: np.ndarray) -> GraspRect | None:

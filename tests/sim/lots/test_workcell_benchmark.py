@@ -43,7 +43,7 @@ def test_cell_parts_do_not_count_the_network_twice():
 
 
 def test_network_thread_scope_restores_torch_threads():
-    from tamp.sim.lots.grasping import INFERENCE_THREADS, torch_threads
+    from tamp.sim.core.threads import INFERENCE_THREADS, torch_threads
 
     before = torch.get_num_threads()
     with torch_threads(INFERENCE_THREADS):
