@@ -86,6 +86,24 @@ def _estimator(kinds, prior, K):
     )
 
 
+def _looking_down(kinds, prior):
+    """An estimator whose camera looks straight down from 2 m over (1, 0), its inputs fixed
+    (no grasp, no view yet): (estimator, context, X_WC, intrinsics)."""
+    import numpy as np
+    from pydrake.math import RigidTransform, RotationMatrix
+
+    from tamp.sim.core.messages import GraspRequest, Observation
+
+    K = (300.0, 300.0, 160.0, 120.0)
+    X_WC = RigidTransform(RotationMatrix(np.diag([1.0, -1.0, -1.0])), [1.0, 0.0, 2.0])
+    est = _estimator(kinds, prior, K)
+    context = est.CreateDefaultContext()
+    est.body_poses_in.FixValue(context, [X_WC, RigidTransform()])
+    est.grasp_port.FixValue(context, GraspRequest())
+    est.observation_port.FixValue(context, Observation())
+    return est, context, X_WC, K
+
+
 def test_the_pose_estimator_tells_objects_apart_by_position_not_by_label():
     """The detector reports classes only (``bottle``, ``obstacle``); the estimator pairs a
     view's detections with its objects by position: nearest within the gate whatever the
@@ -145,20 +163,13 @@ def test_an_object_put_down_half_hidden_is_believed_there_and_its_size_learnt_an
     views) it is believed there though partly hidden, and its full size restarts from
     there, so later whole views of it refine the estimate."""
     import numpy as np
-    from pydrake.math import RigidTransform, RotationMatrix
 
     from tamp.grasp.pinhole import camera_to_pixel
-    from tamp.sim.core.messages import Detection, GraspRequest, Observation
+    from tamp.sim.core.messages import Detection, Observation
     from tamp.sim.smp.perception import CONFIRM, EstimatorState
     from tamp.sim.smp.robot import OBJECT_KINDS as KINDS
 
-    K = (300.0, 300.0, 160.0, 120.0)
-    X_WC = RigidTransform(RotationMatrix(np.diag([1.0, -1.0, -1.0])), [1.0, 0.0, 2.0])
-    est = _estimator({"Oa": KINDS["obstacle"]}, {"Oa": (5.0, 5.0, 0.075, 0.0)}, K)
-    context = est.CreateDefaultContext()
-    est.body_poses_in.FixValue(context, [X_WC, RigidTransform()])
-    est.grasp_port.FixValue(context, GraspRequest())
-    est.observation_port.FixValue(context, Observation())
+    est, context, X_WC, K = _looking_down({"Oa": KINDS["obstacle"]}, {"Oa": (5.0, 5.0, 0.075, 0.0)})
 
     def view(t, x, pixels):
         p_C = X_WC.inverse().multiply(np.array([x, 0.1, 0.075]))
@@ -227,20 +238,13 @@ def test_one_views_jump_does_not_move_a_resting_objects_estimate():
     one-frame 8 cm jump (the noisy detector's "fresh identity") does not move it; the
     views after it are of where it stands."""
     import numpy as np
-    from pydrake.math import RigidTransform, RotationMatrix
 
     from tamp.grasp.pinhole import camera_to_pixel
-    from tamp.sim.core.messages import Detection, GraspRequest, Observation
+    from tamp.sim.core.messages import Detection, Observation
     from tamp.sim.smp.perception import FUSED
     from tamp.sim.smp.robot import OBJECT_KINDS as KINDS
 
-    K = (300.0, 300.0, 160.0, 120.0)
-    X_WC = RigidTransform(RotationMatrix(np.diag([1.0, -1.0, -1.0])), [1.0, 0.0, 2.0])
-    est = _estimator({"O0": KINDS["bottle"]}, {"O0": (1.0, 0.3, 0.1, 0.0)}, K)
-    context = est.CreateDefaultContext()
-    est.body_poses_in.FixValue(context, [X_WC, RigidTransform()])
-    est.grasp_port.FixValue(context, GraspRequest())
-    est.observation_port.FixValue(context, Observation())
+    est, context, X_WC, K = _looking_down({"O0": KINDS["bottle"]}, {"O0": (1.0, 0.3, 0.1, 0.0)})
     context.SetTime(0.0)
     est._update(context, context.get_mutable_state())
 
