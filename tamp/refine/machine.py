@@ -126,6 +126,7 @@ class Machine:
             b.name: frozenset(start_predecessors(self.robot, i))
             for i, b in enumerate(self.robot.behaviors)
         }
+        self._ids = {b.name: event_id(self.robot.name, b.name) for b in self.robot.behaviors}
 
     def initial(self) -> MachineState:
         x, y, yaw = self.robot.start
@@ -180,27 +181,36 @@ class Machine:
         others: Mapping[str, float],
         override: float | None = None,
     ) -> MachineState:
-        """The machine one sensor period on, at time ``t`` (module docstring)."""
-        name = self.robot.name
-        fired_ids = set(others) | {event_id(name, n) for n in s.fired}
-        new_fired = dict(s.fired)
+        """The machine one sensor period on, at time ``t`` (module docstring); ``s`` itself
+        when nothing changed (no event fired, nothing started, no command due)."""
+        ids = self._ids
+        fired_ids = set(others)
+        fired_ids.update(ids[n] for n in s.fired)
+        new_fired: dict[str, float] = {}
         sp = list(s.setpoints)
         for b in self.running(s):
             if self._triggered(b, s, samples, fired_ids):
                 new_fired[b.name] = t
-                fired_ids.add(event_id(name, b.name))
+                fired_ids.add(ids[b.name])
                 self._hold(b, sp, samples)
-        s = replace(s, setpoints=tuple(sp))
-        started, refs = dict(s.started), dict(s.refs)
-        odo = samples.get("odometry")
-        for b in self.robot.behaviors:
-            if b.name not in started and self.preds[b.name] <= fired_ids:
-                started[b.name] = t
-                refs[b.name] = tuple(odo.message.value) if odo is not None else self.robot.start
-        s = replace(s, fired=new_fired, started=started, refs=refs)
+        if new_fired:
+            s = replace(s, setpoints=tuple(sp), fired={**s.fired, **new_fired})
+        starts = [
+            b.name
+            for b in self.robot.behaviors
+            if b.name not in s.started and self.preds[b.name] <= fired_ids
+        ]
+        if starts:
+            odo = samples.get("odometry")
+            ref = tuple(odo.message.value) if odo is not None else self.robot.start
+            s = replace(
+                s,
+                started={**s.started, **dict.fromkeys(starts, t)},
+                refs={**s.refs, **dict.fromkeys(starts, ref)},
+            )
         rate = self.rate_of(s, override)
         if t + 1e-9 < s.next_due:
-            return replace(s, rate=rate)
+            return s if rate == s.rate else replace(s, rate=rate)
         sp = list(s.setpoints)
         issued = dict(s.issued)
         for b in self.running(s):

@@ -22,7 +22,7 @@ from __future__ import annotations
 import heapq
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 
@@ -82,6 +82,7 @@ class Network:
 
     routes: Mapping[str, Route]
     servers: tuple[str, ...] = field(init=False)
+    _hops: dict[str, tuple[tuple[str, float], ...]] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         names: list[str] = []
@@ -94,6 +95,8 @@ class Network:
                 if hop.server not in names:
                     names.append(hop.server)
         self.servers = tuple(names)
+        # each stream's hops as plain (server, service) pairs: `advance` runs every tick
+        self._hops = {k: tuple((h.server, h.service) for h in r) for k, r in self.routes.items()}
 
     def initial(self) -> QueueState:
         return QueueState(free_at=tuple((s, -math.inf) for s in self.servers))
@@ -114,32 +117,37 @@ class Network:
         pending = list(state.pending)
         seq = state.next_seq
         made = []
-        routes, now = self.routes, state.now - 1e-12
+        routes, now, push = self.routes, state.now - 1e-12, heapq.heappush
         for stream, created, value in items:
             if stream not in routes:
                 raise KeyError(f"no route for stream {stream!r}")
             if created < now:
                 raise ValueError(f"message created at {created} before the queue time {state.now}")
             m = Message(stream, float(created), seq, value)
-            seq += 1
             made.append(m)
-            heapq.heappush(pending, (m.created, m.seq, 0, m, 0.0))
+            push(pending, (m.created, seq, 0, m, 0.0))
+            seq += 1
+        if not made:
+            return state, made
         return QueueState(tuple(pending), state.free_at, seq, state.now), made
 
     def advance(self, state: QueueState, until: float) -> tuple[QueueState, list[Delivery]]:
         """Process every arrival up to ``until``; returns the new state and the deliveries."""
+        now = max(state.now, until)
+        if not state.pending or state.pending[0][0] > until:  # nothing arrives by then
+            return (state if now == state.now else replace(state, now=now)), []
         pending = list(state.pending)  # a heap already: tuples keep the list's order
         free = dict(state.free_at)
         out: list[Delivery] = []
-        routes = self.routes
+        hops = self._hops
         pop, push = heapq.heappop, heapq.heappush
         while pending and pending[0][0] <= until:
             t, seq, hop, m, wait = pop(pending)
-            route = routes[m.stream]
+            route = hops[m.stream]
             if hop == len(route):
                 out.append(Delivery(m, t, wait))
                 continue
-            server, service = route[hop].server, route[hop].service
+            server, service = route[hop]
             free_at = free[server]
             start = t if t > free_at else free_at
             done = start + service
@@ -149,7 +157,7 @@ class Network:
             pending=tuple(pending),
             free_at=tuple(free.items()),
             next_seq=state.next_seq,
-            now=max(state.now, until),
+            now=now,
         )
         return new, out
 

@@ -48,6 +48,21 @@ def test_commands_leave_at_rate_p_and_each_moves_one_step():
     assert s2.setpoints[ARM] == pytest.approx(-26 * lower.motion.speed / 10.0)
 
 
+def test_a_tick_that_changes_nothing_returns_the_state_itself():
+    """Between commands, with no event and no start, the step is the state it was given (the
+    workcell's system then leaves its state alone); a due command or a fresh sample that
+    fires an event gives a new state."""
+    m = Machine(task(4), "R1")
+    s = m.step(m.initial(), 0.0, {}, {})  # lower_arm starts, the first command leaves
+    assert s.command.number == 1
+    for k in range(1, 10):  # 10 Hz: nothing due before 0.1 s
+        assert m.step(s, k * 0.01, {"imu": sample("imu", -0.1, k * 0.01)}, {}) is s
+    due = m.step(s, 0.1, {}, {})
+    assert due is not s and due.command.number == 2
+    fired = m.step(s, 0.05, {"imu": sample("imu", -0.41, 0.04)}, {})
+    assert fired is not s and fired.fired["lower_arm"] == 0.05
+
+
 def test_waits_for_the_other_robot_and_odometry_progress():
     m = Machine(task(4), "R1")
     s = m.initial()

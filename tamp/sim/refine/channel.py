@@ -75,6 +75,8 @@ class Channel(LeafSystem):
         self._rates = tuple(float(sensor_rates[x]) for x in SENSORS)
         self._stream_of = command_stream
         self._streams: dict[tuple[str, ...], str] = {}
+        #: per stream: the key of its latest delivery (every command stream is `COMMAND`)
+        self._latest_key = {x: COMMAND if x.startswith(COMMAND) else x for x in network.routes}
         self._actuation_start = np.concatenate([q_start, np.zeros_like(q_start)])
         self._last: tuple[Delivery | None, np.ndarray] = (None, self._actuation_start)
         self.period = tick
@@ -117,16 +119,17 @@ class Channel(LeafSystem):
         s = self.state(context)
         t = context.get_time()
         r: Readings = self.readings_port.Eval(context)
+        previous = s.previous
         items = []
         taken = s.samples or (0,) * len(SENSORS)
         samples = []
         for x, rate, k in zip(SENSORS, self._rates, taken, strict=True):
             while k / rate <= t + 1e-9:
                 created = k / rate
-                items.append((x, created, (r if created >= t - 1e-9 else s.previous).value(x)))
+                items.append((x, created, (r if created >= t - 1e-9 else previous).value(x)))
                 k += 1
             samples.append(k)
-        items.sort(key=lambda item: item[1])  # one time order across the sensors
+        items.sort(key=_created)  # one time order across the sensors
         cmd: Command = self.command_port.Eval(context)
         injected = s.injected
         if cmd.number > injected:
@@ -137,11 +140,21 @@ class Channel(LeafSystem):
             injected = cmd.number
         queue, _ = self._network.inject(s.queue, items)
         queue, out = self._network.advance(queue, t)
-        latest = dict(s.latest)
-        for d in out:
-            stream = d.message.stream
-            latest[COMMAND if stream.startswith(COMMAND) else stream] = d
-        recent = tuple(d for d in out if not d.message.stream.startswith(COMMAND))
-        new = ChannelState(queue, latest, recent, injected, tuple(samples), r)
+        latest = s.latest
+        recent = []
+        if out:
+            latest = dict(latest)
+            key = self._latest_key
+            for d in out:
+                k = key[d.message.stream]
+                latest[k] = d
+                if k != COMMAND:
+                    recent.append(d)
+        new = ChannelState(queue, latest, tuple(recent), injected, tuple(samples), r)
         state.get_mutable_abstract_state(self._state).set_value(new)
         return EventStatus.Succeeded()
+
+
+def _created(item: tuple) -> float:
+    """The creation time of a message ``(stream, created, value)`` to be injected."""
+    return item[1]

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, LeafSystem
@@ -92,6 +93,8 @@ class ContactMonitor(LeafSystem):
         self._rule = rule
         self._body = dict(geometry_body)  # GeometryId value -> body index
         self._period = period
+        #: per body pair: (`CollisionRule.classify`, `CollisionRule.touch`), computed once
+        self._verdicts: dict[tuple[int, int], tuple[Any, Any]] = {}
         self.contact_port = self.DeclareAbstractInputPort("contact_results", contact_model)
         self._state = self.DeclareAbstractState(AbstractValue.Make(ContactLog()))
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
@@ -112,6 +115,13 @@ class ContactMonitor(LeafSystem):
                 out.append((a, b))
         return out
 
+    def _verdict(self, pair: tuple[int, int]) -> tuple[Any, Any]:
+        """(collision key or None, gripper touch or None) of a body pair (`CollisionRule`)."""
+        v = self._verdicts.get(pair)
+        if v is None:
+            v = self._verdicts[pair] = (self._rule.classify(*pair), self._rule.touch(*pair))
+        return v
+
     def _update(self, context, state) -> EventStatus:
         pairs = self._pairs(self.contact_port.Eval(context))
         if not pairs:
@@ -119,14 +129,13 @@ class ContactMonitor(LeafSystem):
         t = context.get_time()
         log = self.log(context)
         spans, touches = log.spans, log.touches
-        for a, b in pairs:
-            key = self._rule.classify(a, b)
+        for pair in pairs:
+            key, touch = self._verdict(pair)
             if key is not None:
                 if spans is log.spans:
                     spans = dict(spans)
                 first, total = spans.get(key, (t, 0.0))
                 spans[key] = (first, total + self._period)
-            touch = self._rule.touch(a, b)
             if touch is not None and touch[0] not in touches:
                 touches = {**touches, touch[0]: (t, touch[1])}
         if spans is log.spans and touches is log.touches:

@@ -54,7 +54,8 @@ class SensorReadings(LeafSystem):
         fx, fy, fz = self.reaction_port.Eval(context)[self._mount].translational()
         mount = math.sqrt(fx * fx + fy * fy + fz * fz)
         tau = self.contact_port.Eval(context)
-        squeeze = max(abs(float(tau[i])) for i in self._fingers)
+        a, b = self._fingers
+        squeeze = max(abs(float(tau[a])), abs(float(tau[b])))
         i, j, k = self._pose
         output.set_value(
             Readings(

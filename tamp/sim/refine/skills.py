@@ -39,22 +39,32 @@ class PioneerStateMachine(LeafSystem):
             lambda ctx, out: out.set_value(self.state(ctx).command),
             prerequisites_of_calc=ticket,
         )
+        self._progress: tuple[MachineState | None, Progress] = (None, Progress())
         self.progress_port = self.DeclareAbstractOutputPort(
             "progress",
             lambda: AbstractValue.Make(Progress()),
-            lambda ctx, out: out.set_value(self.machine.progress_of(self.state(ctx))),
+            self._calc_progress,
             prerequisites_of_calc=ticket,
         )
 
     def state(self, context) -> MachineState:
         return context.get_abstract_state(self._state).get_value()
 
+    def _calc_progress(self, context, output) -> None:
+        """The progress of the machine's state (the same state object as on the last tick,
+        when its step changed nothing, gives the same progress: not recomputed)."""
+        s = self.state(context)
+        if s is not self._progress[0]:
+            self._progress = (s, self.machine.progress_of(s))
+        output.set_value(self._progress[1])
+
     def _update(self, context, state) -> EventStatus:
         delivered: ChannelState = self.delivered_port.Eval(context)
         others: Progress = self.others_port.Eval(context)
         override = self.rates_port.Eval(context).rates.get(self.robot)
-        new = self.machine.step(
-            self.state(context), context.get_time(), delivered.latest, others.fired, override
-        )
+        s = self.state(context)
+        new = self.machine.step(s, context.get_time(), delivered.latest, others.fired, override)
+        if new is s:
+            return EventStatus.DidNothing()
         state.get_mutable_abstract_state(self._state).set_value(new)
         return EventStatus.Succeeded()

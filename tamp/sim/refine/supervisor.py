@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, LeafSystem
 
+from tamp.refine.queues import Delivery
 from tamp.refine.steps import RateSearch
 from tamp.sim.refine.channel import ChannelState
 from tamp.sim.refine.messages import RateOverride
@@ -111,39 +112,58 @@ class RateTuningSupervisor(LeafSystem):
         )
         self._state = self.DeclareAbstractState(AbstractValue.Make(initial))
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
+        self._rates: tuple[SupervisorState | None, RateOverride] = (None, RateOverride())
         self.rates_port = self.DeclareAbstractOutputPort(
             "rates",
             lambda: AbstractValue.Make(RateOverride()),
-            lambda ctx, out: out.set_value(RateOverride(self.state(ctx).rates())),
+            self._calc_rates,
             prerequisites_of_calc={self.abstract_state_ticket(self._state)},
         )
 
     def state(self, context) -> SupervisorState:
         return context.get_abstract_state(self._state).get_value()
 
+    def _calc_rates(self, context, output) -> None:
+        """The searches' rates (recomputed only when the state object changed)."""
+        s = self.state(context)
+        if s is not self._rates[0]:
+            self._rates = (s, RateOverride(s.rates()))
+        output.set_value(self._rates[1])
+
     def _update(self, context, state) -> EventStatus:
         t = context.get_time()
         s = self.state(context)
         robots = {}
+        changed = False
         for name, w in s.robots.items():
             ch: ChannelState = self.delivered_ports[name].Eval(context)
-            waits = dict(w.probe_waits)
-            longest = w.sensor_waits
-            worst = 0.0
-            for d in ch.recent:
-                sensor = d.message.stream
-                if sensor in w.watched:
-                    waits[sensor] = max(waits.get(sensor, 0.0), d.wait)
-                    worst = max(worst, d.wait)
-                    if d.wait > longest.get(sensor, 0.0):
-                        longest = {**longest, sensor: d.wait}
-            w = replace(w, probe_waits=waits, max_wait=max(w.max_wait, worst), sensor_waits=longest)
-            if w.searches and not w.done and t - w.probe_start >= self.window:
-                searches = {
-                    k: v.observe(waits.get(k, 0.0)) if not v.done else v
-                    for k, v in w.searches.items()
-                }
-                w = replace(w, searches=searches, probe_start=t, probe_waits={})
-            robots[name] = w
+            new = self._watch(w, ch.recent, t)
+            changed = changed or new is not w
+            robots[name] = new
+        if not changed:
+            return EventStatus.DidNothing()
         state.get_mutable_abstract_state(self._state).set_value(SupervisorState(robots))
         return EventStatus.Succeeded()
+
+    def _watch(self, w: RobotWatch, recent: Sequence[Delivery], t: float) -> RobotWatch:
+        """``w`` after this tick's sensor deliveries ``recent`` at time ``t`` (``w`` itself
+        when no longest wait grew and no probe ended)."""
+        waits = w.probe_waits
+        longest = w.sensor_waits
+        worst = 0.0
+        for d in recent:
+            sensor = d.message.stream
+            if sensor in w.watched:
+                if d.wait > waits.get(sensor, 0.0):
+                    waits = {**waits, sensor: d.wait}
+                worst = max(worst, d.wait)
+                if d.wait > longest.get(sensor, 0.0):
+                    longest = {**longest, sensor: d.wait}
+        if waits is not w.probe_waits or longest is not w.sensor_waits or worst > w.max_wait:
+            w = replace(w, probe_waits=waits, max_wait=max(w.max_wait, worst), sensor_waits=longest)
+        if w.searches and not w.done and t - w.probe_start >= self.window:
+            searches = {
+                k: v.observe(waits.get(k, 0.0)) if not v.done else v for k, v in w.searches.items()
+            }
+            w = replace(w, searches=searches, probe_start=t, probe_waits={})
+        return w
