@@ -61,7 +61,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -77,7 +77,7 @@ from tamp.sim.core.instances import ObjectDetection, located, world_heights
 from tamp.sim.core.messages import Detection, Observation, Seen, TargetCrop, ViewRequest
 from tamp.sim.core.threads import torch_threads
 from tamp.sim.core.timing import Stopwatch
-from tamp.sim.core.tracks import Tracks, update
+from tamp.sim.core.tracks import Tracks, regate_for, update
 
 #: a remembered point counts as covered where the image shows something this much nearer (m)
 OCCLUSION_TOLERANCE = 0.02
@@ -89,6 +89,10 @@ RIM_MARGIN = 0.004
 #: below the lowest object's top (a lying screw's is 8 mm up), above the renderer's depth
 #: error and a mat's 2 mm
 FLOOR_BAND = 0.005
+#: a remembered point this high over its workspace's support (m) or lower rests on it (the
+#: catalogue's tallest lying object, the toy car, has its top 5.4 cm up); a part stacked
+#: on another lies higher (the tower's body on its bottom: 9 cm) (`merged_into_others`)
+MERGED_HEIGHT = 0.06
 #: the class reported in hand when the object there is not the grasp's tracked target
 UNKNOWN = "unknown"
 
@@ -306,6 +310,25 @@ def hidden(
     return bool(np.any(patch < z - tolerance))  # NaN compares False: no cover
 
 
+def covering(
+    point: tuple[float, float, float] | np.ndarray,
+    masks: Sequence[np.ndarray],
+    X_WC: RigidTransform,
+    intrinsics: tuple[float, float, float, float],
+) -> tuple[int, ...]:
+    """The indices of the ``masks`` (one per detection of a view from ``X_WC``) that cover
+    world ``point``'s pixel (none when it is behind the camera or out of the image)."""
+    p_C = X_WC.inverse().multiply(np.asarray(point, float))
+    if p_C[2] <= 0 or not masks:
+        return ()
+    u, v = camera_to_pixel(p_C, intrinsics)
+    ui, vi = int(round(u)), int(round(v))
+    h, w = masks[0].shape
+    if not (0 <= ui < w and 0 <= vi < h):
+        return ()
+    return tuple(k for k, m in enumerate(masks) if m[vi, ui])
+
+
 def recall(
     memory: tuple[Seen, ...],
     now: tuple[Seen, ...],
@@ -314,6 +337,7 @@ def recall(
     X_WC: RigidTransform,
     intrinsics: tuple[float, float, float, float],
     *,
+    merged: frozenset[int] = frozenset(),
     tolerance: float = OCCLUSION_TOLERANCE,
     window: float = OCCLUSION_WINDOW,
 ) -> tuple[tuple[Seen, ...], tuple[Seen, ...]]:
@@ -322,9 +346,11 @@ def recall(
 
     ``memory``: what was last seen in this workspace; ``now``: this view's detections (their
     tracks, classes and world centroids); ``depth``: this view; ``held``: the tracks in the
-    gripper. Every detection is remembered where it is seen now. A remembered track not
-    detected now is kept, as occluded, when its point is `hidden`; it is gone when its point
-    is in plain view or when it is in the gripper.
+    gripper; ``merged``: remembered tracks lying on the support under another detection's
+    mask (`merged_into_others`). Every detection is remembered where it is seen now. A
+    remembered track not detected now is kept, as occluded, when its point is `hidden` or
+    it is ``merged`` (in view, but inside a neighbour's detection: not gone); it is gone when
+    its point is in plain view or when it is in the gripper.
     """
     seen = {d.track for d in now}
     occluded = tuple(
@@ -332,9 +358,36 @@ def recall(
         for m in memory
         if m.track not in seen
         and m.track not in held
-        and hidden(m.position, depth, X_WC, intrinsics, tolerance=tolerance, window=window)
+        and (
+            m.track in merged
+            or hidden(m.position, depth, X_WC, intrinsics, tolerance=tolerance, window=window)
+        )
     )
     return now + occluded, occluded
+
+
+def merged_into_others(
+    memory: Sequence[Seen],
+    ids: Sequence[int],
+    masks: Sequence[np.ndarray],
+    X_WC: RigidTransform,
+    intrinsics: tuple[float, float, float, float],
+    base: float,
+    height: float = MERGED_HEIGHT,
+) -> frozenset[int]:
+    """The remembered tracks not detected in this view (``ids``: the track of each
+    detection, ``masks`` its mask) whose point lies under another detection's mask and
+    within ``height`` of the support at ``base``: an object lying beside another, seen as
+    one detection with it (the learned detector merges touching objects), is still there.
+    Only what lies on the support: a part removed from the top of a stack leaves its point
+    above the part below, and is gone."""
+    out = set()
+    for m in memory:
+        if m.track in ids or m.position[2] - base > height:
+            continue
+        if any(ids[k] != m.track for k in covering(m.position, masks, X_WC, intrinsics)):
+            out.add(m.track)
+    return frozenset(out)
 
 
 def choose_target(
@@ -404,7 +457,9 @@ class Perception(LeafSystem):
     injects through the arguments). ``source``: the `LabelOracle` (label and depth images,
     colour for grasps) or a learned `ImageDetector` (colour and depth only: no label input
     is declared); ``task_classes``: the classes a noisy detector may swap to (default: the
-    oracle's classes)."""
+    oracle's classes); ``spans``: each class's length on the table (its footprint's
+    diagonal), which bounds how far apart the tracker may take two views of one object to
+    be (`tamp.sim.core.tracks.regate_for`; a class without one: `REGATE`)."""
 
     def __init__(
         self,
@@ -419,6 +474,7 @@ class Perception(LeafSystem):
         noise: DetectorNoise | None = None,
         regions: dict[str, Region] | None = None,
         task_classes: Sequence[str] | None = None,
+        spans: Mapping[str, float] | None = None,
     ):
         super().__init__()
         self.set_name("perception")
@@ -437,6 +493,8 @@ class Perception(LeafSystem):
         self._noise = noise
         #: each workspace's rectangle on the table: what a view of it counts and remembers
         self._regions = dict(regions or {})
+        #: the tracker's second-stage gate per class
+        self._regate = {c: regate_for(x) for c, x in (spans or {}).items()}
         self._min_pixels = min_pixels
         self._hand_depth = hand_depth
         self._center = ((width - 1) / 2, (height - 1) / 2)
@@ -513,7 +571,21 @@ class Perception(LeafSystem):
                 t = context.get_time()
                 # the lift's view (a track, no target): only the target's own surface counts
                 firm = {req.track} if req.target is None and req.track is not None else set()
-                tracks, ids = update(s.tracks, observed, t, keep=keep, points=clouds, firm=firm)
+                masks = [d.mask for d in raw]
+                under = {
+                    k.id: covering(k.position, masks, X_WC, self._intrinsics)
+                    for k in s.tracks.tracks
+                }
+                tracks, ids = update(
+                    s.tracks,
+                    observed,
+                    t,
+                    keep=keep,
+                    points=clouds,
+                    firm=firm,
+                    under=under,
+                    regate=self._regate,
+                )
             dets = tuple(
                 Detection(i, d.cls, d.pixels, d.u, d.v, d.depth)
                 for i, d in zip(ids, raw, strict=True)
@@ -569,7 +641,15 @@ class Perception(LeafSystem):
                     for i, d, ok in zip(ids, raw, inside, strict=True)
                     if ok
                 )
-                memory, occluded = self._remember(s.memory, req, depth, now, gone)
+                merged = merged_into_others(
+                    s.memory.get(req.side, ()),
+                    ids,
+                    [d.mask for d in raw],
+                    X_WC,
+                    self._intrinsics,
+                    region.base if region is not None else 0.0,
+                )
+                memory, occluded = self._remember(s.memory, req, depth, now, gone, merged)
                 counts = counted(m.cls for m in (*now, *occluded))
         obs = Observation(
             req.id,
@@ -646,13 +726,20 @@ class Perception(LeafSystem):
         depth: np.ndarray,
         now: tuple[Seen, ...],
         held: frozenset[int],
+        merged: frozenset[int] = frozenset(),
     ) -> tuple[dict[str, tuple[Seen, ...]], tuple[Seen, ...]]:
         """The new memory of every workspace after a view of ``req.side`` (its detections
-        ``now``, ``held``: tracks taken into the gripper), and the occluded instances of that
-        view. A track is in one place: one seen here or in the gripper is forgotten in the
-        other workspaces."""
+        ``now``, ``held``: tracks taken into the gripper, ``merged``: remembered tracks
+        inside a neighbour's detection), and the occluded instances of that view. A track is
+        in one place: one seen here or in the gripper is forgotten in the other workspaces."""
         here, occluded = recall(
-            memory.get(req.side, ()), now, held, depth, req.camera_pose, self._intrinsics
+            memory.get(req.side, ()),
+            now,
+            held,
+            depth,
+            req.camera_pose,
+            self._intrinsics,
+            merged=merged,
         )
         moved = held | {m.track for m in now}
         new = {

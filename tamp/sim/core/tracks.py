@@ -17,10 +17,14 @@ a track:
   (Hungarian, `scipy.optimize.linear_sum_assignment`, per class), so two neighbours of one
   class never swap;
 - then, among what is left (detections without a track, live tracks without a detection),
-  the same assignment with the wider gate `REGATE`: one object seen partly, from two sides
+  the same assignment with a wider gate (`REGATE`, or per class the object's own length:
+  `regate_for`): one object seen partly, from two sides
   or cut by the image's edge, has centroids farther apart than the gate and may share no
   surface (a scissors' two visible parts lay 8 cm apart, a saw's 10 cm; the second stage
-  never takes a track another detection of this view could have: only leftovers meet);
+  never takes a track another detection of this view could have: only leftovers meet), and
+  never a track whose last position lies under another detection's mask (``under``): that
+  object is in view, merged into its neighbour's detection (two objects touching seen as
+  one), not moved 10 cm to where a new detection appears;
 - a detection still left without a track starts a new one (a fresh id, never reused);
 - a track not associated for longer than ``lifetime`` seconds is dropped, unless the caller
   keeps it (occlusion memory: an instance remembered as hidden keeps its track).
@@ -35,7 +39,7 @@ numpy, no Drake: the learned detector plugs into the same tracker as the label i
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -101,18 +105,28 @@ def _subsample(points: np.ndarray | None, n: int = KEEP_POINTS) -> np.ndarray | 
     return points[:, :: int(np.ceil(points.shape[1] / n))]
 
 
+def regate_for(span: float) -> float:
+    """The second stage's gate for a class whose footprint's diagonal is ``span`` (m): two
+    visible parts of one object lie no farther apart than the object is long, so a screw's
+    track (7.7 cm) is never handed to a screw 9 cm away; at least `GATE`, at most
+    `REGATE`."""
+    return min(REGATE, max(GATE, span))
+
+
 def associate(
     tracks: Sequence[Track],
     observed: Sequence[tuple[str, Sequence[float]]],
-    gate: float = GATE,
+    gate: float | Mapping[str, float] = GATE,
     points: Sequence[np.ndarray | None] | None = None,
     share: float = SHARE,
 ) -> list[int | None]:
     """For each observed (class, centroid), the index in ``tracks`` of its track, or None:
-    per class, the minimum-distance assignment among pairs within ``gate`` or whose points
-    overlap (``points``: each observation's world points; module docstring)."""
+    per class, the minimum-distance assignment among pairs within ``gate`` (one for all, or
+    per class: every observed class must be in it) or whose points overlap (``points``:
+    each observation's world points; module docstring)."""
     out: list[int | None] = [None] * len(observed)
     for cls in {c for c, _ in observed}:
+        limit = gate[cls] if isinstance(gate, Mapping) else gate
         rows = [i for i, (c, _) in enumerate(observed) if c == cls]
         cols = [j for j, t in enumerate(tracks) if t.cls == cls]
         if not cols:
@@ -120,7 +134,7 @@ def associate(
         a = np.array([observed[i][1] for i in rows], float).reshape(len(rows), 3)
         b = np.array([tracks[j].position for j in cols], float).reshape(len(cols), 3)
         dist = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
-        ok = dist <= gate
+        ok = dist <= limit
         if points is not None:
             for r, i in enumerate(rows):
                 for c, j in enumerate(cols):
@@ -145,21 +159,40 @@ def update(
     gate: float = GATE,
     lifetime: float = LIFETIME,
     points: Sequence[np.ndarray | None] | None = None,
-    regate: float = REGATE,
+    regate: float | Mapping[str, float] = REGATE,
     firm: frozenset[int] | set[int] = frozenset(),
+    under: Mapping[int, Sequence[int]] | None = None,
 ) -> tuple[Tracks, tuple[int, ...]]:
     """The tracker after one view at sim ``time`` whose detections are ``observed`` (class,
     world centroid; ``points``: their world points, when known), and the track id of each
     detection. Associated tracks move to their detection's centroid; unassociated
     detections start tracks with fresh ids; tracks unseen for longer than ``lifetime`` are
     dropped unless their id is in ``keep``. Tracks in ``firm`` take part in the first stage
-    only (the lift's check: is the target's own surface still on the table?)."""
+    only (the lift's check: is the target's own surface still on the table?). ``regate``:
+    the second stage's gate, one for all or per class (`regate_for`; a class not in it:
+    `REGATE`). ``under``:
+    per track id, the indices of the detections whose mask covers the track's last position
+    in this view; a track covered by any detection but a leftover of its own class takes
+    part in the first stage only (module docstring)."""
     live = [t for t in state.tracks if time - t.seen <= lifetime or t.id in keep]
     match = associate(live, observed, gate, points)
     left = [k for k, j in enumerate(match) if j is None]
-    spare = [j for j in range(len(live)) if j not in set(match) and live[j].id not in firm]
+
+    def merged(t: Track) -> bool:
+        covers = (under or {}).get(t.id, ())
+        return any(k not in left or observed[k][0] != t.cls for k in covers)
+
+    taken = set(match)
+    spare = [
+        j
+        for j in range(len(live))
+        if j not in taken and live[j].id not in firm and not merged(live[j])
+    ]
     if left and spare:
-        again = associate([live[j] for j in spare], [observed[k] for k in left], regate)
+        gates = {
+            c: regate.get(c, REGATE) if isinstance(regate, Mapping) else regate for c, _ in observed
+        }
+        again = associate([live[j] for j in spare], [observed[k] for k in left], gates)
         for k, j in zip(left, again, strict=True):
             if j is not None:
                 match[k] = spare[j]

@@ -68,6 +68,12 @@ class Footprint:
     ymax: float
     top: float
 
+    @property
+    def span(self) -> float:
+        """The footprint's diagonal (m): no two points of the object lie farther apart on
+        the table."""
+        return math.hypot(self.xmax - self.xmin, self.ymax - self.ymin)
+
     def corners(self, x: float, y: float, yaw: float) -> np.ndarray:
         """The footprint's four corners (4 x 2) for the object at (x, y, yaw) on the table."""
         c, s = math.cos(yaw), math.sin(yaw)

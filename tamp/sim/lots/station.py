@@ -180,6 +180,7 @@ def build_station(
         Perception(
             view_source(scenario, cell),
             task_classes=sorted(set(cell.classes.values())),
+            spans={c: scenario.object_class(c).footprint.span for c in set(cell.classes.values())},
             width=scenario.camera.width,
             height=scenario.camera.height,
             period=scenario.control.perception_period,

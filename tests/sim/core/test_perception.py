@@ -9,11 +9,14 @@ from pydrake.math import RigidTransform, RotationMatrix
 
 from tamp.sim.core.messages import Detection, Seen
 from tamp.sim.core.perception import (
+    MERGED_HEIGHT,
     choose_target,
+    covering,
     crop_square,
     detect,
     gripper_region,
     hidden,
+    merged_into_others,
     recall,
 )
 from tamp.sim.core.tracks import Tracks, update
@@ -101,9 +104,13 @@ def look(memory, label, depth, tracks=NO_TRACKS, held=frozenset(), time=0.0):
     classes = CLASSES | {9: "hammer"}
     dets = detect(label, depth, classes, intrinsics=K, X_WC=X_LOOK)
     keep = {m.track for m in memory}
-    tracks, ids = update(tracks, [(d.cls, d.centroid) for d in dets], time, keep=keep)
+    masks = [d.mask for d in dets]
+    under = {t.id: covering(t.position, masks, X_LOOK, K) for t in tracks.tracks}
+    observed = [(d.cls, d.centroid) for d in dets]
+    tracks, ids = update(tracks, observed, time, keep=keep, under=under)
     now = tuple(Seen(i, d.cls, d.centroid) for i, d in zip(ids, dets, strict=True))
-    memory, occluded = recall(memory, now, held, depth, X_LOOK, K)
+    merged = merged_into_others(memory, ids, masks, X_LOOK, K, base=0.0)
+    memory, occluded = recall(memory, now, held, depth, X_LOOK, K, merged=merged)
     return memory, occluded, tracks
 
 
@@ -158,6 +165,49 @@ def test_an_instance_taken_into_the_gripper_is_forgotten_and_one_seen_again_is_u
     saw0 = next(m for m in memory if m.cls == "saw")
     assert memory2[0].track == saw0.track  # 2 cm: within the gate, the same track
     assert memory2[0].position[0] > saw0.position[0]  # seen further right (+x): remembered there
+
+
+BESIDE_SAW = (slice(84, 96), slice(132, 150))  # 2 px right of the saw's block
+
+
+def test_an_instance_merged_into_a_neighbours_detection_is_kept_not_gone():
+    """The learned detector can see a screw lying against a hammer as part of the hammer's
+    detection (LOTS Example 1). Its place is in plain view, but inside another detection's
+    mask: it is kept (reported occluded) and its track is not handed on."""
+    memory, _, tracks = look((), *view({8: SAW, 5: BESIDE_SAW}))
+    scissors = next(m for m in memory if m.cls == "scissors")
+    label, depth = view({8: SAW, 5: BESIDE_SAW})
+    label[BESIDE_SAW] = 8  # one saw detection over both
+    memory2, occluded, _ = look(memory, label, depth, tracks, time=1.0)
+    assert occluded == (scissors,)
+    assert sorted(m.cls for m in memory2) == ["saw", "scissors"]
+    # the same place, bare: gone
+    memory3, occluded3, _ = look(memory, *view({8: SAW}), tracks, time=1.0)
+    assert occluded3 == () and [m.cls for m in memory3] == ["saw"]
+
+
+def test_a_part_taken_off_a_stack_is_gone_though_the_part_below_covers_its_place():
+    """Only what rests on the support can be merged into a neighbour: a part stacked on
+    another (its point higher than `MERGED_HEIGHT`) that is no longer seen is gone, even
+    though the part below now covers its pixel."""
+    label, depth = view({8: SAW})
+    label[BESIDE_SAW], depth[BESIDE_SAW] = 5, TABLE - (MERGED_HEIGHT + 0.02)
+    memory, _, tracks = look((), label, depth)
+    assert max(m.position[2] for m in memory) > MERGED_HEIGHT
+    label, depth = view({8: SAW})
+    label[BESIDE_SAW] = 8
+    memory2, occluded, _ = look(memory, label, depth, tracks, time=1.0)
+    assert occluded == () and [m.cls for m in memory2] == ["saw"]
+
+
+def test_covering_names_the_masks_over_a_points_pixel():
+    label, depth = view({8: SAW})
+    dets = detect(label, depth, CLASSES, intrinsics=K, X_WC=X_LOOK)
+    saw = dets[0].centroid
+    assert covering(saw, [d.mask for d in dets], X_LOOK, K) == (0,)
+    assert covering((0.5, -0.25, 0.0), [d.mask for d in dets], X_LOOK, K) == ()
+    assert covering((0.5, 0.25, 0.0), [d.mask for d in dets], X_LOOK, K) == ()  # off image
+    assert covering(saw, [], X_LOOK, K) == ()
 
 
 def test_hidden_out_of_the_image_behind_the_camera_and_under_a_patch():

