@@ -13,8 +13,8 @@ Sections (``--only``):
   changes: the learned detector (SMP-MRO ``detector: learned``, the mast camera's weights;
   LOTS ``camera.detector: learned``) and the seeded noisy detector
   (``perturbation.sensor.detector: low`` and ``high``, `tamp.sim.core.detection_noise`) over
-  the label oracle or (SMP-MRO) over the learned detector; ``--smp-readings`` picks the
-  SMP-MRO rows. ``--perception-cells`` picks ``smp`` and/or ``lots``
+  the label oracle or (SMP-MRO) over the learned detector; ``--smp-readings`` and
+  ``--lots-readings`` pick the rows. ``--perception-cells`` picks ``smp`` and/or ``lots``
   (default ``smp``: a LOTS tower campaign costs about 280 CPU s per run); each variant is
   the packaged file with that one field changed, written into the output folder.
 - ``overhead``: Ray's own cost per run, without a simulation's noise: runs that only sleep
@@ -148,11 +148,21 @@ def variant(name: str, folder: str, out: Path, tag: str, **sections) -> Path:
     return path
 
 
+#: the LOTS tower's perception rows: the learned detector, the noisy one over the oracle
+LOTS_READINGS = ["learned", "oracle, low", "oracle, high"]
+
+
 def perception(
-    cells: list[str], runs: dict[str, int], workers: int, out: Path, lots, readings: list[str]
+    cells: list[str],
+    runs: dict[str, int],
+    workers: int,
+    out: Path,
+    lots,
+    readings: list[str],
+    lots_readings: list[str] = LOTS_READINGS,
 ) -> list:
     """The ``perception`` section (module docstring): one row per cell and reading (SMP-MRO:
-    those of ``readings``)."""
+    those of ``readings``; LOTS: those of ``lots_readings``)."""
     rows = []
     noisy = {lvl: {"perturbation": {"sensor": {"detector": lvl}}} for lvl in ("low", "high")}
     if "smp" in cells:
@@ -171,8 +181,9 @@ def perception(
             rows.append({**row("perception", doc), "cell": "smp", "reading": reading})
     if "lots" in cells:
         scenario, cell, interference = lots
-        readings = {"learned": {"camera": {"detector": "learned"}}, **noisy}
-        for tag, change in readings.items():
+        lots_changes = {"learned": {"camera": {"detector": "learned"}}, **noisy}
+        for tag in (r.removeprefix("oracle, ") for r in lots_readings):
+            change = lots_changes[tag]
             path = variant(cell, "lots_sim", out / "perception", tag, **change)
             extra = ("--cell", str(path))
             if interference != "none":
@@ -241,6 +252,14 @@ def main() -> int:
         help="the SMP-MRO perception rows: the learned detector (`detector: learned`) and the "
         "seeded noisy detector's levels over the oracle or the learned detector (default: all)",
     )
+    ap.add_argument(
+        "--lots-readings",
+        nargs="+",
+        choices=LOTS_READINGS,
+        default=list(LOTS_READINGS),
+        help="the LOTS tower's perception rows: the learned detector (`camera.detector: "
+        "learned`) and the seeded noisy detector's levels over the oracle (default: all)",
+    )
     ap.add_argument("--out", default="build/bench_campaign", help="campaign folders")
     args = ap.parse_args()
     os.environ.setdefault("DRAKE_ALLOW_NETWORK", "meshcat")
@@ -265,7 +284,15 @@ def main() -> int:
     if "perception" in only:
         runs = {"smp": args.runs or args.smp_runs, "lots": args.runs or args.lots_runs}
         lots = (args.lots_scenario, args.lots_cell, args.lots_interference)
-        rows += perception(args.perception_cells, runs, args.workers, out, lots, args.smp_readings)
+        rows += perception(
+            args.perception_cells,
+            runs,
+            args.workers,
+            out,
+            lots,
+            args.smp_readings,
+            args.lots_readings,
+        )
     engine_cost = overhead(args.runs or args.overhead_runs) if "overhead" in only else None
     scaling = None
     if "throughput" in only:

@@ -40,11 +40,10 @@ import torch.nn.functional as F
 
 from tamp.sim.core import cropnet
 from tamp.sim.core.instances import (
-    FINE_JUMP,
     MIN_PIXELS,
     backproject_mask,
     proposals,
-    split_at_jumps,
+    split_several,
 )
 from tamp.sim.core.segdata import STUFF, UNKNOWN, read_scene, scene_file, view_fixtures
 from tamp.sim.core.segtrain import begin_training
@@ -114,7 +113,7 @@ def view_samples(
         masks = [m]
         label = label_proposal(m, inst, inst_cls, outputs)
         if label == several:
-            parts = split_at_jumps(m, depth, jump=FINE_JUMP)
+            parts, _ = split_several(m, depth, prop.heights)
             masks += parts if len(parts) > 1 else []
         for part in masks:
             pts = backproject_mask(part, depth, intrinsics, X_WC)

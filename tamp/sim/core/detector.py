@@ -10,7 +10,8 @@ wrist camera's RGB-D images. Ours is the classic tabletop pipeline (Rusu et al.,
    depth jumps;
 2. a small CNN per proposal (`tamp.sim.core.cropnet`) on its crop (colour, height above the
    plane, mask) and its metric size, giving a catalogue class, ``unknown``, ``hand``,
-   ``several`` (touching objects: the proposal is split again at 5 mm depth steps and its
+   ``several`` (touching objects: the proposal is split again at 8 mm depth steps, or at
+   its height levels when one part stands on another, `instances.split_several`, and its
    parts classified) or ``none`` (dropped); a task class below the weights' threshold is
    reported ``unknown``, and so is one of a size its class never had in training
    (`cropnet.size_gate`); touching parts named alike are one object when their union is
@@ -56,9 +57,9 @@ from tamp.sim.core.instances import (
     extract,
     located,
     proposals,
-    split_at_jumps,
+    split_several,
 )
-from tamp.sim.core.segdata import HAND, STUFF
+from tamp.sim.core.segdata import HAND, STACK_CLASSES, STUFF
 from tamp.sim.core.segnet import SegNet, load, prepare
 
 
@@ -199,13 +200,15 @@ class Detector:
 
         final = []
         for m, p, f in named(prop.masks):
-            split = int(p.argmax()) == self._several
-            parts = (
-                split_at_jumps(m, depth, jump=self.fine_jump, min_pixels=self.min_pixels)
-                if split
-                else []
-            )
-            for part, q, g in named(parts) if len(parts) > 1 else [(m, p, f)]:
+            parts, stacked = [], False
+            if int(p.argmax()) == self._several:
+                parts, stacked = split_several(
+                    m, depth, prop.heights, jump=self.fine_jump, min_pixels=self.min_pixels
+                )
+            split = named(parts) if len(parts) > 1 else []
+            if stacked and not self._a_stack(split):
+                split = []
+            for part, q, g in split or [(m, p, f)]:
                 q = q.copy()
                 q[self._several] = 0.0  # a part not split further is named as one object
                 final.append((part, q / max(float(q.sum()), 1e-9), g))
@@ -218,6 +221,19 @@ class Detector:
                 continue
             out.append((m, cls, score))
         return out
+
+    def _a_stack(self, parts: list) -> bool:
+        """Whether a proposal's levels (bottom up: (mask, probabilities, features)) are
+        parts stacked as the training data stacks them (`segdata.STACK_CLASSES`, in that
+        order, one class on itself allowed): one or more named so, any others ``unknown``.
+        An object with faces at two heights side by side (a dumbbell's discs beside its bar)
+        also shows levels; its parts named anything else keep it whole."""
+        names = [self.label(q, g)[0] for _, q, g in parts]
+        named = [c for c in names if c != UNKNOWN]
+        if not named or any(c not in STACK_CLASSES for c in named):
+            return False
+        order = [STACK_CLASSES.index(c) for c in named]
+        return order == sorted(order)
 
     def _joined(self, parts: list, named) -> list[tuple[np.ndarray, str | None, float]]:
         """(mask, class, score) of named parts with touching parts of one task class joined

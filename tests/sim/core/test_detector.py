@@ -210,8 +210,9 @@ def test_an_object_the_detector_never_saw_is_unknown_or_ignored(detector, catalo
 @pytest.mark.slow
 @pytest.mark.xfail(
     strict=True,
-    reason="the shipped weights, fine-tuned on stacks, count 10 % of the held-out stack views "
-    "right (benchmarks/results/detector.json): a tower of three is not counted right yet",
+    reason="split at its levels, the tower shows its bottom and peak, but the body between "
+    "them (two 1 cm strips round the peak) is named unknown in every view by the shipped "
+    "weights; the LOTS cell keeps it from memory (hidden under the peak): Fig. 10 passes",
 )
 def test_the_shipped_detector_counts_a_three_high_tower(detector, catalogue):
     """Fig. 10's tower (bottom, body on it, peak on that; `tamp.sim.lots.stack`) rendered
@@ -232,6 +233,35 @@ def test_the_shipped_detector_counts_a_three_high_tower(detector, catalogue):
         found = detector.detect(v.rgb, v.depth, (K[0, 0], K[1, 1], K[0, 2], K[1, 2]), v.X_WC)
         counts.append(sorted(d.cls for d in found))
     assert counts == [["body", "bottom", "peak"]] * 4, counts
+
+
+@pytest.mark.slow
+def test_a_body_stacked_on_a_bottom_is_two_detections(detector, catalogue):
+    """Fig. 10 with the learned detector: the person puts a body on the bottom in W^B; the
+    proposal is named ``several`` but no depth step parts it (the body's sides run on into
+    the bottom's). Split at its levels (the bottom's top showing round the body), each part
+    is named. The two-high stack at six yaws, seen from the LOTS look pose (0.47 m above,
+    320 x 180): 4 of 6 views count a bottom and a body (3 before the level split: most
+    such stacks are parted by the 8 mm depth step; the level split is for those that are
+    not, as the narrative's was; `test_instances.py` tests the split itself)."""
+    classes, fixtures = catalogue
+    by_name = {c.name: c for c in classes}
+    cfg = sd.DataConfig(views=1, width=320, height=180)
+    X_WC = np.eye(4)
+    X_WC[:3, :3] = np.diag([1.0, -1.0, -1.0])  # straight down
+    X_WC[:3, 3] = [0.03, -0.04, 0.47]
+    light = ({"direction": [0.2, 0.1, -1.0], "intensity": 0.9, "color": [1.0, 1.0, 1.0]},)
+    rng = np.random.default_rng(11)
+    counts = []
+    for yaw in np.linspace(0.0, 3.0, 6):
+        bottom = sd.Item("bottom", by_name["bottom"].visuals, 0.0, 0.0, float(yaw), kind="bottom")
+        stack = (bottom, sd.stacked(bottom, by_name["body"], rng))
+        scene = sd.Scene(stack, (), (0.6, 0.55, 0.45, 1.0), light, None, (X_WC,))
+        (v,) = sd.render_scene(scene, classes, fixtures, cfg)
+        K = v.K
+        found = detector.detect(v.rgb, v.depth, (K[0, 0], K[1, 1], K[0, 2], K[1, 2]), v.X_WC)
+        counts.append(sorted(d.cls for d in found))
+    assert sum(c == ["body", "bottom"] for c in counts) >= 4, counts
 
 
 @pytest.mark.parametrize("name", ["saw", "hammer", "screwdriver"])

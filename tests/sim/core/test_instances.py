@@ -14,6 +14,8 @@ from tamp.sim.core.instances import (
     extract,
     proposals,
     split_at_jumps,
+    split_at_levels,
+    split_several,
     support_plane,
     world_heights,
 )
@@ -189,3 +191,62 @@ def test_proposals_are_what_stands_on_the_plane_split_at_depth_jumps():
     depth[20:40, 30:50] = 0.5 - 0.04
     (one,) = proposals(depth, INTR, X_DOWN).masks
     assert one.sum() == 800 and len(split_at_jumps(one, depth, jump=FINE_JUMP)) == 1
+
+
+def _tower(levels: list[tuple[int, float]], side: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """Heights (m) of a stack seen from above: nested squares, each (half-size in px, top
+    height), the largest first; each part's visible top a ring around the next, with a
+    one-pixel side face whose pixels show heights from its top down to the next lower
+    part's (a side face seen obliquely)."""
+    rng = np.random.default_rng(0)
+    h = np.full((side, side), np.nan)
+    c = side // 2
+    lower = 0.0
+    for half, top in levels:
+        h[c - half : c + half, c - half : c + half] = top
+        ring = np.zeros((side, side), bool)
+        ring[c - half : c + half, c - half : c + half] = True
+        ring[c - half + 1 : c + half - 1, c - half + 1 : c + half - 1] = False
+        h[ring] = rng.uniform(lower, top, int(ring.sum()))
+        lower = top
+    mask = np.isfinite(h)
+    return mask, np.where(mask, h, np.nan)
+
+
+def test_a_stack_is_cut_at_the_top_of_each_lower_part():
+    """Fig. 10's tower from above: the bottom's top (4 cm) shows round the body (9 cm),
+    the body's round the peak (13.5 cm): three levels, three parts, each holding its own
+    top; the side faces between go to the part below their top edge's cut."""
+    mask, z = _tower([(15, 0.04), (11, 0.09), (7, 0.135)])
+    parts = split_at_levels(mask, z)
+    assert len(parts) == 3
+    assert np.logical_or.reduce(parts).sum() == mask.sum()
+    assert sum(int(p.sum()) for p in parts) == mask.sum()  # disjoint
+    tops = [float(np.nanmax(z[p])) for p in parts]
+    assert tops == pytest.approx([0.04, 0.09, 0.135], abs=0.005)
+
+
+def test_one_object_with_sloping_sides_is_not_cut():
+    """A block seen at an angle: its top is one level, its side faces spread over many
+    height bands and make none: one part."""
+    mask, z = _tower([(15, 0.05)])
+    yy, xx = np.mgrid[0:40, 0:40]
+    side = mask & (xx < 12)
+    z[side] = 0.05 * xx[side] / 12  # a wide side face, heights 0..5 cm
+    (one,) = split_at_levels(mask, z)
+    assert one is mask
+
+
+def test_a_several_proposal_tries_depth_steps_first_then_levels():
+    """Two blocks side by side at 3 and 6 cm are parted by the depth step; a stack, whose
+    sides run on without one, by its levels."""
+    depth = np.full((60, 80), 0.5)
+    depth[20:40, 10:30], depth[20:40, 30:50] = 0.5 - 0.03, 0.5 - 0.06
+    mask = depth < 0.5
+    z = np.where(mask, 0.5 - depth, np.nan)
+    parts, stacked = split_several(mask, depth, z)
+    assert len(parts) == 2 and not stacked
+    mask, z = _tower([(15, 0.04), (11, 0.09)])
+    flat = np.where(mask, 0.5, 0.5)  # no depth steps at all: only the levels tell
+    parts, stacked = split_several(mask, flat, z)
+    assert len(parts) == 2 and stacked
