@@ -118,3 +118,20 @@ def test_kind_options_reach_the_runner_and_the_replay(fake_kind, fake_file):
     with pytest.raises(InputError, match="not an option of kind test-fake") as e:
         CampaignSpec(fake_kind, fake_file, 1, options=(("interference", "x.yaml"),))
     assert e.value.field == "--interference"
+
+
+def test_a_cell_option_named_cell_reaches_the_cell(fake_file):
+    """The LOTS cell's ``--cell`` option (its workcell file) is a keyword ``cell``; the
+    generic seeded run must pass it on, not take it for its own first argument (every LOTS
+    campaign with ``--cell`` crashed with "got multiple values for argument 'cell'")."""
+    from tamp.sim.core.workcell import Option, run_seeded
+    from tests.campaign.faulty import FakeWorkcell
+
+    class WithCell(FakeWorkcell):
+        options = (Option("cell", "the workcell file", campaign=True),)
+
+        def load(self, name_or_path, cell: str | None = None):
+            return super().load(name_or_path, note=cell)
+
+    out = run_seeded(WithCell(), fake_file, 0, cell="tower_perturbed")
+    assert out["status"] == "SUCCESS" and out["note"] == "tower_perturbed"

@@ -278,6 +278,7 @@ def run_seeded(
     cell: str | Workcell,
     scenario: str | Path,
     seed: int,
+    /,
     *,
     record: str | Path | None = None,
     max_sim_time: float | None = None,
@@ -287,7 +288,8 @@ def run_seeded(
     """ONE seeded run of any workcell, as the JSON of ``tamp simulate CELL ... --seed N
     --json``: load the scenario (with the cell's load-stage ``options``), run it, return
     `RunResult.to_json`. Arguments are plain data, so a campaign sends them to a Ray worker
-    and the diagram is built there. The entry point of every campaign kind."""
+    and the diagram is built there. The entry point of every campaign kind. The first three
+    are positional only: a cell's own option may be called ``cell`` (the LOTS ``--cell``)."""
     wc = get(cell) if isinstance(cell, str) else cell
     load_opts, run_opts = split_options(wc, options)
     _quiet_drake()
