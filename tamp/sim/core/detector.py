@@ -12,11 +12,13 @@ wrist camera's RGB-D images. Ours is the classic tabletop pipeline (Rusu et al.,
    plane, mask) and its metric size, giving a catalogue class, ``unknown``, ``hand``,
    ``several`` (touching objects: the proposal is split again at 8 mm depth steps, or at
    its height levels when one part stands on another, `instances.split_several`, and its
-   parts classified) or ``none`` (dropped); a task class below the weights' threshold is
-   reported ``unknown``, and so is one of a size its class never had in training
-   (`cropnet.size_gate`); touching parts named alike are one object when their union is
-   named so too (a saw's handle 3 cm over its blade is split by the depth jump, and each
-   part looks like a saw), as touching parts named ``hand`` are one hand;
+   parts classified; a proposal named ``unknown`` is tried at its levels too, and a split
+   at levels is kept only when its parts are named as tower parts stacked, `_a_stack`) or
+   ``none`` (dropped); a task class below the weights' threshold is reported ``unknown``,
+   and so is one of a size its class never had in training (`cropnet.size_gate`); touching
+   parts named alike are one object when their union is named so too (a saw's handle 3 cm
+   over its blade is split by the depth jump, and each part looks like a saw), as touching
+   parts named ``hand`` are one hand;
 3. a part in the gripper's region (median depth under `IN_HAND_DEPTH`) that is not the
    person's hand is the held object: not reported (perception knows what the gripper holds).
 
@@ -57,6 +59,7 @@ from tamp.sim.core.instances import (
     extract,
     located,
     proposals,
+    split_at_levels,
     split_several,
 )
 from tamp.sim.core.segdata import HAND, STACK_CLASSES, STUFF
@@ -205,6 +208,9 @@ class Detector:
                 parts, stacked = split_several(
                     m, depth, prop.heights, jump=self.fine_jump, min_pixels=self.min_pixels
                 )
+            elif self.label(p, f)[0] == UNKNOWN:  # a stack the classifier cannot name whole
+                parts = split_at_levels(m, prop.heights, min_pixels=self.min_pixels)
+                stacked = len(parts) > 1
             split = named(parts) if len(parts) > 1 else []
             if stacked and not self._a_stack(split):
                 split = []

@@ -72,12 +72,13 @@ PLANE_BIN = 0.002
 #: camera, 12 cm above the tallest object, is 11 cm or more away), not an object on the table
 IN_HAND_DEPTH = 0.10
 #: a stack's part's top (a horizontal face) holds at least this share of the proposal's
-#: pixels in one height band (a tower's bottom seen round the body on it: 17 % at 0.47 m)
-LEVEL_SHARE = 0.08
+#: pixels in two adjacent height bands (a tower's bottom seen round the body on it: 17 %
+#: at 0.47 m straight above; 6 % with the body turned on it near the image's edge)
+LEVEL_SHARE = 0.05
 #: a stack is cut this far above the top of a lower part's level (the upper edge of its
-#: height band, m): over the heights' +-1 mm scatter, far below the next part's top (the
-#: shortest tower part is 4 cm)
-LEVEL_MARGIN = 0.004
+#: two height bands, m, which already hold the face's +-1 mm scatter), far below the next
+#: part's top (the shortest tower part is 4 cm)
+LEVEL_MARGIN = 0.002
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,24 +181,26 @@ def split_at_levels(
     margin: float = LEVEL_MARGIN,
 ) -> list[np.ndarray]:
     """A stack's parts: each part's top is a horizontal face, a *level* of the proposal's
-    heights (a `bin_width` band holding at least ``share`` of its pixels and ``min_pixels``;
-    adjacent bands are one level); side faces spread over many bands and make none. Cut
-    ``margin`` above every level but the highest: the pixels up to a cut belong to the part
-    whose top is that level (a tower's bottom seen round the body on it), those above to the
-    parts above. One level (or a part smaller than ``min_pixels``): ``[mask]``."""
+    heights (two adjacent `bin_width` bands holding at least ``share`` of its pixels and
+    ``min_pixels``: a face's heights scatter over a band's edge; overlapping windows are one
+    level); side faces spread over many bands and make none. Cut ``margin`` above every
+    level but the highest: the pixels up to a cut belong to the part whose top is that level
+    (a tower's bottom seen round the body on it), those above to the parts above. One level
+    (or a part smaller than ``min_pixels``): ``[mask]``."""
     z = heights[mask]
     z = z[np.isfinite(z)]
     if z.size < 2 * min_pixels:
         return [mask]
-    edges = np.arange(float(z.min()), float(z.max()) + 2 * bin_width, bin_width)
+    edges = np.arange(float(z.min()), float(z.max()) + 3 * bin_width, bin_width)
     counts, edges = np.histogram(z, bins=edges)
-    dense = counts >= max(min_pixels, share * z.size)
+    window = counts[:-1] + counts[1:]  # window i: bands i and i + 1
+    dense = window >= max(min_pixels, share * z.size)
     levels, run = [], []
     for i, d in enumerate(dense):
         if d:
             run.append(i)
         if run and (not d or i == len(dense) - 1):
-            top = float(edges[run[-1] + 1])  # the run's upper edge: the face and its scatter
+            top = float(edges[run[-1] + 2])  # the run's upper edge: the face and its scatter
             levels.append(top)
             run = []
     if len(levels) <= 1:
@@ -225,7 +228,8 @@ def split_several(
     they are its levels): split at ``jump`` steps of depth (side by side at different
     heights), else at its levels (`split_at_levels`, bottom up: one stacked on another,
     whose sides run on without a step). One part: the proposal itself. The detector and the
-    classifier's training split alike."""
+    classifier's training split alike (the detector also tries the levels of a proposal it
+    calls ``unknown``)."""
     parts = split_at_jumps(mask, depth, jump=jump, min_pixels=min_pixels)
     if len(parts) > 1:
         return parts, False

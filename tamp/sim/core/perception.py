@@ -89,10 +89,11 @@ RIM_MARGIN = 0.004
 #: below the lowest object's top (a lying screw's is 8 mm up), above the renderer's depth
 #: error and a mat's 2 mm
 FLOOR_BAND = 0.005
-#: a remembered point this high over its workspace's support (m) or lower rests on it (the
-#: catalogue's tallest lying object, the toy car, has its top 5.4 cm up); a part stacked
-#: on another lies higher (the tower's body on its bottom: 9 cm) (`merged_into_others`)
-MERGED_HEIGHT = 0.06
+#: a remembered object inside another's detection is still there when the view's depth at
+#: its point is within this of the point's (m): its top is what the camera sees there; one
+#: taken away leaves the surface below at least 1.2 cm farther (the thinnest object, the
+#: wrench, is 12 mm high) (`merged_into_others`)
+SURFACE_TOLERANCE = 0.008
 #: the class reported in hand when the object there is not the grasp's tracked target
 UNKNOWN = "unknown"
 
@@ -346,8 +347,8 @@ def recall(
 
     ``memory``: what was last seen in this workspace; ``now``: this view's detections (their
     tracks, classes and world centroids); ``depth``: this view; ``held``: the tracks in the
-    gripper; ``merged``: remembered tracks lying on the support under another detection's
-    mask (`merged_into_others`). Every detection is remembered where it is seen now. A
+    gripper; ``merged``: remembered tracks seen inside another detection's mask
+    (`merged_into_others`). Every detection is remembered where it is seen now. A
     remembered track not detected now is kept, as occluded, when its point is `hidden` or
     it is ``merged`` (in view, but inside a neighbour's detection: not gone); it is gone when
     its point is in plain view or when it is in the gripper.
@@ -370,22 +371,30 @@ def merged_into_others(
     memory: Sequence[Seen],
     ids: Sequence[int],
     masks: Sequence[np.ndarray],
+    depth: np.ndarray,
     X_WC: RigidTransform,
     intrinsics: tuple[float, float, float, float],
-    base: float,
-    height: float = MERGED_HEIGHT,
+    tolerance: float = SURFACE_TOLERANCE,
 ) -> frozenset[int]:
     """The remembered tracks not detected in this view (``ids``: the track of each
-    detection, ``masks`` its mask) whose point lies under another detection's mask and
-    within ``height`` of the support at ``base``: an object lying beside another, seen as
-    one detection with it (the learned detector merges touching objects), is still there.
-    Only what lies on the support: a part removed from the top of a stack leaves its point
-    above the part below, and is gone."""
+    detection, ``masks`` its mask) whose point lies under another detection's mask with the
+    surface still there: the view's depth at its pixel within ``tolerance`` of the point's.
+    Such an object is seen, inside a neighbour's detection (the learned detector merges a
+    screw lying against the hammer, or names a whole tower as one), not gone; one taken
+    away leaves the surface below it (the table, the part under it in a stack) farther."""
     out = set()
+    h, w = depth.shape
     for m in memory:
-        if m.track in ids or m.position[2] - base > height:
+        if m.track in ids:
             continue
-        if any(ids[k] != m.track for k in covering(m.position, masks, X_WC, intrinsics)):
+        if not any(ids[k] != m.track for k in covering(m.position, masks, X_WC, intrinsics)):
+            continue
+        p_C = X_WC.inverse().multiply(np.asarray(m.position, float))
+        u, v = camera_to_pixel(p_C, intrinsics)
+        ui, vi = int(round(u)), int(round(v))
+        patch = depth[max(vi - 1, 0) : min(vi + 2, h), max(ui - 1, 0) : min(ui + 2, w)]
+        patch = patch[np.isfinite(patch) & (patch > 0)]
+        if patch.size and abs(float(np.median(patch)) - p_C[2]) <= tolerance:
             out.add(m.track)
     return frozenset(out)
 
@@ -645,9 +654,9 @@ class Perception(LeafSystem):
                     s.memory.get(req.side, ()),
                     ids,
                     [d.mask for d in raw],
+                    depth,
                     X_WC,
                     self._intrinsics,
-                    region.base if region is not None else 0.0,
                 )
                 memory, occluded = self._remember(s.memory, req, depth, now, gone, merged)
                 counts = counted(m.cls for m in (*now, *occluded))

@@ -9,7 +9,6 @@ from pydrake.math import RigidTransform, RotationMatrix
 
 from tamp.sim.core.messages import Detection, Seen
 from tamp.sim.core.perception import (
-    MERGED_HEIGHT,
     choose_target,
     covering,
     crop_square,
@@ -109,7 +108,7 @@ def look(memory, label, depth, tracks=NO_TRACKS, held=frozenset(), time=0.0):
     observed = [(d.cls, d.centroid) for d in dets]
     tracks, ids = update(tracks, observed, time, keep=keep, under=under)
     now = tuple(Seen(i, d.cls, d.centroid) for i, d in zip(ids, dets, strict=True))
-    merged = merged_into_others(memory, ids, masks, X_LOOK, K, base=0.0)
+    merged = merged_into_others(memory, ids, masks, depth, X_LOOK, K)
     memory, occluded = recall(memory, now, held, depth, X_LOOK, K, merged=merged)
     return memory, occluded, tracks
 
@@ -187,15 +186,14 @@ def test_an_instance_merged_into_a_neighbours_detection_is_kept_not_gone():
 
 
 def test_a_part_taken_off_a_stack_is_gone_though_the_part_below_covers_its_place():
-    """Only what rests on the support can be merged into a neighbour: a part stacked on
-    another (its point higher than `MERGED_HEIGHT`) that is no longer seen is gone, even
-    though the part below now covers its pixel."""
+    """Inside a neighbour's detection an object is kept only while its surface is still
+    there: a part stacked 8 cm up, taken away, leaves the part below (2 cm up) under its
+    pixel, 6 cm farther; it is gone, though that part's detection covers its place."""
     label, depth = view({8: SAW})
-    label[BESIDE_SAW], depth[BESIDE_SAW] = 5, TABLE - (MERGED_HEIGHT + 0.02)
+    label[BESIDE_SAW], depth[BESIDE_SAW] = 5, TABLE - 0.08
     memory, _, tracks = look((), label, depth)
-    assert max(m.position[2] for m in memory) > MERGED_HEIGHT
     label, depth = view({8: SAW})
-    label[BESIDE_SAW] = 8
+    label[BESIDE_SAW] = 8  # the saw's detection now covers the place; its surface is 2 cm up
     memory2, occluded, _ = look(memory, label, depth, tracks, time=1.0)
     assert occluded == () and [m.cls for m in memory2] == ["saw"]
 
