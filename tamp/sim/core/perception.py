@@ -46,8 +46,10 @@ Occlusion is not absence: an object the gripper holds can hang in front of a wri
 Perception therefore keeps, per workspace, what it last saw there (`Seen`: each instance's
 track, class and world centroid). At a new view of that workspace, a remembered instance
 that is not seen now is kept (counted, and reported as occluded) when its point is hidden:
-out of the image, or covered by something nearer than it (the gripper, the held object); one
-whose point lies in plain view is gone (`recall`). A track taken into the gripper is
+out of the image, or covered by something nearer than it (the gripper, the held object), or
+inside another detection's mask with the depth there still its own (merged into a
+neighbour's detection: `merged_into_others`); one whose point lies in plain view is gone
+(`recall`). A track taken into the gripper is
 forgotten everywhere: it lies in no workspace.
 
 Rendering is the budget (~15-20 ms per image kind at 320x180 on 2 cores): the sensor renders
@@ -653,7 +655,7 @@ class Perception(LeafSystem):
                 merged = merged_into_others(
                     s.memory.get(req.side, ()),
                     ids,
-                    [d.mask for d in raw],
+                    masks,
                     depth,
                     X_WC,
                     self._intrinsics,

@@ -170,10 +170,9 @@ def update(
     dropped unless their id is in ``keep``. Tracks in ``firm`` take part in the first stage
     only (the lift's check: is the target's own surface still on the table?). ``regate``:
     the second stage's gate, one for all or per class (`regate_for`; a class not in it:
-    `REGATE`). ``under``:
-    per track id, the indices of the detections whose mask covers the track's last position
-    in this view; a track covered by any detection but a leftover of its own class takes
-    part in the first stage only (module docstring)."""
+    `REGATE`). ``under``: per track id, the indices of the detections whose mask covers the
+    track's last position in this view; a track covered by any detection but a leftover of
+    its own class takes part in the first stage only (module docstring)."""
     live = [t for t in state.tracks if time - t.seen <= lifetime or t.id in keep]
     match = associate(live, observed, gate, points)
     left = [k for k, j in enumerate(match) if j is None]
