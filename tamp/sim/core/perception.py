@@ -285,6 +285,20 @@ def gripper_region(depth: np.ndarray, hand_depth: float = 0.12) -> np.ndarray:
     return np.isfinite(depth) & (depth > 0) & (depth <= hand_depth)
 
 
+def projected(
+    point: tuple[float, float, float] | np.ndarray,
+    X_WC: RigidTransform,
+    intrinsics: tuple[float, float, float, float],
+) -> tuple[int, int, float] | None:
+    """World ``point`` in the view of a camera at ``X_WC``: its pixel (column, row, rounded)
+    and its depth along the optical axis; None when it is behind the camera."""
+    p_C = X_WC.inverse().multiply(np.asarray(point, float))
+    if p_C[2] <= 0:
+        return None
+    u, v = camera_to_pixel(p_C, intrinsics)
+    return int(round(u)), int(round(v)), float(p_C[2])
+
+
 def hidden(
     point: tuple[float, float, float] | np.ndarray,
     depth: np.ndarray,
@@ -299,14 +313,12 @@ def hidden(
     the camera), or a pixel of that patch shows something more than ``tolerance`` nearer
     than the point (the gripper or the object it holds, a hand). Depth 0 (nearer than the
     clipping plane) is near too."""
-    p_C = X_WC.inverse().multiply(np.asarray(point, float))
-    z = p_C[2]
-    if z <= 0:
+    where = projected(point, X_WC, intrinsics)
+    if where is None:
         return True
-    u, v = camera_to_pixel(p_C, intrinsics)
+    ui, vi, z = where
     h, w = depth.shape
     r = max(0, int(round(window * intrinsics[0] / z)))
-    ui, vi = int(round(u)), int(round(v))
     if not (r <= ui < w - r and r <= vi < h - r):  # the patch is not all in the image
         return True
     patch = depth[vi - r : vi + r + 1, ui - r : ui + r + 1]
@@ -321,11 +333,14 @@ def covering(
 ) -> tuple[int, ...]:
     """The indices of the ``masks`` (one per detection of a view from ``X_WC``) that cover
     world ``point``'s pixel (none when it is behind the camera or out of the image)."""
-    p_C = X_WC.inverse().multiply(np.asarray(point, float))
-    if p_C[2] <= 0 or not masks:
+    where = projected(point, X_WC, intrinsics)
+    return () if where is None else _under(where[0], where[1], masks)
+
+
+def _under(ui: int, vi: int, masks: Sequence[np.ndarray]) -> tuple[int, ...]:
+    """The indices of the ``masks`` holding pixel (``ui``, ``vi``) (none out of the image)."""
+    if not masks:
         return ()
-    u, v = camera_to_pixel(p_C, intrinsics)
-    ui, vi = int(round(u)), int(round(v))
     h, w = masks[0].shape
     if not (0 <= ui < w and 0 <= vi < h):
         return ()
@@ -387,16 +402,15 @@ def merged_into_others(
     out = set()
     h, w = depth.shape
     for m in memory:
-        if m.track in ids:
+        where = None if m.track in ids else projected(m.position, X_WC, intrinsics)
+        if where is None:
             continue
-        if not any(ids[k] != m.track for k in covering(m.position, masks, X_WC, intrinsics)):
+        ui, vi, z = where
+        if not any(ids[k] != m.track for k in _under(ui, vi, masks)):
             continue
-        p_C = X_WC.inverse().multiply(np.asarray(m.position, float))
-        u, v = camera_to_pixel(p_C, intrinsics)
-        ui, vi = int(round(u)), int(round(v))
         patch = depth[max(vi - 1, 0) : min(vi + 2, h), max(ui - 1, 0) : min(ui + 2, w)]
         patch = patch[np.isfinite(patch) & (patch > 0)]
-        if patch.size and abs(float(np.median(patch)) - p_C[2]) <= tolerance:
+        if patch.size and abs(float(np.median(patch)) - z) <= tolerance:
             out.add(m.track)
     return frozenset(out)
 
