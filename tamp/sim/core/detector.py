@@ -45,6 +45,7 @@ from pathlib import Path
 import numpy as np
 import torch
 from scipy import ndimage
+from scipy.sparse.csgraph import connected_components
 
 from tamp.sim.core import cropnet
 from tamp.sim.core.instances import (
@@ -202,7 +203,7 @@ class Detector:
             return list(zip(masks, cropnet.classify(self.model, x, f), f, strict=True))
 
         final = []
-        for m, p, f in named(prop.masks):
+        for origin, (m, p, f) in enumerate(named(prop.masks)):
             parts, stacked = [], False
             if int(p.argmax()) == self._several:
                 parts, stacked = split_several(
@@ -217,8 +218,10 @@ class Detector:
             for part, q, g in split or [(m, p, f)]:
                 q = q.copy()
                 q[self._several] = 0.0  # a part not split further is named as one object
-                final.append((part, q / max(float(q.sum()), 1e-9), g))
-        named_parts = self._joined([(m, *self.label(p, f)) for m, p, f in final], named)
+                final.append((part, q / max(float(q.sum()), 1e-9), g, origin))
+        named_parts = self._joined(
+            [(m, *self.label(p, f)) for m, p, f, _ in final], [o for *_, o in final], named
+        )
         out = []
         for m, cls, score in _hands_joined(named_parts):
             d = depth[m]
@@ -241,13 +244,23 @@ class Detector:
         order = [STACK_CLASSES.index(c) for c in named]
         return order == sorted(order)
 
-    def _joined(self, parts: list, named) -> list[tuple[np.ndarray, str | None, float]]:
-        """(mask, class, score) of named parts with touching parts of one task class joined
-        when the classifier names their union that class too: one object of parts at
-        different heights (a saw's handle over its flat blade) is split by the depth jumps
-        into parts that each look like it; two touching objects of a class are not joined,
-        their union being too large for one (`label`'s size gate)."""
-        groups = _touching_groups([(m, c) for m, c, _ in parts if c not in (None, UNKNOWN, HAND)])
+    def _joined(
+        self, parts: list, origins: list[int], named
+    ) -> list[tuple[np.ndarray, str | None, float]]:
+        """(mask, class, score) of named parts with the parts of one task class that touch,
+        or come from one proposal (``origins``: each part's proposal), joined when the
+        classifier names their union that class too: one object of parts at different
+        heights (a saw's handle over its flat blade) is split by the depth jumps into parts
+        that each look like it, and a tower's bottom seen round the body on it into strips on
+        either side that do not touch; two objects of a class are not joined, their union
+        being too large for one (`label`'s size gate)."""
+        groups = _related_groups(
+            [
+                (m, c, o)
+                for (m, c, _), o in zip(parts, origins, strict=True)
+                if c not in (None, UNKNOWN, HAND)
+            ]
+        )
         if not groups:
             return parts
         joined, used = [], set()
@@ -299,18 +312,27 @@ class Detector:
 _NOT_OBJECTS = (cropnet.SEVERAL, cropnet.NONE)
 
 
-def _touching_groups(parts: list[tuple[np.ndarray, str]]) -> list[list[tuple[np.ndarray, str]]]:
-    """The groups of two or more (mask, class) of one class whose masks touch (8-connected
-    once each is grown by a pixel)."""
+def _related_groups(
+    parts: list[tuple[np.ndarray, str, int]],
+) -> list[list[tuple[np.ndarray, str]]]:
+    """The groups of two or more (mask, class) of one class that are related: their masks
+    touch (8-connected once each is grown by a pixel) or they come from one proposal (the
+    third item), directly or through other members."""
     groups = []
-    for cls in {c for _, c in parts}:
-        mine = [(m, c) for m, c in parts if c == cls]
+    for cls in {c for _, c, _ in parts}:
+        mine = [(m, o) for m, c, o in parts if c == cls]
         if len(mine) < 2:
             continue
-        union = np.logical_or.reduce([m for m, _ in mine])
-        labels, n = ndimage.label(ndimage.binary_dilation(union), structure=np.ones((3, 3), bool))
-        for k in range(1, n + 1):
-            group = [(m, c) for m, c in mine if (labels[m] == k).any()]
+        grown = [ndimage.binary_dilation(m, structure=np.ones((3, 3), bool)) for m, _ in mine]
+        related = np.array(
+            [
+                [oi == oj or bool((gi & mj).any()) for mj, oj in mine]
+                for gi, (_, oi) in zip(grown, mine, strict=True)
+            ]
+        )
+        n, label = connected_components(related, directed=False)
+        for k in range(n):
+            group = [(m, cls) for (m, _), lk in zip(mine, label, strict=True) if lk == k]
             if len(group) > 1:
                 groups.append(group)
     return groups

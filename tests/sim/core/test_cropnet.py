@@ -128,6 +128,26 @@ def test_touching_parts_named_hand_are_one_hand():
     assert next(s for m, c, s in out if c == "hand" and m.sum() == 45) == 0.9
 
 
+def test_parts_of_one_class_are_candidates_to_join_when_they_touch_or_share_a_proposal():
+    """A tower's bottom seen round the body on it is split into strips on either side that
+    do not touch: parts of one proposal are a group as touching parts are; parts of two
+    proposals that do not touch are not, nor are parts of different classes."""
+    from tamp.sim.core.detector import _related_groups
+
+    def box(c0, c1):
+        m = np.zeros((20, 40), bool)
+        m[5:15, c0:c1] = True
+        return m
+
+    left, right, far = box(0, 5), box(15, 20), box(30, 35)
+    groups = _related_groups([(left, "bottom", 0), (right, "bottom", 0), (far, "bottom", 1)])
+    assert [sorted(int(m.nonzero()[1].min()) for m, _ in g) for g in groups] == [[0, 15]]
+    assert _related_groups([(left, "bottom", 0), (right, "bottom", 1)]) == []
+    assert _related_groups([(left, "bottom", 0), (right, "body", 0)]) == []
+    touching = _related_groups([(box(0, 5), "saw", 0), (box(5, 9), "saw", 1), (far, "saw", 2)])
+    assert [len(g) for g in touching] == [2]
+
+
 def test_a_class_is_only_given_to_a_proposal_of_its_size():
     """The size gate: larger than the class ever was (with the 10 % slack) is no member of
     it; smaller is only judged when the proposal is wholly inside the image; the detector
