@@ -7,18 +7,22 @@ Sets (one pick per scene, seeded; every method sees the same scenes):
   (footprints 3-8 mm apart), the target among them (``numpy.random.default_rng((1, s))``);
 - ``random``: random initial positions and yaws: the target and one distractor anywhere in
   W^A (the scenes of ``benchmarks/lots_workcell.py``: ``default_rng(s)``);
-- ``moving``: the ``random`` scene whose target is carried across the table during the
-  descent: from 1.5 s to 4.5 s after the pick starts it moves at 2 cm/s in a direction
-  drawn by ``default_rng((3, s))`` that keeps it inside W^A and clear of the distractor (the
-  benchmark sets its pose and velocity on the plant every 20 ms: a conveyor, not a hand),
-  and stops early when the fingers come within 12 cm of the table (`RELEASE_Z`).
+- ``moving``: the ``random`` scene whose target slides across the table through the descent
+  and the final approach: from 1.5 s after the pick starts it moves at 2 cm/s until the
+  fingers first close on it (or its path ends), in the direction, of 16 starting at one
+  drawn by ``default_rng((3, s))``, whose straight path stays inside W^A and clear of the
+  distractor longest (up to 16 cm; the benchmark sets its pose and velocity on the plant
+  every 20 ms: a conveyor, not a hand). Each pick records how far it went and whether it
+  was still moving when the fingers closed (``moving_at_close``).
 
 Methods: ``hrgnet``, ``grconvnet``, ``ggcnn`` (the shipped weights, post-processing on: the
 cell's default), and the controls ``mask_axis`` (no network: grasps across the target
 mask's principal axis, `tamp.sim.lots.grasping.mask_axis_grasps`, post-processing on),
 ``mask_axis_raw`` (the same, post-processing off) and ``hrgnet_raw`` (HRG-Net with
 post-processing off: its grasps on the mask as predicted). All use the same descent and
-thresholds (the ``tower`` cell's ``grasp.descent``).
+thresholds (the ``tower`` cell's ``grasp.descent``), the final approach of ``--approach``
+(``closed``, the cell's default, or ``open``) and the views read by ``--detector``
+(``oracle``: the label image, the cell's default; ``learned``: the learned detector).
 
 Per pick: ``Pick(cls)`` through `CellDriver`; success when the skill reports SUCCESS and the
 plant shows the target more than 5 cm up; the time per pick is the skill's sim time from
@@ -30,11 +34,13 @@ significant difference", and below 10 paired scenes no claim is made either way.
 
     python benchmarks/grasp_experiments.py [--scenes 30] [--sets clutter random moving]
         [--methods hrgnet ...] [--out benchmarks/results/grasp_experiments.json] [--resume]
-        [--pick-timeout 60] [--tables-only]
+        [--pick-timeout 60] [--tables-only] [--detector oracle|learned] [--approach closed|open]
 
 Every finished pick is written to ``--out`` at once (the per-scene records and the tables
 from them), so ``--resume`` continues an interrupted or smaller run with the scenes and
-methods still missing: ``--scenes 30 --resume`` completes a committed short run.
+methods still missing: ``--scenes 30 --resume`` completes a committed short run (with the
+detector and approach it was run with: a file without them was run with the oracle and the
+open approach, before the closed one existed).
 """
 
 from __future__ import annotations
@@ -48,6 +54,7 @@ import os
 import platform
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -64,11 +71,16 @@ METHODS = {
     "hrgnet_raw": ("network", "hrgnet", False),
 }
 REFERENCE = "hrgnet"
-#: the moving target: when it moves (s after the pick starts), how fast (m/s), how often
-#: its pose is set (s)
-MOVE_FROM, MOVE_TO, MOVE_SPEED, MOVE_TICK = 1.5, 4.5, 0.02, 0.02
-#: ... and it stops early when the fingers come lower than this over the table (m)
-RELEASE_Z = 0.12
+#: the moving target: when it starts (s after the pick starts), how fast (m/s), how often
+#: its pose is set (s); it moves until the fingers first close (a pose set into closing
+#: fingers makes the contact solver fail, not the grasp) or its path ends
+MOVE_FROM, MOVE_SPEED, MOVE_TICK = 1.5, 0.02, 0.02
+#: ... along a straight path of at most `MOVE_MAX` (m: 8 s, past the first close of every
+#: pick the closed approach made in the smoke run) and at least `MOVE_MIN` (the 6 cm the
+#: moving set had before), checked every `PATH_STEP`
+MOVE_MAX, MOVE_MIN, PATH_STEP = 0.16, 0.06, 0.01
+#: ``--detector`` and ``--approach`` of a result file that does not name them
+LEGACY = {"detector": "oracle", "approach": "open"}
 #: clutter: how many objects, how far apart their footprints at least and at most (m)
 CLUTTER_COUNT = (5, 8)
 TOUCH_GAP = (0.003, 0.008)
@@ -142,10 +154,19 @@ def _clutter(base, rng, seed: int, classes, targets):
     return placed
 
 
-def motion(scene, uid: str, seed: int) -> tuple[float, float] | None:
-    """The moving target's velocity (m/s): a direction drawn by ``default_rng((3, seed))``
-    among 16 whose path keeps the target in W^A (1 cm margin) and 1 cm clear of the other
-    objects; None when none does."""
+class Motion(NamedTuple):
+    """The moving target's conveyor: its velocity (m/s, world x and y) and the length of its
+    straight path (m)."""
+
+    velocity: tuple[float, float]
+    travel: float
+
+
+def motion(scene, uid: str, seed: int) -> Motion | None:
+    """The moving target's path: of 16 directions, starting at one drawn by
+    ``default_rng((3, seed))``, the one whose straight path keeps the target in W^A (1 cm
+    margin) and 1 cm clear of the other objects longest, up to `MOVE_MAX` (the first such
+    on a tie); None when none gets `MOVE_MIN`."""
     from tamp.sim.lots.catalogue import CLASSES
     from tamp.sim.lots.scenario import rectangles_overlap
 
@@ -154,26 +175,26 @@ def motion(scene, uid: str, seed: int) -> tuple[float, float] | None:
     fp = CLASSES[o.cls].footprint
     w = scene.workspaces["A"]
     others = [CLASSES[p.cls].footprint.corners(*p.xy, p.yaw) for p in scene.objects if p.id != uid]
-    travel = MOVE_SPEED * (MOVE_TO - MOVE_FROM)
     start = float(rng.uniform(0, 2 * math.pi))
+    best: Motion | None = None
     for k in range(16):
         a = start + k * 2 * math.pi / 16
         d = (math.cos(a), math.sin(a))
-        ok = True
-        for f in np.linspace(0.0, 1.0, 6):
-            c = fp.corners(o.xy[0] + f * travel * d[0], o.xy[1] + f * travel * d[1], o.yaw)
+        travel = 0.0
+        for f in np.arange(PATH_STEP, MOVE_MAX + 1e-9, PATH_STEP):
+            c = fp.corners(o.xy[0] + f * d[0], o.xy[1] + f * d[1], o.yaw)
             if not all(w.contains(*p, margin=0.01) for p in c) or any(
                 rectangles_overlap(c, q, 0.01) for q in others
             ):
-                ok = False
                 break
-        if ok:
-            return (MOVE_SPEED * d[0], MOVE_SPEED * d[1])
-    return None
+            travel = float(f)
+        if travel >= MOVE_MIN - 1e-9 and (best is None or travel > best.travel + 1e-9):
+            best = Motion((MOVE_SPEED * d[0], MOVE_SPEED * d[1]), round(travel, 3))
+    return best
 
 
 def make(set_name: str, base, seed: int, bench):
-    """(scenario, target class, target id, velocity or None) of scene ``seed`` of a set."""
+    """(scenario, target class, target id, `Motion` or None) of scene ``seed`` of a set."""
     if set_name == "clutter":
         classes = tuple(sorted(set(bench.TARGETS) | set(bench.DISTRACTORS)))
         return (*clutter_scene(base, seed, classes, bench.TARGETS), None)
@@ -182,8 +203,9 @@ def make(set_name: str, base, seed: int, bench):
 
 
 # ---- one pick -----------------------------------------------------------------------------
-def run_pick(scene, target: str, uid: str, method: str, velocity, timeout: float) -> dict:
-    """One ``Pick(target)`` with ``method`` (module docstring); what happened and its cost."""
+def run_pick(scene, target: str, uid: str, method: str, move, timeout: float) -> dict:
+    """One ``Pick(target)`` with ``method`` (module docstring), the target carried by
+    ``move`` (a `Motion`, or None); what happened and its cost."""
 
     from tamp.sim.lots.driver import CellDriver
     from tamp.sim.lots.station import build_station
@@ -193,15 +215,17 @@ def run_pick(scene, target: str, uid: str, method: str, velocity, timeout: float
         scene.grasp, predictor=predictor, network=network, weights=None, post_process=post
     )
     cell = build_station(dataclasses.replace(scene, grasp=grasp))
-    driver = CellDriver(cell, tick=MOVE_TICK if velocity else 0.05)
+    driver = CellDriver(cell, tick=MOVE_TICK if move else 0.05)
     plant, body = cell.plant, cell.cell.bodies[uid]
     w0, c0, t0 = time.perf_counter(), time.process_time(), driver.context.get_time()
     h = driver.start(f"Pick({target})")
     crash = None
+    conveyor = Conveyor(move, plant, body) if move else None
     try:
-        _poll(driver, h, t0, timeout, velocity, plant, body, cell)
+        _poll(driver, h, t0, timeout, conveyor)
     except RuntimeError as exc:  # the contact solver failed (a NaN): a failed pick, recorded
         crash = str(exc).split(". ")[0]
+    moved = {} if conveyor is None else conveyor.record()
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0
     status = driver.status()
     sim = driver.context.get_time() - t0
@@ -220,7 +244,7 @@ def run_pick(scene, target: str, uid: str, method: str, velocity, timeout: float
             "commits": 0,
             "cpu_time": round(cpu, 2),
             "wall_time": round(wall, 2),
-        }
+        } | moved
     z = float(plant.EvalBodyPoseInWorld(driver.plant_context(), body).translation()[2])
     commits = [t - t0 for t, m in s.log if m.startswith("commit after")]
     return {
@@ -236,40 +260,69 @@ def run_pick(scene, target: str, uid: str, method: str, velocity, timeout: float
         "commits": len(commits),
         "cpu_time": round(cpu, 2),
         "wall_time": round(wall, 2),
-    }
+    } | moved
 
 
-def _poll(driver, h, t0, timeout, velocity, plant, body, cell) -> None:
+class Conveyor:
+    """Carries the moving target along its `Motion` from `MOVE_FROM` after the pick starts
+    until the skill first commands the fingers closed or the path ends (module docstring);
+    then it stands still for good."""
+
+    def __init__(self, move: Motion, plant, body):
+        self.move, self.plant, self.body = move, plant, body
+        self.origin: np.ndarray | None = None
+        self.done = False
+        self.at_close = False  # still moving when the fingers closed
+        self.moved = 0.0
+
+    def step(self, driver, el: float) -> None:
+        """Once per poll, ``el`` sim seconds after the pick started."""
+        from pydrake.math import RigidTransform
+        from pydrake.multibody.math import SpatialVelocity
+
+        from tamp.sim.lots.skills import CLOSED
+
+        if self.done or el < MOVE_FROM:
+            return
+        ctx = driver.plant_context()
+        X = self.plant.EvalBodyPoseInWorld(ctx, self.body)
+        origin = self.origin = X.translation().copy() if self.origin is None else self.origin
+        closing = driver.skill_state().finger == CLOSED
+        d = min((el - MOVE_FROM) * MOVE_SPEED, self.move.travel)
+        if closing or d >= self.move.travel:
+            self.at_close = closing and d < self.move.travel
+            self.done = True
+            self.plant.SetFreeBodySpatialVelocity(ctx, self.body, SpatialVelocity.Zero())
+            return
+        u = np.array([*self.move.velocity, 0.0]) / MOVE_SPEED
+        p = origin + d * u
+        p[2] = X.translation()[2]
+        self.plant.SetFreeBodyPose(ctx, self.body, RigidTransform(X.rotation(), p))
+        v = SpatialVelocity(np.zeros(3), MOVE_SPEED * u)
+        self.plant.SetFreeBodySpatialVelocity(ctx, self.body, v)
+        self.moved = float(d)
+
+    def record(self) -> dict:
+        """What the pick's record says of the motion."""
+        return {
+            "travel": self.move.travel,
+            "moved": round(self.moved, 4),
+            "moving_at_close": self.at_close,
+        }
+
+
+def _poll(driver, h, t0, timeout, conveyor: Conveyor | None) -> None:
     """Poll the pick to its end (or ``timeout``), carrying the moving target (module
-    docstring) when ``velocity`` is given."""
-    from pydrake.math import RigidTransform
-    from pydrake.multibody.math import SpatialVelocity
-
+    docstring) when a ``conveyor`` is given."""
     from tamp.world.interface import Status
 
-    origin = None
     while driver.poll(h) is Status.RUNNING:
         el = driver.context.get_time() - t0
         if el > timeout:
             driver.cancel(h)
             break
-        if velocity and MOVE_FROM <= el <= MOVE_TO and origin is not False:
-            ctx = driver.plant_context()
-            if cell.skills.kin.tcp_pose(driver.skill_state().q).translation()[2] < RELEASE_Z:
-                # the fingers are coming down on it: the conveyor lets go (a pose set into
-                # the closing fingers makes the contact solver fail, not the grasp)
-                plant.SetFreeBodySpatialVelocity(ctx, body, SpatialVelocity.Zero())
-                origin = False
-                continue
-            X = plant.EvalBodyPoseInWorld(ctx, body)
-            if origin is None:
-                origin = X.translation().copy()
-            p = origin + (el - MOVE_FROM) * np.array([velocity[0], velocity[1], 0.0])
-            p[2] = X.translation()[2]
-            plant.SetFreeBodyPose(ctx, body, RigidTransform(X.rotation(), p))
-            moving = el < MOVE_TO - MOVE_TICK  # at rest after the last tick
-            v = np.array([velocity[0], velocity[1], 0.0]) if moving else np.zeros(3)
-            plant.SetFreeBodySpatialVelocity(ctx, body, SpatialVelocity(np.zeros(3), v))
+        if conveyor is not None:
+            conveyor.step(driver, el)
 
 
 LIFTED = 0.05  # m above the table: the plant's verdict that the target was picked
@@ -406,6 +459,13 @@ def main() -> int:
     ap.add_argument(
         "--tables-only", action="store_true", help="recompute and print --out's tables; run nothing"
     )
+    from tamp.sim.core.models import DETECTORS
+    from tamp.sim.lots.scenario import APPROACHES, CameraSettings, DescentSettings
+
+    what = "what reads the wrist camera's views (camera.detector; default %(default)s)"
+    ap.add_argument("--detector", choices=DETECTORS, default=CameraSettings().detector, help=what)
+    what = "the final approach from the preset height (grasp.descent.approach; default %(default)s)"
+    ap.add_argument("--approach", choices=APPROACHES, default=DescentSettings().approach, help=what)
     ap.add_argument("--threads", type=int, default=1, help="torch threads")
     ap.add_argument("--note", default="", help="stored in --out (e.g. the commit the run used)")
     args = ap.parse_args()
@@ -419,6 +479,12 @@ def main() -> int:
         except (ValueError, KeyError) as exc:
             print(f"{args.out}: picks: not a grasp_experiments result ({exc})")
             return 2
+        for key, default in LEGACY.items():
+            had = doc.get(key, default)
+            if args.resume and picks and had != getattr(args, key):
+                ran = getattr(args, key)
+                print(f"{args.out}: {key}: its picks ran with {had}, not --{key} {ran}")
+                return 2
     if args.tables_only:  # the tables again from the picks (rewritten into --out)
         if picks:
             write(args.out, picks, {k: v for k, v in doc.items() if k not in ("rows", "picks")})
@@ -432,34 +498,50 @@ def main() -> int:
     torch.set_num_threads(args.threads)
     bench = _workcell_bench()
     base = load_cell_scenario("tower")
+    descent = dataclasses.replace(base.grasp.descent, approach=args.approach)
+    base = dataclasses.replace(
+        base,
+        camera=dataclasses.replace(base.camera, detector=args.detector),
+        grasp=dataclasses.replace(base.grasp, descent=descent),
+    )
     done = {(p["set"], p["method"], p["scene"]) for p in picks}
     meta = {
         "benchmark": "grasp_experiments",
         "command": "python benchmarks/grasp_experiments.py "
         + " ".join(
             f"--{k.replace('_', '-')} {' '.join(map(str, v)) if isinstance(v, list) else v}"
-            for k, v in (("scenes", args.scenes), ("sets", args.sets), ("methods", args.methods))
+            for k, v in (
+                ("scenes", args.scenes),
+                ("sets", args.sets),
+                ("methods", args.methods),
+                ("detector", args.detector),
+                ("approach", args.approach),
+            )
         ),
         "note": args.note,
         "cell": "tower",
+        "detector": args.detector,
+        "approach": args.approach,
         "descent": dataclasses.asdict(base.grasp.descent),
         "machine": f"{platform.machine()} {os.cpu_count()} cpus (shared)",
         "time": "sim seconds per pick; cpu/wall per pick on the shared machine",
     }
     for s in range(args.scenes):  # scene by scene: every method on a scene before the next
         for set_name in args.sets:
-            scene, target, uid, velocity = make(set_name, base, s, bench)
+            scene, target, uid, move = make(set_name, base, s, bench)
             for method in args.methods:
                 if (set_name, method, s) in done:
                     continue
-                p = run_pick(scene, target, uid, method, velocity, args.pick_timeout)
+                p = run_pick(scene, target, uid, method, move, args.pick_timeout)
                 p |= {
                     "set": set_name,
                     "scene": s,
                     "method": method,
                     "target": target,
                     "objects": len(scene.objects),
-                    "velocity": None if velocity is None else [round(v, 4) for v in velocity],
+                    "velocity": None if move is None else [round(v, 4) for v in move.velocity],
+                    "detector": args.detector,
+                    "approach": args.approach,
                 }
                 picks.append(p)
                 write(args.out, picks, meta | {"load_avg": round(os.getloadavg()[0], 2)})

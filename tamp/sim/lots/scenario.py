@@ -279,6 +279,8 @@ class SafetySettings:
 #: where a pick's grasps come from: the grasp network, or no network (`tamp.sim.lots.grasping.
 #: mask_axis_grasps`: closing across the target mask's principal axis, a control)
 PREDICTORS = ("network", "mask_axis")
+#: how the hand goes from the preset height to the grasp (`DescentSettings.approach`)
+APPROACHES = ("closed", "open")
 
 
 @dataclass(frozen=True)
@@ -290,7 +292,9 @@ class DescentSettings:
     uncertain and commits (descends at ``commit_speed``) once at least ``min_views`` views
     agree within ``max_spread`` and ``max_angle_spread`` with a mean quality of at least
     ``min_quality``; at ``preset_height`` it hovers at most ``hover`` seconds for confidence,
-    else the attempt fails."""
+    else the attempt fails. The final approach from there to the grasp is ``closed`` loop
+    (views go on while the hand comes down and the grasp moves with the target,
+    `tamp.sim.lots.skills`) or ``open`` (fixed moves from the last view)."""
 
     preset_height: float = spec(
         0.2,
@@ -323,6 +327,12 @@ class DescentSettings:
     min_quality: float = spec(0.3, min=0.0, max=2.0, help="mean quality of the fused grasps")
     hover: float = spec(
         1.5, min=0.0, max=30.0, unit="s", help="extra views at the lowest point before failing"
+    )
+    approach: str = spec(
+        "closed",
+        choices=APPROACHES,
+        help="the final approach: closed (views on the way down, the grasp follows the target) "
+        "or open (fixed moves from the last view)",
     )
 
     def check(self, f: Fields) -> None:

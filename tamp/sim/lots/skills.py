@@ -17,8 +17,18 @@ Skills (arguments are strings, as in `tamp.world.actions.Action`):
   without stopping; the grasp network runs on each and the views' best grasps are fused
   (`tamp.sim.lots.descent`). While the fused grasp is uncertain the hand descends slowly
   with the camera shifted sideways (exploring); once confident it commits and descends at
-  full speed. At the preset height it executes the fused grasp (approach, close, lift), or
-  hovers up to ``descent.hover`` seconds for confidence and else fails the attempt. A grasp
+  full speed. At the preset height it executes the fused grasp, or hovers up to
+  ``descent.hover`` seconds for confidence and else fails the attempt. The final approach
+  (``descent.approach: closed``, the default) is one more servo step: views go on, the
+  grasp moves with the target's centre (`descent.carried`) and follows the latest confident
+  fusion of the same grasp (`descent.same_grasp`); the hand moves over it and turns to its
+  yaw (within the wrist's range, `descent.wrist_turn`) while the camera
+  still sees the target, then goes straight down, below `BLIND_DEPTH` (where the target is
+  in the gripper's region of the image) without views, the goal going on at the target's
+  velocity from its last views (`descent.predicted_centre`; frozen for a still target), and
+  closes, lifts and checks. ``approach: open``: fixed moves from the last view of the
+  descent (over the grasp, down at `APPROACH_SPEED`), corrected once by the target's
+  displacement since the confident view. A grasp
   fails when the fingers close on nothing (finger width) or when the target is still on the
   table in the next view (not lifted); it is retried with new predictions up to
   ``grasp.attempts`` times, never again with a grasp that missed or slipped in this pick
@@ -54,9 +64,10 @@ Each skill is a queue of small steps (move, settle, grip, view, check, finish) k
 abstract state; views end in a handler that appends the next steps from what was seen, so
 the whole skill is data in the Context and one update advances it by one control period.
 Moves are straight TCP lines with a minimum-jerk profile, tracked by Drake's differential
-IK (`tamp.sim.lots.kinematics`); the descent is one step that sets a TCP velocity every
-period (position-based visual servoing on the target's centre from the latest view: images
-cost ~50 ms each, so views come at ``descent.view_period``, not every period). Only a pick's
+IK (`tamp.sim.lots.kinematics`); the descent and the closed final approach are steps that
+set a TCP velocity every period (position-based visual servoing on the target's centre from
+the latest view: images cost ~50 ms each, so views come at ``descent.view_period``, not
+every period). Only a pick's
 own views ask perception for a target (and so for a colour image): a class left from an
 earlier pick never makes a later look render colour or follow an instance.
 A new command id starts a skill (while another runs it is cancelled first); ``cancel=True``
@@ -82,13 +93,22 @@ from tamp.sim.core.messages import Observation, SkillCommand, SkillStatus, ViewR
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.descent import (
+    GATE_TOLERANCE,
     FusedGrasp,
     Thresholds,
     ViewGrasp,
+    approach_aim,
     approach_velocity,
+    carried,
     confident,
     explore_offset,
     fuse,
+    predicted_centre,
+    same_grasp,
+    seen_velocity,
+    turn_rate,
+    wholly_in_view,
+    wrist_turn,
 )
 from tamp.sim.lots.grasping import GraspCandidate, GraspPlanner, near_grasp
 from tamp.sim.lots.kinematics import ArmKinematics, down, hand_yaw_for_closing, pose_error
@@ -120,6 +140,27 @@ WRIST_REACH = 2.6
 LOST_VIEWS = 3
 #: a descent that has not reached the preset height after this long (sim s) gives up
 DESCENT_TIMEOUT = 30.0
+#: the closed final approach stops correcting its goal from views once the camera is this
+#: close (m) above the target's top (measured in the views): perception takes every pixel
+#: nearer than 0.12 m (its ``hand_depth``, `tamp.sim.core.perception`) for the gripper's,
+#: so the target's top vanishes from the views there. That is the binding limit of the
+#: geometry in ``lots_arm.sdf``: the camera sits 5.54 cm above the TCP and 6.5 cm off its
+#: axis, so the target under the TCP leaves the field of view (+-34.6 deg across the image's
+#: width) only at 0.094 m, and the 0.03 m near plane (``camera.near``) is where the target's
+#: top is with the TCP at the grasp (2.5 cm under the top); the fingers (pads 1.5 cm below
+#: the TCP, 7 cm from the camera) stay inside the gripper's region throughout. 2 cm over
+#: 0.12 m keep a whole flat top beyond it (a view whose target is cut there shows part of it,
+#: and its centre moves with the cut). So the last 11 cm of the TCP's way down are blind
+BLIND_DEPTH = 0.14
+#: the closed approach goes below that height only over the goal: within this distance (m)
+#: and yaw (rad) of it (`descent.approach_aim`)
+APPROACH_REACH = 0.004
+APPROACH_TURN = math.radians(3.0)
+#: the hand's yaw rate changes by at most this much per second in the closed approach
+#: (rad/s^2; Franka's wrist allows 20; a minimum-jerk half turn of a move peaks near 3)
+TURN_ACCEL = 4.0
+#: a closed approach that has not reached its grasp after this long (sim s) gives up
+APPROACH_TIMEOUT = 10.0
 #: peak TCP angular speed of that turn (rad/s): the wrist alone turns the hand there, and
 #: Franka's last joint allows 2.61 rad/s (the IK plans within 90 %)
 TURN_SPEED = 2.0
@@ -147,8 +188,8 @@ PLACE_LIFT = 0.12
 class Step:
     """One step of a skill. ``pose``: TCP goal (x, y, z, yaw) of a move."""
 
-    #: move | descend | brake | settle | grip | release | wait | view | check_fingers |
-    #: check_held | finish
+    #: move | descend | approach | brake | settle | grip | release | wait | view |
+    #: check_fingers | check_held | finish
     kind: str
     pose: tuple[float, float, float, float] | None = None
     speed: float = 0.0
@@ -180,6 +221,10 @@ class SkillState:
     target_cls: str | None = None
     track: int | None = None
     target_xy: tuple[float, float] | None = None
+    #: (render time, x, y, whole) of the target's centre in this attempt's latest views that
+    #: showed it (``whole``: all of it, not cut by the image's edge): where it is now for the
+    #: closed approach (`descent.predicted_centre`)
+    seen_at: tuple[tuple[float, float, float, bool], ...] = ()
     target_top: float = 0.0  # the target's top above the table, from the last view
     #: the target's top-view points in the table plane round its centre (N x 2, world
     #: axes): the widest of this attempt's views (a low view may show only part of it)
@@ -201,8 +246,9 @@ class SkillState:
     view_asked: float | None = None
     view_done_t: float = 0.0
     bottom_t: float | None = None
-    #: the descent's TCP set point (x, y, z), its velocity (m/s) and the hand's yaw
-    servo: tuple[np.ndarray, np.ndarray, float] | None = None
+    #: the descent's and the closed approach's TCP set point (x, y, z), its velocity (m/s),
+    #: the hand's yaw and its rate (rad/s; the descent keeps the yaw)
+    servo: tuple[np.ndarray, np.ndarray, float, float] | None = None
     #: (time, measured arm joints) of the last control periods: a view taken while moving is
     #: back-projected from where the camera was when it was rendered
     recent_q: tuple[tuple[float, np.ndarray], ...] = ()
@@ -259,6 +305,10 @@ class PandaSkillController(LeafSystem):
         self.kin = kin
         self.planner = planner
         self.dt = scenario.control.period
+        #: how far the camera is above the TCP with the hand pointing down (m; 0.0554)
+        self._camera_lift = float(
+            (RigidTransform(down(0.0), np.zeros(3)) @ kin.X_TC).translation()[2]
+        )
         self._order = list(actuator_order)
         #: time spent in the update (differential IK, view handlers, the grasp network calls
         #: they make: `GraspPlanner.network` times those); measurement only
@@ -338,7 +388,7 @@ class PandaSkillController(LeafSystem):
             # stopped by the safety monitor: the targets follow the held arm; a move starts
             # afresh from rest where the arm stands when it resumes (a new minimum-jerk
             # profile), any other step's clock stands still
-            if s.steps[0].kind in ("move", "descend"):
+            if s.steps[0].kind in ("move", "descend", "approach"):
                 s.step_t0, s.move_from = None, None
             elif s.step_t0 is not None:
                 s.step_t0 += self.dt
@@ -477,6 +527,7 @@ class PandaSkillController(LeafSystem):
         s.sure = None
         s.lost, s.explored, s.view_asked, s.bottom_t, s.servo = 0, 0, None, None, None
         s.target_shape = np.zeros((0, 2))
+        s.seen_at = ()
 
     # ---- step execution ------------------------------------------------------------------
     def _advance(self, s, t, q_meas, v_meas, obs: Observation) -> None:
@@ -490,6 +541,8 @@ class PandaSkillController(LeafSystem):
             done = self._track(s, el)
         elif step.kind == "descend":
             return self._descend(s, t, el, q_meas, obs)
+        elif step.kind == "approach":
+            return self._approach(s, t, el, q_meas, obs)
         elif step.kind == "brake":
             s.v = self.kin.brake(s.v)
             s.q = s.q + s.v * self.dt
@@ -557,9 +610,11 @@ class PandaSkillController(LeafSystem):
             speed = step.speed if s.finger != CLOSED else min(step.speed, CARRY_SPEED)
             T = max(1.875 * dist / speed, 1.875 * ang / (step.turn_speed or ANGULAR_SPEED), 0.2)
             s.move_from = (X0.translation().copy(), X0.rotation().ToQuaternion().wxyz(), T)
-        elif step.kind == "descend":
+        elif step.kind in ("descend", "approach"):
             p = self.kin.tcp_pose(s.q).translation().copy()
-            s.servo = (p, np.zeros(3), self.kin.tcp_yaw(s.q))
+            s.servo = (p, np.zeros(3), self.kin.tcp_yaw(s.q), 0.0)
+            if step.kind == "approach":
+                s.finger = OPEN  # on the way: the pads are 7 cm or more above the target
         elif step.kind == "grip":
             s.finger = step.width
         elif step.kind == "view":
@@ -714,6 +769,8 @@ class PandaSkillController(LeafSystem):
             not len(s.target_shape) or np.hypot(*shape.T).max() > np.hypot(*s.target_shape.T).max()
         ):
             s.target_shape = shape
+        whole = self._wholly_in_view(s, s.target_xy, X_WC)
+        s.seen_at = (*s.seen_at[-(2 * d.window) :], (obs.time, *s.target_xy, whole))
         s.others = tuple(
             (float(q[0]), float(q[1]))
             for o in obs.detections
@@ -746,7 +803,12 @@ class PandaSkillController(LeafSystem):
                 + ("; confident" if sure else ""),
             )
         )
-        if sure:
+        approaching = bool(s.steps) and s.steps[0].kind == "approach"
+        # the final approach keeps to its grasp: another one fused now is not followed
+        other = (
+            approaching and f is not None and s.sure is not None and not same_grasp(f, s.sure[0])
+        )
+        if sure and not other:
             s.sure = (f, s.target_xy)
         if sure and not s.committed:
             s.committed = True
@@ -768,7 +830,7 @@ class PandaSkillController(LeafSystem):
                 return self._fail_descent(s, t, why)
         if s.view_asked is None and t - s.view_done_t >= d.view_period - 1e-9:
             self._ask_view(s, t)
-        p_set, v_set, yaw = s.servo
+        p_set, v_set, yaw, _ = s.servo
         ox, oy = (0.0, 0.0)
         if not s.committed:
             ox, oy = explore_offset(s.target_xy, s.others, s.explored, d.explore_shift)
@@ -778,7 +840,7 @@ class PandaSkillController(LeafSystem):
         speed = d.commit_speed if s.committed else d.explore_speed
         v_new = approach_velocity(p_set, goal, v_set, speed, d.accel, self.dt, d.commit_speed)
         p_new = p_set + v_new * self.dt
-        s.servo = (p_new, v_new, yaw)
+        s.servo = (p_new, v_new, yaw, 0.0)
         X_des = RigidTransform(down(yaw), p_new)
         V = pose_error(self.kin.tcp_pose(s.q), X_des) / self.dt
         v, _ = self.kin.step(s.q, s.v, V)
@@ -803,9 +865,8 @@ class PandaSkillController(LeafSystem):
             # stop where the arm stands, without this period's step (as a move arrives,
             # `_track`): the stream sees it come to rest within the limits
             s.v = np.zeros(7)
-            f, (x0, y0) = s.sure  # moved with the target since that view
-            g = f.grasp
-            return self._grasp(s, t, replace(g, x=g.x + cx - x0, y=g.y + cy - y0))
+            f, then = s.sure  # moved with the target since that view
+            return self._grasp(s, t, carried(f.grasp, then, (cx, cy)))
         s.q, s.v = s.q + v * self.dt, v
         # committed: no hover limit (it is settling over the committed grasp)
         hovered = s.bottom_t is not None and t - s.bottom_t > d.hover and not s.committed
@@ -819,10 +880,13 @@ class PandaSkillController(LeafSystem):
             )
             return self._fail_descent(s, t, why)
 
-    def _fail_descent(self, s: SkillState, t: float, why: str) -> None:
-        """End the descent as a failed attempt: brake to rest, then `_retry`."""
+    def _fail_descent(
+        self, s: SkillState, t: float, why: str, cause: str = "object_not_found"
+    ) -> None:
+        """End the descent (or the closed approach) as a failed attempt: brake to rest, then
+        `_retry`."""
         s.steps, s.step_t0, s.servo = s.steps[1:], None, None
-        self._retry(s, t, why, "object_not_found")
+        self._retry(s, t, why, cause)
         if s.steps:
             s.steps = (Step("brake"), *s.steps)
 
@@ -837,15 +901,12 @@ class PandaSkillController(LeafSystem):
         s.view_asked = t
 
     def _grasp(self, s: SkillState, t: float, g: GraspCandidate) -> None:
-        """Execute grasp ``g`` (the fused one): approach, close, lift, look."""
-        s.chosen = g
+        """Execute grasp ``g`` (the fused one): approach (closed loop or open, ``descent.
+        approach``), close, lift, look."""
         z = max(g.z - GRASP_DEPTH, MIN_GRASP_Z)
         yaw = hand_yaw_for_closing(g.yaw, toward=self.kin.wrist_centred_yaw(s.q))
-        s.hold_z = z
-        c, w = math.cos(yaw), math.sin(yaw)  # the centre's offset from the TCP, hand frame
-        dx, dy = s.target_xy[0] - g.x, s.target_xy[1] - g.y
-        s.hold_offset = (c * dx + w * dy, -w * dx + c * dy)
-        s.hold_shape = footprint(s.target_shape, yaw)
+        assert s.target_xy is not None  # the view the grasp was fused in saw it
+        self._hold(s, g, z, yaw, s.target_xy)
         s.grasp_attempts += 1
         s.picks_tried += 1
         k = s.picks_tried
@@ -860,23 +921,174 @@ class PandaSkillController(LeafSystem):
                 + (" [drawn to fail: the hand stays open]" if s.injected else ""),
             )
         )
-        s.steps = self._grasp_steps(g.x, g.y, z, yaw, s.side, close=not s.injected)
+        if self.scenario.grasp.descent.approach == "closed":
+            s.steps = (Step("approach", pose=(g.x, g.y, z, yaw)),)
+        else:
+            s.steps = self._grasp_steps(g.x, g.y, z, yaw, s.side, close=not s.injected)
+
+    def _hold(
+        self,
+        s: SkillState,
+        g: GraspCandidate,
+        z: float,
+        yaw: float,
+        centre: tuple[float, float],
+    ) -> None:
+        """Grasp ``g`` is the one executed, with the TCP at height ``z`` and yaw ``yaw`` and
+        the target's centre at ``centre``: what `Place` needs of it (that centre and the
+        target's footprint in the hand's frame)."""
+        s.chosen = g
+        s.hold_z = z
+        c, w = math.cos(yaw), math.sin(yaw)  # the centre's offset from the TCP, hand frame
+        dx, dy = centre[0] - g.x, centre[1] - g.y
+        s.hold_offset = (c * dx + w * dy, -w * dx + c * dy)
+        s.hold_shape = footprint(s.target_shape, yaw)
 
     def _grasp_steps(
         self, x: float, y: float, z: float, yaw: float, side: str, close: bool = True
     ) -> tuple:
-        """Open, approach from 12 cm above, close, check the fingers, lift, look again
-        (``close=False``: an attempt drawn to fail, the hand stays open)."""
+        """Open, approach from 12 cm above, then `_close_steps` (``close=False``: an attempt
+        drawn to fail, the hand stays open)."""
         return (
             Step("grip", width=OPEN),
             self._move((x, y, z + 0.12, yaw)),
             self._move((x, y, z, yaw), APPROACH_SPEED),
+            *self._close_steps(x, y, yaw, side, close),
+        )
+
+    def _close_steps(self, x: float, y: float, yaw: float, side: str, close: bool) -> tuple:
+        """At the grasp: close (or, drawn to fail, stay open), check the fingers, lift
+        straight up, look again."""
+        return (
             Step("grip", width=CLOSED if close else OPEN),
             Step("check_fingers"),
             self._move((x, y, LIFT_Z, yaw)),
             *self._look(side),
             Step("view", handler="lifted"),
         )
+
+    def _approach(self, s: SkillState, t: float, el: float, q_meas, obs: Observation) -> None:
+        """One control period of the closed final approach (Zhou et al. §IV-B: the grasp from
+        the observations along the trajectory; module docstring, `tamp.sim.lots.descent`):
+        views every ``view_period`` while the camera sees the target; the goal (the step's
+        pose) is the latest confident grasp carried with the target's centre as it is now
+        (`_target_now`); the TCP is servoed over it and turned to its yaw, then goes
+        straight down, below the gate (`BLIND_DEPTH`) without views; at the grasp,
+        `_close_steps`."""
+        d = self.scenario.grasp.descent
+        step = s.steps[0]
+        assert s.servo is not None and s.sure is not None  # entered after a confident view
+        s.recent_q = (*s.recent_q[-9:], (t, np.array(q_meas[:7], float)))
+        p_set, v_set, yaw, w = s.servo
+        # the TCP height at which the camera is `BLIND_DEPTH` above the target's top
+        gate = s.target_top + BLIND_DEPTH - self._camera_lift
+        blind = p_set[2] < gate - GATE_TOLERANCE
+        if s.view_asked is not None and obs.id == s.request.id:
+            s.view_asked = None
+            s.view_done_t = t
+            if not blind:  # one asked at the gate and rendered below it shows a cut target
+                q_view = next((q for tq, q in s.recent_q if abs(tq - obs.time) < 1e-6), q_meas[:7])
+                X_WC = self.kin.camera_pose(q_view)
+                if obs.target is None or self._wholly_in_view(
+                    s, self._target_now(s, obs.time), X_WC
+                ):
+                    self._see(s, t, obs, X_WC)
+                else:
+                    s.lost = 0
+                    s.log.append(
+                        (t, f"approach view: part of the {s.target_cls} out of the image: not read")
+                    )
+                if s.lost >= LOST_VIEWS:
+                    why = (
+                        f"target lost: the {s.target_cls} (track {s.track}) left the view "
+                        "during the final approach"
+                    )
+                    return self._fail_descent(s, t, why)
+                gate = s.target_top + BLIND_DEPTH - self._camera_lift
+        if not blind and s.view_asked is None and t - s.view_done_t >= d.view_period - 1e-9:
+            self._ask_view(s, t)
+        # the latest confident grasp carried with the target to where it is now; its yaw as
+        # the same closing line nearest the goal's (never a flip of the hand)
+        f, then = s.sure
+        centre = self._target_now(s, t)
+        g = carried(f.grasp, then, centre)
+        z = max(g.z - GRASP_DEPTH, MIN_GRASP_Z)
+        goal_yaw = hand_yaw_for_closing(g.yaw, toward=step.pose[3])
+        s.steps = (replace(step, pose=(g.x, g.y, z, goal_yaw)), *s.steps[1:])
+        goal = np.array([g.x, g.y, z])
+        turn = math.remainder(goal_yaw - yaw, 2 * math.pi)  # how far off, either way round
+        seen = s.lost == 0  # never into the blind part on a view that missed the target
+        aim = approach_aim(p_set, goal, turn, gate, APPROACH_REACH, APPROACH_TURN, seen)
+        lateral = self.scenario.control.speed
+        v_new = approach_velocity(p_set, aim, v_set, APPROACH_SPEED, d.accel, self.dt, lateral)
+        centred = self.kin.wrist_centred_yaw(s.q)
+        w_new = turn_rate(wrist_turn(yaw, goal_yaw, centred), w, ANGULAR_SPEED, TURN_ACCEL, self.dt)
+        p_new, yaw_new = p_set + v_new * self.dt, yaw + w_new * self.dt
+        s.servo = (p_new, v_new, yaw_new, w_new)
+        if not blind and p_new[2] < gate - GATE_TOLERANCE:
+            s.view_asked = None  # an answer rendered below the gate is not read
+            vx, vy = seen_velocity(s.seen_at)
+            s.log.append(
+                (
+                    t,
+                    f"approach: last view, the camera {BLIND_DEPTH:.2f} m over the "
+                    f"{s.target_cls}'s top (nearer, the gripper hides it); the grasp at "
+                    f"({g.x:.3f}, {g.y:.3f}, {z:.3f}) yaw {math.degrees(goal_yaw):.0f} deg "
+                    f"goes on at ({vx * 1000:.0f}, {vy * 1000:.0f}) mm/s",
+                )
+            )
+        X_des = RigidTransform(down(yaw_new), p_new)
+        V = pose_error(self.kin.tcp_pose(s.q), X_des) / self.dt
+        v, _ = self.kin.step(s.q, s.v, V)
+        if not np.all(np.isfinite(v)):
+            v = self.kin.brake(s.v)
+        # arrived: at the grasp, come down to rest (sideways it may still follow a sliding
+        # target), the arm there too (not only the set point: a joint at its limit holds
+        # it back), stopping where it stands within the acceleration limits (as `_descend`
+        # settles)
+        err = pose_error(self.kin.tcp_pose(s.q), RigidTransform(down(goal_yaw), goal))
+        arrived = (
+            float(np.linalg.norm(goal - p_new)) < 0.002
+            and float(np.linalg.norm(err[3:])) < 0.003
+            and float(np.linalg.norm(err[:3])) < 0.02
+            and abs(math.remainder(goal_yaw - yaw_new, 2 * math.pi)) < 0.01
+            and abs(float(v_new[2])) < 0.01
+            and abs(w_new) < 0.05
+            and bool(np.all(np.abs(s.v) <= self.kin.amax * self.dt))
+        )
+        if arrived:
+            s.steps, s.step_t0, s.servo = s.steps[1:], None, None
+            s.v = np.zeros(7)
+            self._hold(s, g, z, goal_yaw, centre)
+            s.log.append((t, f"at the grasp ({g.x:.3f}, {g.y:.3f}, {z:.3f})"))
+            s.steps = self._close_steps(g.x, g.y, goal_yaw, s.side, close=not s.injected)
+            return
+        s.q, s.v = s.q + v * self.dt, v
+        if el > APPROACH_TIMEOUT:
+            why = f"the final approach did not reach the grasp on the {s.target_cls} in time"
+            return self._fail_descent(s, t, why, "unreachable")
+
+    def _wholly_in_view(
+        self, s: SkillState, centre: tuple[float, float], X_WC: RigidTransform
+    ) -> bool:
+        """Whether the target's outline (`SkillState.target_shape` round ``centre``, at its
+        top) lies inside the image of the camera at ``X_WC`` (`descent.wholly_in_view`)."""
+        cx, cy = centre
+        pts = s.target_shape
+        W = np.vstack((pts[:, 0] + cx, pts[:, 1] + cy, np.full(len(pts), s.target_top)))
+        cam = self.scenario.camera
+        return wholly_in_view(
+            X_WC.inverse().multiply(W), self.planner.intrinsics, cam.width, cam.height
+        )
+
+    @staticmethod
+    def _target_now(s: SkillState, t: float) -> tuple[float, float]:
+        """The target's centre at time ``t``: the latest view's, carried on at the velocity
+        the attempt's recent views show (`descent.predicted_centre`; still: where it was)."""
+        if not s.seen_at:
+            assert s.target_xy is not None  # a view of the attempt found it
+            return s.target_xy
+        return predicted_centre(s.seen_at, t)
 
     def _on_lifted(self, s: SkillState, t: float, obs: Observation, q_meas) -> None:
         if s.injected:

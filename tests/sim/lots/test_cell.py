@@ -9,6 +9,7 @@ from pydrake.math import RigidTransform
 
 from tamp.sim.lots.driver import CellDriver
 from tamp.sim.lots.scenario import load_cell_scenario
+from tamp.sim.lots.skills import BLIND_DEPTH
 from tamp.sim.lots.station import build_station
 from tamp.world.interface import Status
 from tests.sim.lots.helpers import write_scenario
@@ -181,7 +182,8 @@ def test_closed_loop_pick_with_hrgnet(building):
     d = CellDriver(building)
     st = d.run("Pick(scissors)", timeout=90)
     log = [text for _, text in d.skill_state().log]
-    views = [t for t in log if t.startswith("view ")]
+    grasp = next(i for i, t in enumerate(log) if t.startswith("grasp at"))
+    views = [t for t in log[:grasp] if t.startswith("view ")]
     # the look pose, then views taken while descending (Fig. 6): the hand keeps going down
     # between views, commits once the fused grasp is confident, and stops at the preset height
     descent = building.scenario.grasp.descent
@@ -194,6 +196,9 @@ def test_closed_loop_pick_with_hrgnet(building):
     assert all(b < a for a, b in zip(first, first[1:], strict=False))
     assert min(first) >= descent.preset_height - 0.015
     assert any(t.endswith("confident") for t in views)
+    # the closed final approach views on below it, down to where the gripper hides the target
+    low = [float(t.split(" at ")[1].split(" m")[0]) for t in log[grasp:] if t.startswith("view ")]
+    assert low and all(BLIND_DEPTH - 0.01 <= h <= descent.preset_height + 0.015 for h in low)
     assert len(building.planner.history) >= 1 + descent.min_views
     assert st.status is Status.SUCCESS, log
     held = [

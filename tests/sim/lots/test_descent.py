@@ -1,5 +1,6 @@
 """The closed-loop descent's decisions (`tamp.sim.lots.descent`): fusion over views,
-confidence, where the exploring camera looks, the speed profile; the within-view ranking and
+confidence, where the exploring camera looks, the speed profile, the final approach's goal,
+gate, turn, the target's velocity and whether a view shows all of it; the within-view ranking and
 the mask-geometry control (`tamp.sim.lots.grasping`); which views ask for a target. No
 simulation."""
 
@@ -15,12 +16,22 @@ from hypothesis import strategies as st
 from tamp.grasp.rect import angle_difference
 from tamp.sim.lots.descent import (
     CLUTTER_RADIUS,
+    STILL_SPEED,
     Thresholds,
     ViewGrasp,
+    approach_aim,
     approach_velocity,
+    carried,
     confident,
     explore_offset,
     fuse,
+    predicted_centre,
+    same_grasp,
+    seen_velocity,
+    target_velocity,
+    turn_rate,
+    wholly_in_view,
+    wrist_turn,
 )
 from tamp.sim.lots.grasping import GraspCandidate, chord, mask_axis_grasps, rank
 
@@ -153,6 +164,130 @@ def test_the_servo_keeps_its_bounds_and_stops_at_the_goal(p0, goal, speed, later
         if np.linalg.norm(goal - p) < 1e-4 and np.linalg.norm(v) < 1e-3:
             break
     assert np.linalg.norm(goal - p) < 1e-3 and np.linalg.norm(v) < 0.02
+
+
+def test_a_grasp_is_carried_with_its_target():
+    g = _g(0.52, 0.21, yaw=0.3)
+    moved = carried(g, (0.5, 0.2), (0.53, 0.18))
+    assert (moved.x, moved.y) == pytest.approx((0.55, 0.19))
+    assert (moved.z, moved.yaw, moved.quality) == (g.z, g.yaw, g.quality)
+    assert carried(g, (0.5, 0.2), (0.5, 0.2)) == g
+
+
+@given(
+    st.floats(-math.pi, math.pi),
+    st.floats(-2.8, 2.8),
+    st.floats(-math.pi / 2, math.pi / 2),
+    st.floats(0.3, 2.0),
+)
+@settings(max_examples=60, deadline=None)
+def test_the_turn_keeps_the_wrist_in_range_within_its_bounds_and_stops(centre, off0, off1, accel):
+    """From a yaw the wrist can hold (within 2.8 rad of its centred yaw) to a goal within a
+    quarter turn of it (`hand_yaw_for_closing`'s choice): never faster than the speed, never
+    changing the rate by more than accel * dt, never farther from the centre than the two
+    ends (the wrist never goes round into its limit), at rest on the goal's yaw in the end."""
+    dt, speed = 0.01, 1.2
+    yaw, goal, w = centre + off0, centre + off1, 0.0
+    for _ in range(int((abs(off1 - off0) / speed + 2 * speed / accel) / dt) + 100):
+        nw = turn_rate(wrist_turn(yaw, goal, centre), w, speed, accel, dt)
+        assert abs(nw) <= speed + 1e-9 and abs(nw - w) <= accel * dt + 1e-9
+        yaw, w = yaw + nw * dt, nw
+        assert abs(yaw - centre) <= max(abs(off0), abs(off1)) + 1e-6
+    assert abs(math.remainder(goal - yaw, 2 * math.pi)) < 1e-3 and abs(w) < 0.02
+
+
+def test_the_wrist_turns_through_its_centre_not_the_short_way():
+    """The hand at yaw 0 with the wrist centred at 98 deg, the grasp at 184 deg: +184 deg
+    through the centre (the short way, -176 deg, runs the last joint into its limit)."""
+    centre, goal = math.radians(98), math.radians(184)
+    assert math.degrees(wrist_turn(0.0, goal, centre)) == pytest.approx(184)
+    assert math.degrees(wrist_turn(0.0, math.radians(30), centre)) == pytest.approx(30)
+
+
+def test_a_square_blocks_two_grasps_are_not_the_same_grasp():
+    def fused(x: float, yaw: float):
+        f = fuse([_view(x, 0.2, yaw)] * 3, (0.5, 0.2))
+        assert f is not None
+        return f
+
+    a, b = fused(0.5, 0.0), fused(0.5, math.pi / 2)
+    c = fused(0.505, math.pi - 0.1)  # 6 deg off, modulo a half turn
+    assert not same_grasp(a, b) and same_grasp(a, c) and same_grasp(c, a)
+    assert not same_grasp(a, fused(0.53, 0.0))  # 3 cm along: the other end
+
+
+def test_the_approach_goes_down_past_the_gate_only_over_the_goal():
+    goal, gate = np.array([0.5, 0.2, 0.02]), 0.1
+    above = np.array([0.45, 0.2, 0.15])  # 5 cm beside the goal, above the gate
+    assert approach_aim(above, goal, 0.0, gate, 0.004, 0.05) == pytest.approx([0.5, 0.2, gate])
+    over = np.array([0.502, 0.2, 0.1])  # over it, but still turning
+    assert approach_aim(over, goal, 0.2, gate, 0.004, 0.05)[2] == gate
+    assert approach_aim(over, goal, 0.01, gate, 0.004, 0.05) == pytest.approx(goal)
+    # ... and not on a view that missed the target
+    assert approach_aim(over, goal, 0.01, gate, 0.004, 0.05, seen=False)[2] == gate
+    below = np.array([0.45, 0.2, 0.08])  # already under the gate: on down, whatever happens
+    assert approach_aim(below, goal, 0.5, gate, 0.004, 0.05) == pytest.approx(goal)
+    high = np.array([0.5, 0.3, 0.2])  # a goal above the gate is gone to at once
+    assert approach_aim(high, goal + [0, 0, 0.1], 0.5, gate, 0.004, 0.05) == pytest.approx(
+        goal + [0, 0, 0.1]
+    )
+
+
+def test_the_targets_velocity_from_its_recent_views():
+    rng = np.random.default_rng(0)
+    ts = np.arange(0.0, 1.2, 0.2)
+    sliding = [(t, 0.5 + 0.02 * t + rng.normal(0, 0.0005), 0.2 - 0.01 * t) for t in ts]
+    vx, vy = target_velocity(sliding)
+    assert (vx, vy) == pytest.approx((0.02, -0.01), abs=0.003)
+    # a still target's centres scatter by a millimetre: still, not creeping
+    still = [(t, 0.5 + rng.normal(0, 0.0005), 0.2 + rng.normal(0, 0.0005)) for t in ts]
+    assert target_velocity(still) == (0.0, 0.0)
+    # only the views of the last span count: it slid, then stopped
+    stopped = [(t, 0.5 + 0.02 * min(t, 0.4), 0.2) for t in np.arange(0.0, 1.6, 0.2)]
+    assert target_velocity(stopped) == (0.0, 0.0)
+    assert target_velocity(sliding[:2]) == (0.0, 0.0)  # too few views to tell
+    assert target_velocity([]) == (0.0, 0.0)
+    assert math.hypot(*target_velocity(sliding, still=0.03)) == 0.0
+    assert STILL_SPEED < 0.02
+
+
+def test_the_centre_goes_on_from_whole_views_only_and_for_a_while():
+    """Carried on at the whole views' velocity, for at most the horizon; a latest view that
+    shows only part of the target (its centre the visible part's, wandering as the camera
+    moves) carries nothing on, whatever the centres did."""
+    ts = np.arange(0.0, 1.0, 0.2)
+    sliding = [(t, 0.5 + 0.02 * t, 0.2, True) for t in ts]
+    assert seen_velocity(sliding) == pytest.approx((0.02, 0.0))
+    t0 = ts[-1]
+    assert predicted_centre(sliding, t0 + 0.5) == pytest.approx((0.5 + 0.02 * (t0 + 0.5), 0.2))
+    far = predicted_centre(sliding, t0 + 10.0, horizon=1.5)
+    assert far == pytest.approx((0.5 + 0.02 * (t0 + 1.5), 0.2))
+    # the clutter hammer: still, its cut centre wandering 2 cm between views
+    cut = [*sliding[:2], *((t, 0.5 + 0.05 * t, 0.2 - 0.1 * t, False) for t in ts[2:])]
+    assert seen_velocity(cut) == (0.0, 0.0)
+    assert predicted_centre(cut, t0 + 1.0) == pytest.approx(cut[-1][1:3])
+    # a whole view after cut ones: the whole views' line, not through the cut ones
+    back = [*cut, (t0 + 0.2, 0.5 + 0.02 * (t0 + 0.2), 0.2, True)]
+    assert seen_velocity(back) == (0.0, 0.0)  # too few whole views in the span
+    assert predicted_centre(back, t0 + 0.7) == pytest.approx(back[-1][1:3])
+
+
+def test_a_view_shows_all_of_the_target_only_inside_its_edges():
+    K = (231.0, 231.0, 159.5, 89.5)  # 320 x 180
+    body = np.array([[-0.035, 0.035, 0.035, -0.035], [-0.02, -0.02, 0.02, 0.02], [0.2] * 4])
+    assert wholly_in_view(body, K, 320, 180)
+    # the tower's body 6.5 cm beside the optical axis (under the TCP) 0.14 m away: its far
+    # end is out of the image; 0.16 m away it is in
+    near = body.copy()
+    near[0] -= 0.065
+    near[2] = 0.14
+    assert not wholly_in_view(near, K, 320, 180)
+    near[2] = 0.16
+    assert wholly_in_view(near, K, 320, 180)
+    behind = body.copy()
+    behind[2] = -0.1
+    assert not wholly_in_view(behind, K, 320, 180)
+    assert wholly_in_view(np.zeros((3, 0)), K, 320, 180)
 
 
 def test_within_a_view_a_clear_grasp_comes_first():

@@ -1,6 +1,7 @@
 """benchmarks/grasp_experiments.py without simulating: its seeded scenes (clutter touching,
 the moving target's path inside W^A and clear of the rest), the paired bootstrap and the
-tables (an interval holding zero is not significant), and the committed result file."""
+tables (an interval holding zero is not significant), the committed result file, and its
+``--detector`` / ``--approach`` options (a resume never mixes them)."""
 
 from __future__ import annotations
 
@@ -57,14 +58,22 @@ def test_clutter_scenes_touch_and_repeat(bench, base, seed):
 
 @pytest.mark.parametrize("seed", range(6))
 def test_the_moving_target_stays_in_its_workspace(bench, base, seed):
+    """Its path keeps it in W^A and clear of the distractor to its end, the longest of the
+    16 directions (up to `MOVE_MAX`), so that it can go on sliding through the approach."""
     wb = bench._workcell_bench()
-    scene, target, uid, v = bench.make("moving", base, seed, wb)
-    assert v is not None and math.hypot(*v) == pytest.approx(bench.MOVE_SPEED)
+    scene, target, uid, move = bench.make("moving", base, seed, wb)
+    assert move is not None and math.hypot(*move.velocity) == pytest.approx(bench.MOVE_SPEED)
+    assert bench.MOVE_MIN <= move.travel <= bench.MOVE_MAX
     o = scene.object(uid)
-    travel = bench.MOVE_TO - bench.MOVE_FROM
-    end = CLASSES[o.cls].footprint.corners(o.xy[0] + v[0] * travel, o.xy[1] + v[1] * travel, o.yaw)
-    assert all(scene.workspaces["A"].contains(*c) for c in end)
+    fp = CLASSES[o.cls].footprint
+    u = np.array(move.velocity) / bench.MOVE_SPEED
+    others = [_corners(p) for p in scene.objects if p.id != uid]
+    for d in np.linspace(0.0, move.travel, 8):
+        c = fp.corners(o.xy[0] + d * u[0], o.xy[1] + d * u[1], o.yaw)
+        assert all(scene.workspaces["A"].contains(*p) for p in c)
+        assert not any(rectangles_overlap(c, q, 0.0099) for q in others)
     assert bench.make("random", base, seed, wb)[0].objects == scene.objects
+    assert bench.make("moving", base, seed, wb)[3] == move
 
 
 def test_paired_bootstrap(bench):
@@ -109,3 +118,29 @@ def test_the_committed_results_hold_their_tables(bench):
     doc = json.loads(path.read_text())
     assert doc["rows"] == json.loads(json.dumps(bench.tables(doc["picks"])))
     assert {p["set"] for p in doc["picks"]} <= set(bench.SETS)
+
+
+def test_a_resume_never_mixes_detectors_or_approaches(bench, tmp_path, monkeypatch, capsys):
+    """A result file's picks keep the detector and approach they ran with; one that names
+    neither ran before the closed approach existed (the oracle, the open approach)."""
+    out = tmp_path / "picks.json"
+    pick = {"set": "random", "method": "hrgnet", "scene": 0, "success": True, "status": "",
+            "sim_time": 10.0, "views": 5, "first_commit": 2.0}  # fmt: skip
+    out.write_text(json.dumps({"picks": [pick]}))
+
+    def no_pick(*args, **kwargs):
+        raise AssertionError("a resume of mixed picks ran a pick")
+
+    monkeypatch.setattr(bench, "run_pick", no_pick)
+
+    def run(*args: str) -> int:
+        monkeypatch.setattr("sys.argv", ["grasp_experiments.py", "--out", str(out), *args])
+        return bench.main()
+
+    assert run("--resume") == 2
+    assert "approach: its picks ran with open, not --approach closed" in capsys.readouterr().out
+    assert run("--resume", "--approach", "open", "--detector", "learned") == 2
+    assert "detector: its picks ran with oracle, not --detector learned" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as exit_:
+        run("--approach", "sideways")
+    assert exit_.value.code == 2

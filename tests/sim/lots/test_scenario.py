@@ -19,13 +19,15 @@ def snapshot_layout(loaded: dict) -> dict:
     the typed one replaced): the ``plant`` section's fields at the top, no ``description``
     and no ``classes`` of their own (packaged files have none), no ``stack`` (a field the
     replaced loader did not have: `tests/sim/lots/test_stack.py` checks it), no
-    ``camera.detector`` (every packaged file reads its views with the oracle), and the
-    never-set ``extra`` mapping."""
+    ``camera.detector`` (every packaged file reads its views with the oracle), no
+    ``grasp.descent.approach`` (every packaged file approaches closed loop, a field the
+    replaced loader did not have), and the never-set ``extra`` mapping."""
     out = dict(loaded)
     out.update(out.pop("plant"))
     assert out.pop("description") == "" and out.pop("classes") == {}
     out.pop("stack")
     assert out["camera"].pop("detector") == "oracle"
+    assert out["grasp"]["descent"].pop("approach") == "closed"
     out["extra"] = {}
     return out
 
@@ -70,6 +72,7 @@ def test_packaged_model_building_loads():
         ([], {"camera": {"width": 8}}, "camera.width"),
         ([], {"grasp": {"descent": {"window": 2, "min_views": 3}}}, "grasp.descent.min_views"),
         ([], {"grasp": {"predictor": "yolo"}}, "grasp.predictor"),
+        ([], {"grasp": {"descent": {"approach": "sideways"}}}, "grasp.descent.approach"),
         ([], {"grasp": {"network": "yolo"}}, "grasp.network"),
         ([], {"waste_basket": [0.5, 0.05]}, "waste_basket"),
         ([], {"waste_basket": [2.0, 0.0]}, "waste_basket"),
