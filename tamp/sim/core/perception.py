@@ -77,6 +77,7 @@ from tamp.grasp.pinhole import camera_to_pixel, pixel_to_camera
 from tamp.sim.core.detection_noise import LEVELS, perturb
 from tamp.sim.core.instances import ObjectDetection, located, world_heights
 from tamp.sim.core.messages import Detection, Observation, Seen, TargetCrop, ViewRequest
+from tamp.sim.core.stack_reading import StackModel, read_stack
 from tamp.sim.core.threads import torch_threads
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.core.tracks import Tracks, regate_for, update
@@ -484,7 +485,9 @@ class Perception(LeafSystem):
     is declared); ``task_classes``: the classes a noisy detector may swap to (default: the
     oracle's classes); ``spans``: each class's length on the table (its footprint's
     diagonal), which bounds how far apart the tracker may take two views of one object to
-    be (`tamp.sim.core.tracks.regate_for`; a class without one: `REGATE`)."""
+    be (`tamp.sim.core.tracks.regate_for`; a class without one: `REGATE`); ``stack``: the
+    stack the cell builds, whose columns a learned detector's views of its workspace are
+    read by height (`tamp.sim.core.stack_reading`)."""
 
     def __init__(
         self,
@@ -500,6 +503,7 @@ class Perception(LeafSystem):
         regions: dict[str, Region] | None = None,
         task_classes: Sequence[str] | None = None,
         spans: Mapping[str, float] | None = None,
+        stack: StackModel | None = None,
     ):
         super().__init__()
         self.set_name("perception")
@@ -520,6 +524,8 @@ class Perception(LeafSystem):
         self._regions = dict(regions or {})
         #: the tracker's second-stage gate per class
         self._regate = {c: regate_for(x) for c, x in (spans or {}).items()}
+        #: the stack the cell builds, read by its heights in a learned detector's views
+        self._stack = stack
         self._min_pixels = min_pixels
         self._hand_depth = hand_depth
         self._center = ((width - 1) / 2, (height - 1) / 2)
@@ -713,6 +719,19 @@ class Perception(LeafSystem):
             with torch_threads():  # one thread: campaigns run a simulation per core
                 found = self._source.detect(image, depth, self._intrinsics, pose, **known)
             raw = on_table(found, depth, intrinsics, X_WC, **kw)
+            stack = self._stack
+            if stack is not None and intrinsics is not None and req.side == stack.side:
+                where = self._regions.get(stack.side)
+                raw = read_stack(
+                    raw,
+                    stack,
+                    depth,
+                    intrinsics,
+                    X_WC,
+                    base=where.base if where else 0.0,
+                    inside=where.contains if where else None,
+                    min_pixels=self._min_pixels,
+                )
         if self._noise is None:
             return raw
         return perturb(

@@ -40,6 +40,7 @@ from tamp.sim.core.camera import DepthNoise, add_rgbd_camera, camera_config
 from tamp.sim.core.detector import Detector, shipped
 from tamp.sim.core.perception import DetectorNoise, LabelOracle, Perception, Region
 from tamp.sim.core.recording import add_visualizer
+from tamp.sim.core.stack_reading import StackModel
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.core.view_log import ViewLog
 from tamp.sim.lots.catalogue import ARM
@@ -52,6 +53,7 @@ from tamp.sim.lots.plant import CellPlant, add_cell_plant
 from tamp.sim.lots.safety import SafetyMonitor
 from tamp.sim.lots.scenario import TRAY_FLOOR, TRAY_INSIDE, TRAY_OUTSIDE, CellScenario, Workspace
 from tamp.sim.lots.skills import PandaSkillController
+from tamp.sim.lots.stack import STACK_SIDE
 
 
 @dataclass
@@ -159,6 +161,16 @@ def view_source(scenario: CellScenario, cell: CellPlant) -> LabelOracle | Detect
     return shipped_detector()
 
 
+def stack_model(scenario: CellScenario) -> StackModel | None:
+    """The stack a learned detector's views of W^B are read by (`tamp.sim.core.
+    stack_reading`): the scenario's declared order with each class's height from its model;
+    None without a declared stack or with the label oracle (which names every part)."""
+    if not scenario.stack or scenario.camera.detector == "oracle":
+        return None
+    heights = tuple(scenario.object_class(c).footprint.top for c in scenario.stack)
+    return StackModel(STACK_SIDE, tuple(scenario.stack), heights)
+
+
 def build_station(
     scenario: CellScenario,
     *,
@@ -187,6 +199,7 @@ def build_station(
             intrinsics=intrinsics,
             noise=detector_noise(scenario),
             regions={side: region(w) for side, w in scenario.workspaces.items()},
+            stack=stack_model(scenario),
         )
     )
     depth = noisy_depth(builder, scenario, camera.depth_image_32F_output_port())
