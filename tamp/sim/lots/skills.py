@@ -386,13 +386,21 @@ class PandaSkillController(LeafSystem):
         held = self.hold_port.HasValue(context) and self.hold_port.Eval(context)[0] > 0.5
         if held and s.steps and s.status.status is Status.RUNNING:
             # stopped by the safety monitor: the targets follow the held arm; a move starts
-            # afresh from rest where the arm stands when it resumes (a new minimum-jerk
-            # profile), any other step's clock stands still
-            if s.steps[0].kind in ("move", "descend", "approach"):
+            # afresh where the arm stands when it resumes (a new minimum-jerk profile), any
+            # other step's clock stands still
+            kind = s.steps[0].kind
+            if kind in ("move", "descend", "approach"):
                 s.step_t0, s.move_from = None, None
             elif s.step_t0 is not None:
                 s.step_t0 += self.dt
-            s.q, s.v = np.array(q_meas[:7], float), np.zeros(7)
+            q_held = np.array(q_meas[:7], float)
+            # the command stream carries these targets' rate (the held arm still settling):
+            # a motion that resumes goes on from it within the acceleration limits. Resumed
+            # from rest instead, a closed approach's first step (at full acceleration) went
+            # against the settling arm's rate: joint 6 at 21.7 rad/s^2, over Franka's 20
+            motion = kind in ("move", "descend", "approach", "brake")
+            s.v = (q_held - s.q) / self.dt if motion else np.zeros(7)
+            s.q = q_held
         elif s.steps and s.status.status is Status.RUNNING:
             obs: Observation = self.observation_port.Eval(context)
             self._advance(s, t, q_meas, v_meas, obs)
@@ -827,7 +835,7 @@ class PandaSkillController(LeafSystem):
                 s.explored += 1
             if s.lost >= LOST_VIEWS:
                 why = f"target lost: the {s.target_cls} (track {s.track}) left the view"
-                return self._fail_descent(s, t, why)
+                return self._fail_descent(s, t, why, stepped=False)
         if s.view_asked is None and t - s.view_done_t >= d.view_period - 1e-9:
             self._ask_view(s, t)
         p_set, v_set, yaw, _ = s.servo
@@ -881,10 +889,21 @@ class PandaSkillController(LeafSystem):
             return self._fail_descent(s, t, why)
 
     def _fail_descent(
-        self, s: SkillState, t: float, why: str, cause: str = "object_not_found"
+        self,
+        s: SkillState,
+        t: float,
+        why: str,
+        cause: str = "object_not_found",
+        stepped: bool = True,
     ) -> None:
         """End the descent (or the closed approach) as a failed attempt: brake to rest, then
-        `_retry`."""
+        `_retry`. ``stepped``: this period's target is already set; else (a view's
+        verdict) the arm brakes this period already: a target left standing for one period
+        stops the stream's velocity at once (an approach losing its target with the wrist
+        turning at 1.1 rad/s commanded joint 7 at 114 rad/s^2)."""
+        if not stepped:
+            s.v = self.kin.brake(s.v)
+            s.q = s.q + s.v * self.dt
         s.steps, s.step_t0, s.servo = s.steps[1:], None, None
         self._retry(s, t, why, cause)
         if s.steps:
@@ -1003,7 +1022,7 @@ class PandaSkillController(LeafSystem):
                         f"target lost: the {s.target_cls} (track {s.track}) left the view "
                         "during the final approach"
                     )
-                    return self._fail_descent(s, t, why)
+                    return self._fail_descent(s, t, why, stepped=False)
                 gate = s.target_top + BLIND_DEPTH - self._camera_lift
         if not blind and s.view_asked is None and t - s.view_done_t >= d.view_period - 1e-9:
             self._ask_view(s, t)

@@ -344,3 +344,89 @@ def test_only_a_picks_own_views_ask_for_a_target():
         skills._enter(s, Step("view", handler=handler), 0.0, q0)
         named = {"target": ("body", 7), "lifted": (None, 7)}.get(handler, (None, None))
         assert (s.request.target, s.request.track) == named
+
+
+def _approach_commands(hold=(), lose_at=None, jump_at=None, ticks=60):
+    """The joint targets of a closed approach run by the skill controller alone, period by
+    period (the arm tracking them, no simulation): the grasp 5 cm beside the TCP and 70 deg
+    round, the target's last view one short of lost. ``hold``: the periods the safety
+    monitor holds the arm (it slows down under the hold); ``lose_at``: the period a view
+    without the target comes; ``jump_at``: the period the target is seen 6 cm aside. Returns
+    the rate of the targets in each period (what the command stream carries), whether each
+    period was held, and the final skill state."""
+    from tamp.sim.core.messages import Observation, SkillCommand, SkillStatus
+    from tamp.sim.lots.catalogue import READY
+    from tamp.sim.lots.descent import FusedGrasp
+    from tamp.sim.lots.kinematics import ArmKinematics
+    from tamp.sim.lots.scenario import load_cell_scenario
+    from tamp.sim.lots.skills import PandaSkillController, SkillState, Step
+    from tamp.world.interface import Status
+
+    scenario = load_cell_scenario("tower")
+    kin = ArmKinematics(scenario.control.period)
+    dt = kin.period
+    q0 = np.array([*READY[:7], 0.04, 0.04])
+    skills = PandaSkillController(scenario, kin, None, q0, list(range(9)))
+    context = skills.CreateDefaultContext()
+    cmd = SkillCommand(id=1, name="Pick", args=("body", "A"))
+    x, y, _ = kin.tcp_pose(q0[:7]).translation()
+    g = _g(x + 0.04, y - 0.03)
+    f = FusedGrasp(g, (0.0, 0.0), 0.0, 0.0, 0.0, g.quality, 3, 0)
+    yaw = kin.tcp_yaw(q0[:7]) + math.radians(70)
+    s = SkillState(
+        q=q0[:7].copy(),
+        command=cmd,
+        status=SkillStatus(1, Status.RUNNING),
+        steps=(Step("approach", pose=(g.x, g.y, 0.005, yaw)),),
+        target_cls="body",
+        target_xy=(g.x, g.y),
+        target_top=0.03,
+        sure=(f, (g.x, g.y)),
+        lost=2,
+        attempt=1,
+    )
+    context.get_mutable_abstract_state(0).set_value(s)
+    skills.command_port.FixValue(context, cmd)
+    q, v = q0[:7].copy(), np.zeros(7)
+    targets, held = [q.copy()], []
+    for k in range(ticks):
+        s = skills.state(context)
+        if k in hold:
+            v = 0.85 * v  # stopped: the arm slows down
+            q = q + v * dt
+        else:
+            q, v = s.q.copy(), s.v.copy()
+        if k == jump_at:
+            s.target_xy = (g.x, g.y + 0.06)
+        obs = Observation(id=s.request.id if k == lose_at else 0, time=k * dt)
+        skills.arm_state_port.FixValue(context, np.r_[q, 0.04, 0.04, v, 0.0, 0.0])
+        skills.observation_port.FixValue(context, obs)
+        skills.hold_port.FixValue(context, [float(k in hold)])
+        context.SetTime(k * dt)
+        skills._update_timed(context, context.get_mutable_state())
+        targets.append(skills.state(context).q.copy())
+        held.append(k in hold)
+    return np.diff(targets, axis=0) / dt, held, skills.state(context)
+
+
+@pytest.mark.parametrize("case", ["jump", "hold", "lost"])
+def test_the_closed_approach_commands_within_the_arms_limits(case):
+    """The safety monitor's own check (`safety.check_limits`) finds nothing in the approach's
+    command stream: with the target seen 6 cm aside; resumed after a stop while the arm still
+    moved (the targets follow the held arm: the step that resumes goes on from their rate,
+    not from rest: about twice the limit); losing its target while the wrist turns (the arm
+    brakes from that period on; the targets stood still for one period: about 6x)."""
+    from tamp.sim.lots.safety import check_limits
+
+    hold = range(15, 17) if case == "hold" else ()
+    rates, held, s = _approach_commands(
+        hold, lose_at=40 if case == "lost" else None, jump_at=20 if case == "jump" else None
+    )
+    assert np.abs(rates).max() > 0.5  # the wrist turns fast
+    # the monitor checks no acceleration within a stop, nor into one
+    for k in range(1, len(rates)):
+        if not held[k]:
+            assert check_limits(np.zeros(7), rates[k], rates[k - 1], 0.01) == [], k
+    lost = any("during the final approach" in m for _, m in s.log)
+    assert lost == (case == "lost")
+    assert (s.steps[0].kind == "approach") == (case != "lost")
