@@ -77,7 +77,7 @@ from tamp.grasp.pinhole import camera_to_pixel, pixel_to_camera
 from tamp.sim.core.detection_noise import LEVELS, perturb
 from tamp.sim.core.instances import ObjectDetection, located, world_heights
 from tamp.sim.core.messages import Detection, Observation, Seen, TargetCrop, ViewRequest
-from tamp.sim.core.stack_reading import StackModel, read_stack
+from tamp.sim.core.stack_reading import StackModel, read_stack, remembered_in_columns
 from tamp.sim.core.threads import torch_threads
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.core.tracks import Tracks, regate_for, update
@@ -681,6 +681,19 @@ class Perception(LeafSystem):
                     self._intrinsics,
                 )
                 memory, occluded = self._remember(s.memory, req, depth, now, gone, merged)
+                if self._stack is not None and req.side == self._stack.side:
+                    levels = [
+                        (d.cls, d.centroid)
+                        for d, ok in zip(raw, inside, strict=True)
+                        if ok and "level" in d.extra
+                    ]
+                    same = remembered_in_columns(occluded, levels)
+                    if same:  # a read level, remembered aside: one part, not two
+                        occluded = tuple(m for m in occluded if m.track not in same)
+                        memory = {
+                            **memory,
+                            req.side: tuple(m for m in memory[req.side] if m.track not in same),
+                        }
                 counts = counted(m.cls for m in (*now, *occluded))
         obs = Observation(
             req.id,

@@ -30,6 +30,7 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from tamp.sim.core.instances import UNKNOWN, ObjectDetection, located, world_heights
+from tamp.sim.core.messages import Seen
 
 #: detections whose centroids lie this close (m, on the table) stand in one column: a
 #: stacked part's centre lies within 1.5 cm of the one below; a lower part's strip seen
@@ -154,3 +155,22 @@ def read_stack(
     if not replaced:
         return found
     return [d for i, d in enumerate(found) if i not in replaced] + read
+
+
+def remembered_in_columns(
+    remembered: Sequence[Seen],
+    levels: Sequence[tuple[str, Sequence[float]]],
+    radius: float = COLUMN_RADIUS,
+) -> frozenset[int]:
+    """The tracks of ``remembered`` instances (kept as hidden) that are a level read in this
+    view: of its class, in its column (within ``radius`` on the table). A column holds one
+    part per level, so a lower part remembered from an earlier view where its strips placed
+    it aside is the part read now, not a second one (``levels``: each read level's class
+    and world centroid, `read_stack`'s detections marked ``extra["level"]``)."""
+    out = set()
+    for m in remembered:
+        for cls, p in levels:
+            if cls == m.cls and np.hypot(m.position[0] - p[0], m.position[1] - p[1]) <= radius:
+                out.add(m.track)
+                break
+    return frozenset(out)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from tamp.sim.core.instances import ObjectDetection, located
-from tamp.sim.core.stack_reading import StackModel, columns, read_stack
+from tamp.sim.core.stack_reading import StackModel, columns, read_stack, remembered_in_columns
 
 K = (200.0, 200.0, 79.5, 44.5)
 W, H = 160, 90
@@ -145,3 +145,19 @@ def test_a_stack_model_needs_one_height_per_class():
     assert TOWER.levels_at(0.095) == 2 and TOWER.levels_at(0.065) == 0
     with pytest.raises(ValueError, match="one height per class"):
         StackModel("B", ("bottom", "body"), (0.04,))
+
+
+def test_a_part_remembered_aside_is_the_level_read_in_its_column():
+    """A bottom remembered where its strip put it (2.5 cm off) is the bottom read now under
+    the body's middle; a bottom remembered beside the tower, or a body remembered there, is
+    not."""
+    from tamp.sim.core.messages import Seen
+
+    remembered = [
+        Seen(6, "bottom", (0.0, 0.025, 0.04)),
+        Seen(7, "bottom", (0.0, 0.09, 0.04)),
+        Seen(8, "peak", (0.0, 0.0, 0.11)),
+    ]
+    levels = [("bottom", (0.0, 0.0, 0.04)), ("body", (0.0, 0.0, 0.09))]
+    assert remembered_in_columns(remembered, levels) == {6}
+    assert remembered_in_columns(remembered, []) == frozenset()
