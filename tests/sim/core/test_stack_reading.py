@@ -138,6 +138,12 @@ def test_two_towers_side_by_side_are_two_columns():
 def test_columns_join_points_within_the_radius_through_others():
     assert columns([(0, 0), (0.03, 0), (0.06, 0), (0.2, 0)]) == [[0, 1, 2], [3]]
     assert columns([]) == []
+    # a lower part's side seen with the part on it (both rise above the first level): 4.9 cm
+    # off the tower's middle is still the tower; a part of the first level's height there is not
+    aside = [(0.0, 0.0), (0.049, 0.0)]
+    assert columns(aside, tall=[True, True]) == [[0, 1]]
+    assert columns(aside, tall=[True, False]) == [[0], [1]]
+    assert columns([(0.0, 0.0), (0.095, 0.0)], tall=[True, True]) == [[0], [1]]
 
 
 def test_a_stack_model_needs_one_height_per_class():
