@@ -205,15 +205,25 @@ def split_at_levels(
             run = []
     if len(levels) <= 1:
         return [mask]
-    with np.errstate(invalid="ignore"):
-        cuts = [-np.inf, *(lv + margin for lv in levels[:-1]), np.inf]
-        parts = [
-            mask & (heights > lo) & (heights <= hi) for lo, hi in zip(cuts, cuts[1:], strict=False)
-        ]
+    parts = cut_at_heights(mask, heights, [lv + margin for lv in levels[:-1]])
     parts[-1] |= mask & ~np.isfinite(heights)  # no depth return: the top part's
     if any(int(p.sum()) < min_pixels for p in parts):
         return [mask]
     return parts
+
+
+def cut_at_heights(
+    mask: np.ndarray, heights: np.ndarray, cuts: Sequence[float]
+) -> list[np.ndarray]:
+    """The pixels of ``mask`` between consecutive ``cuts`` (ascending world heights, m), one
+    mask per slice from below the first cut to above the last: a stack's parts, each up to
+    the cut above its top (pixels without a height are in none)."""
+    edges = [-np.inf, *cuts, np.inf]
+    with np.errstate(invalid="ignore"):
+        return [
+            mask & (heights > lo) & (heights <= hi)
+            for lo, hi in zip(edges, edges[1:], strict=False)
+        ]
 
 
 def split_several(

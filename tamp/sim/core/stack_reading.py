@@ -22,14 +22,19 @@ task class (a toy car on the tower) is left as the detector named it.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
-from tamp.sim.core.instances import UNKNOWN, ObjectDetection, located, world_heights
+from tamp.sim.core.instances import (
+    UNKNOWN,
+    ObjectDetection,
+    cut_at_heights,
+    located,
+    world_heights,
+)
 from tamp.sim.core.messages import Seen
 
 #: detections whose centroids lie this close (m, on the table) stand in one column: a
@@ -127,7 +132,7 @@ def read_stack(
     ]
     if not cands:
         return found
-    z = world_heights(depth, intrinsics, X_WC) - base
+    z = None  # the view's heights over the base, computed for the first column read
     replaced: set[int] = set()
     read: list[ObjectDetection] = []
     first = model.tops[0] + TOP_TOLERANCE
@@ -141,31 +146,29 @@ def read_stack(
         k = model.levels_at(top)
         if k < 2:
             continue
+        if z is None:
+            z = world_heights(depth, intrinsics, X_WC) - base
         union = np.logical_or.reduce([d.mask for d in members])
-        cuts = [-np.inf, *(t + LEVEL_MARGIN for t in model.tops[: k - 1]), np.inf]
-        with np.errstate(invalid="ignore"):
-            bands = [union & (z > lo) & (z <= hi) for lo, hi in zip(cuts, cuts[1:], strict=False)]
+        bands = cut_at_heights(union, z, [t + LEVEL_MARGIN for t in model.tops[: k - 1]])
         shown = [int(b.sum()) >= min_pixels for b in bands]
         if sum(shown) < 2 and len(members) < 2:
             continue  # one object showing one level: not told from a tall object
-        score = max(d.score for d in members)
-        levels = []
-        for cls, band, ok in zip(model.order[:k], bands, shown, strict=False):
-            where = located(band, depth, intrinsics, X_WC) if ok else None
-            if where is not None:
-                levels.append(ObjectDetection(cls, score, band, **where, extra={"level": cls}))
-        if not levels:
+        found_at = [
+            (cls, band, located(band, depth, intrinsics, X_WC) if ok else None)
+            for cls, band, ok in zip(model.order[:k], bands, shown, strict=False)
+        ]
+        found_at = [(cls, band, where) for cls, band, where in found_at if where is not None]
+        if not found_at:
             continue
         # every level stands under the top one's middle (the parts are centred on each
         # other): a lower part's visible strips are off its middle by up to half its width,
         # and its remembered track (seen whole before the next part went on it) is there
-        x, y = levels[-1].centroid[:2]
-        levels = [
-            dataclasses.replace(d, centroid=(x, y, d.centroid[2])) if d is not levels[-1] else d
-            for d in levels
-        ]
+        x, y = found_at[-1][2]["centroid"][:2]
+        score = max(d.score for d in members)
+        for cls, band, where in found_at:
+            where["centroid"] = (x, y, where["centroid"][2])
+            read.append(ObjectDetection(cls, score, band, **where, extra={"level": cls}))
         replaced |= {cands[j] for j in group}
-        read += levels
     if not replaced:
         return found
     return [d for i, d in enumerate(found) if i not in replaced] + read
