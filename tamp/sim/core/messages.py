@@ -125,13 +125,16 @@ class Detection:
 
 @dataclass(frozen=True)
 class Seen:
-    """An instance as perception last saw it: its track id, class, and its world centroid
-    (the median of its pixels back-projected through their depth: about the middle of its
-    top)."""
+    """An instance as perception last saw it: its track id, class, its world centroid (the
+    median of its pixels back-projected through their depth: about the middle of its top),
+    and where it lay on the table: the world x, y of its points, one per square of
+    `tamp.sim.core.perception.FOOTPRINT_CELL` (empty when not known), which a place keeps
+    clear of while it is hidden."""
 
     track: int
     cls: str
     position: tuple[float, float, float]
+    footprint: tuple[tuple[float, float], ...] = ()
 
 
 @dataclass(frozen=True)

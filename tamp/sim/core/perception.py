@@ -81,6 +81,7 @@ from tamp.sim.core.stack_reading import StackModel, read_stack, remembered_in_co
 from tamp.sim.core.threads import torch_threads
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.core.tracks import Tracks, regate_for, update
+from tamp.sim.core.view_parts import joined_fragments, touched_by_hand
 
 #: a remembered point counts as covered where the image shows something this much nearer (m)
 OCCLUSION_TOLERANCE = 0.02
@@ -99,6 +100,8 @@ FLOOR_BAND = 0.005
 SURFACE_TOLERANCE = 0.008
 #: the class reported in hand when the object there is not the grasp's tracked target
 UNKNOWN = "unknown"
+#: a remembered instance's footprint keeps one point per square this size (m)
+FOOTPRINT_CELL = 0.005
 
 
 @dataclass(frozen=True)
@@ -206,6 +209,9 @@ class ImageDetector(Protocol):
 
 #: what a learned detector reports that is no object on the table (never tracked or counted)
 NOT_OBJECTS = ("hand",)
+#: the mark (`ObjectDetection.extra`) of an object a person's hand touches: tracked, neither
+#: counted nor remembered in a workspace (`tamp.sim.core.view_parts.touched_by_hand`)
+CARRIED = "carried"
 
 
 def on_table(
@@ -219,16 +225,21 @@ def on_table(
 ) -> list[ObjectDetection]:
     """A learned detector's objects as perception counts them, by the label oracle's rules
     (`detect`): the person's hand dropped (`NOT_OBJECTS`: never an object, whatever decides
-    safety), each mask cut to its pixels farther than ``hand_depth`` (the gripper's region
-    is the in-hand check's) and kept when at least ``min_pixels``; placed in the world when
-    ``intrinsics`` and ``X_WC`` are given."""
+    safety) and what it touches marked `CARRIED` (`tamp.sim.core.view_parts`), each mask
+    cut to its pixels farther than ``hand_depth`` (the gripper's region is the in-hand
+    check's) and kept when at least ``min_pixels``; placed in the world when ``intrinsics``
+    and ``X_WC`` are given."""
+    hands = [d.mask for d in found if d.cls in NOT_OBJECTS]
+    touched = touched_by_hand(found, hands, depth)
     depth = np.where(np.isfinite(depth), depth, 0.0)
     far = depth > hand_depth
     placed = intrinsics is not None and X_WC is not None
     out = []
-    for d in found:
+    for d, carried in zip(found, touched, strict=True):
         if d.cls in NOT_OBJECTS:
             continue
+        if carried:
+            d = dataclasses.replace(d, extra={**d.extra, CARRIED: True})
         mask = d.mask & far
         if int(mask.sum()) < min_pixels:
             continue
@@ -272,6 +283,15 @@ def detect(
         if where is not None:  # always: a mask's pixels lie beyond hand_depth
             out.append(ObjectDetection(cls, 1.0, mask, **where))
     return out
+
+
+def footprint(points: np.ndarray) -> tuple[tuple[float, float], ...]:
+    """Where a detection lies on the table, thinned for memory: the centres of the
+    `FOOTPRINT_CELL` squares its world points (3 x N) fall in."""
+    if points.size == 0:
+        return ()
+    cells = np.unique(np.floor(points[:2].T / FOOTPRINT_CELL).astype(int), axis=0)
+    return tuple((float(x), float(y)) for x, y in (cells + 0.5) * FOOTPRINT_CELL)
 
 
 def counted(classes) -> dict[str, int]:
@@ -524,6 +544,8 @@ class Perception(LeafSystem):
         self._regions = dict(regions or {})
         #: the tracker's second-stage gate per class
         self._regate = {c: regate_for(x) for c, x in (spans or {}).items()}
+        #: each class's length on the table: fragments within it may be one object
+        self._spans = dict(spans or {})
         #: the stack the cell builds, read by its heights in a learned detector's views
         self._stack = stack
         self._min_pixels = min_pixels
@@ -630,7 +652,11 @@ class Perception(LeafSystem):
                 occupied |= d.mask
             # what lies in the workspace looked at (beside it: seen, not counted there)
             region = self._regions.get(req.side) if placed else None
-            inside = [region is None or region.contains(d.centroid) for d in raw]
+            inside = [
+                (region is None or region.contains(d.centroid)) and CARRIED not in d.extra
+                for d in raw
+            ]
+            carried = frozenset(i for i, d in zip(ids, raw, strict=True) if CARRIED in d.extra)
             counts = counted(d.cls for d, ok in zip(dets, inside, strict=True) if ok)
             det = None
             if req.target is not None:
@@ -668,7 +694,7 @@ class Perception(LeafSystem):
         if placed and req.side:
             with self.analysis:
                 now = tuple(
-                    Seen(i, d.cls, tuple(float(x) for x in d.centroid))
+                    Seen(i, d.cls, tuple(float(x) for x in d.centroid), footprint(d.points))
                     for i, d, ok in zip(ids, raw, inside, strict=True)
                     if ok
                 )
@@ -680,7 +706,7 @@ class Perception(LeafSystem):
                     X_WC,
                     self._intrinsics,
                 )
-                memory, occluded = self._remember(s.memory, req, depth, now, gone, merged)
+                memory, occluded = self._remember(s.memory, req, depth, now, gone | carried, merged)
                 if self._stack is not None and req.side == self._stack.side:
                     levels = [
                         (d.cls, d.centroid)
@@ -732,6 +758,8 @@ class Perception(LeafSystem):
             with torch_threads():  # one thread: campaigns run a simulation per core
                 found = self._source.detect(image, depth, self._intrinsics, pose, **known)
             raw = on_table(found, depth, intrinsics, X_WC, **kw)
+            if intrinsics is not None and self._spans:  # one object cut in two by an occluder
+                raw = joined_fragments(raw, depth, self._spans, intrinsics, X_WC)
             stack = self._stack
             if stack is not None and intrinsics is not None and req.side == stack.side:
                 where = self._regions.get(stack.side)

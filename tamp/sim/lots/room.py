@@ -31,6 +31,7 @@ from pydrake.math import RigidTransform
 from scipy import ndimage
 
 from tamp.grasp.pinhole import camera_to_pixel, pixel_to_camera
+from tamp.sim.core.messages import Seen
 
 #: the floor raster's cell (m)
 RES = 0.005
@@ -44,6 +45,9 @@ EDGE = 0.01
 WALL_MARGIN = 0.03
 #: a remembered object that is hidden now blocks this radius round its centre (m)
 HIDDEN_RADIUS = 0.03
+#: ... and this far round each point of the footprint it was last seen with (m): half its
+#: thinning cell's diagonal and a margin
+FOOTPRINT_MARGIN = 0.005
 #: the camera's sideways shifts tried for another view of the floor (m; 8 directions each)
 SHIFTS = (0.07, 0.13)
 
@@ -124,12 +128,14 @@ def observed(
     *,
     occupied: np.ndarray | None,
     floor: np.ndarray | None,
-    avoid: Sequence[tuple[float, float]] = (),
+    avoid: Sequence[Seen] = (),
 ) -> Room:
     """``room`` with one more view: the cells this view saw bare join ``seen`` (all of them
     when the view has no ``floor`` mask: it is taken to show the whole floor); the cells its
-    object pixels fall on, and those within `HIDDEN_RADIUS` of the hidden objects' centres
-    (``avoid``), join ``blocked``."""
+    object pixels fall on, and, for each remembered object hidden now (``avoid``), those
+    within `HIDDEN_RADIUS` of its centre and within `FOOTPRINT_MARGIN` of where it was seen
+    lying (its footprint: a long one reaches far past a disc round its centre), join
+    ``blocked``."""
     cells = room.cells.reshape(-1, 2)
     if floor is None:
         seen = np.ones(room.seen.shape, bool)
@@ -140,8 +146,11 @@ def observed(
     if occupied is not None and occupied.any():
         i, j, inside = room.index(on_floor_plane(occupied, room.floor, X_WC, intrinsics))
         blocked[i[inside], j[inside]] = True
-    for x, y in avoid:
+    for m in avoid:
+        x, y = m.position[:2]
         near = np.hypot(cells[:, 0] - x, cells[:, 1] - y) <= HIDDEN_RADIUS
+        for fx, fy in m.footprint:
+            near |= np.hypot(cells[:, 0] - fx, cells[:, 1] - fy) <= FOOTPRINT_MARGIN
         blocked |= near.reshape(blocked.shape)
     return Room(room.center, room.size, room.floor, room.seen | seen, blocked)
 
@@ -185,7 +194,9 @@ def place(
     floor, at least `EDGE` from its edges; of those (``walls``: the floor's edges are walls,
     a tray's) the ones `WALL_MARGIN` farther inside (or as near it as any), then the largest
     clearance (the least of its points' `clearance`: farthest from everything to keep clear
-    of); among equals the one farthest inside the edges, and the first yaw. When no
+    of); when every footprint lies in part on cells not free, the one with the fewest
+    points on something kept clear of, then on floor no view saw; among equals the one
+    farthest inside the edges, and the first yaw. When no
     footprint fits inside, the one whose clearance or edge distance is least bad.
     ``unseen_bare``: `clearance`'s."""
     D = clearance(room, unseen_bare=unseen_bare)
@@ -201,12 +212,24 @@ def place(
         edge = (half - np.abs(pts - np.asarray(room.center))).min(axis=2).min(axis=1)
         clear = np.where(edge >= 0, D[i, j].min(axis=1), -RES)
         fits = edge >= EDGE
-        # inside the edges first, then off the walls, then the clearance, then the
-        # distance to the edges
+        # a footprint on cells not free: the fewer on something kept clear of, then the
+        # fewer on floor no view saw (every such footprint's clearance is the same)
+        on_blocked = room.blocked[i, j].sum(axis=1)
+        on_unseen = 0 if unseen_bare else (~room.seen & ~room.blocked)[i, j].sum(axis=1)
+        # inside the edges first, then off the walls, then the clearance, the overlap, then
+        # the distance to the edges
         off_walls = np.where(fits, np.minimum(edge - EDGE, WALL_MARGIN if walls else 0.0), 0.0)
         key = np.stack(
-            [fits, off_walls, np.where(fits, clear, np.minimum(clear, edge)), edge], axis=1
-        )
+            np.broadcast_arrays(
+                fits,
+                off_walls,
+                np.where(fits, clear, np.minimum(clear, edge)),
+                -on_blocked,
+                -on_unseen,
+                edge,
+            ),
+            axis=1,
+        ).astype(float)
         b = int(np.lexsort(-key.T[::-1])[0])  # the largest key; the first among equals
         if best_key is None or tuple(key[b]) > best_key:
             best_key = tuple(key[b])

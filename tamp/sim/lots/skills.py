@@ -715,7 +715,7 @@ class PandaSkillController(LeafSystem):
             self.planner.intrinsics,
             occupied=obs.occupied,
             floor=obs.floor,
-            avoid=tuple(m.position[:2] for m in obs.occluded),
+            avoid=obs.occluded,
         )
 
     def _report_counts(self, s: SkillState, t: float, obs: Observation) -> None:

@@ -9,6 +9,7 @@ import pytest
 from pydrake.math import RigidTransform
 
 from tamp.grasp.rect import GraspRect
+from tamp.sim.core.messages import Seen
 from tamp.sim.lots.grasping import dilate, on_mask, snap_to_mask
 from tamp.sim.lots.kinematics import down
 from tamp.sim.lots.room import empty_room, footprint, next_look, observed, place
@@ -68,11 +69,28 @@ def test_a_place_keeps_the_footprint_clear_of_objects_seen():
 def test_a_place_keeps_away_from_hidden_objects():
     w = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34))
     occupied = np.zeros((180, 320), bool)
-    p = place(_room(w, occupied, X_LOOK, avoid=((0.61, -0.36),)), DISC, [0.0])
+    hidden = Seen(3, "screw", (0.61, -0.36, 0.01))
+    p = place(_room(w, occupied, X_LOOK, avoid=(hidden,)), DISC, [0.0])
     assert math.hypot(p.x - 0.61, p.y + 0.36) > 0.1 and p.clearance > 0.05
-    hidden_cell = _room(w, occupied, X_LOOK, avoid=((0.61, -0.36),))
+    hidden_cell = _room(w, occupied, X_LOOK, avoid=(hidden,))
     i, j, _ = hidden_cell.index(np.array([[0.61, -0.36]]))
     assert hidden_cell.blocked[i, j].all()
+
+
+def test_a_hidden_long_object_blocks_where_it_was_seen_lying():
+    """Example 1 with a person: the screwdriver in the tray, hidden behind the held hammer,
+    blocked a 3 cm disc round its centre, and the hammer's head went down on its handle 6 cm
+    away. Its footprint, as last seen, is kept clear along its whole length."""
+    w = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34))
+    occupied = np.zeros((180, 320), bool)
+    xs = np.arange(0.40, 0.60, 0.01)  # a 20 cm bar along x through the middle
+    bar = Seen(6, "screwdriver", (0.5, -0.25, 0.02), tuple((float(x), -0.25) for x in xs))
+    room = _room(w, occupied, X_LOOK, avoid=(bar,))
+    i, j, _ = room.index(np.array([[0.41, -0.25], [0.59, -0.25], [0.5, -0.2]]))
+    assert room.blocked[i[:2], j[:2]].all()  # 9 cm from the centre, on the bar: blocked
+    assert not room.blocked[i[2], j[2]]  # 5 cm beside it: free
+    centre_only = _room(w, occupied, X_LOOK, avoid=(Seen(6, "screwdriver", (0.5, -0.25, 0.02)),))
+    assert not centre_only.blocked[i[:2], j[:2]].any()
 
 
 def test_a_place_in_a_tray_keeps_the_object_off_its_walls():
