@@ -18,7 +18,10 @@ detector's class output. Either way each instance becomes an `ObjectDetection` (
 world points and centroid: `tamp.sim.core.instances.located`) cut to the pixels beyond the
 gripper's region (`on_table`: the person's hand is no object), and nothing after this step
 reads a label id. An ``unknown`` object (a shape the detector was not trained on) is
-tracked, remembered and kept clear of, but never counted as a task class (`counted`). With
+tracked, remembered and kept clear of, but never counted as a task class (`counted`). A
+learned detector's view is read once more as a whole (`tamp.sim.core.view_parts`): an
+object cut in two by an occluder is joined back into one, and an object the person's hand
+touches (``CARRIED``) is tracked but neither counted nor remembered. With
 ``noise`` the view's detections first pass through the seeded noisy detector
 (`tamp.sim.core.detection_noise.perturb`: misses, class swaps, mask jitter, fresh identities,
 false positives), so robustness to perception errors is measured on its own axis.

@@ -5,8 +5,9 @@ person's arm) can cut its visible pixels in two, and the detector then reports t
 of its class. The label oracle reports one body, whatever hides its middle; perception joins
 such fragments back into one object (`joined_fragments`) when together they are no larger
 than one object of their class (its footprint's diagonal, the cell's ``spans``), lie at one
-height, and what separates them in the image is nearer than both and no detection's (an
-occluder, not a third object between two).
+height, and what separates them in the image is nearer than both (an occluder: the held
+object, an arm, or an object lying across this one; two objects of one class either side of
+a third would span more than one of them).
 
 *An object in a person's hand.* The person moves objects by hand: one the hand touches is
 being taken or put down, and where it will rest is not settled. Perception sees and tracks
@@ -87,11 +88,12 @@ def _extent(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt((diff**2).sum(-1)).max())
 
 
-def _occluded_between(a: np.ndarray, b: np.ndarray, depth: np.ndarray, others: np.ndarray) -> bool:
+def _occluded_between(a: np.ndarray, b: np.ndarray, depth: np.ndarray) -> bool:
     """Whether the pixels on the shortest segment from mask ``a`` to mask ``b`` show an
     occluder: at least `OCCLUDER_SHARE` of them nearer than both masks' median depth by
-    `OCCLUDER_NEARER` (or without a return) and none in another detection (``others``);
-    False when the masks touch (the detector split them itself)."""
+    `OCCLUDER_NEARER` (or without a return), whatever shows there (the held object, an
+    arm, an object lying across this one); False when the masks touch (the detector split
+    them itself)."""
     dist, (iy, ix) = ndimage.distance_transform_edt(~a, return_indices=True)
     vs, us = np.nonzero(b)
     k = int(np.argmin(dist[vs, us]))
@@ -103,8 +105,6 @@ def _occluded_between(a: np.ndarray, b: np.ndarray, depth: np.ndarray, others: n
     t = np.linspace(0.0, 1.0, n + 1)[1:-1]
     rows = np.rint(v0 + t * (v1 - v0)).astype(int)
     cols = np.rint(u0 + t * (u1 - u0)).astype(int)
-    if others[rows, cols].any():
-        return False
     d = _surface(depth)
     da, db = d[a], d[b]
     far = min(float(np.median(da[da > 0])), float(np.median(db[db > 0])))
@@ -138,11 +138,7 @@ def joined_fragments(
                     continue
                 if _extent(a.points, b.points) > span + SPAN_SLACK:
                     continue
-                others = np.zeros(depth.shape, bool)
-                for k, o in enumerate(out):
-                    if k not in (i, j):
-                        others |= o.mask
-                if not _occluded_between(a.mask, b.mask, depth, others):
+                if not _occluded_between(a.mask, b.mask, depth):
                     continue
                 mask = a.mask | b.mask
                 where = located(mask, depth, intrinsics, X_WC)

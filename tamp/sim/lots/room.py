@@ -45,8 +45,8 @@ EDGE = 0.01
 WALL_MARGIN = 0.03
 #: a remembered object that is hidden now blocks this radius round its centre (m)
 HIDDEN_RADIUS = 0.03
-#: ... and this far round each point of the footprint it was last seen with (m): half its
-#: thinning cell's diagonal and a margin
+#: ... and this far round each point of the footprint it was last seen with (m): about half
+#: its thinning cell's diagonal (`tamp.sim.core.perception.FOOTPRINT_CELL`, 5 mm)
 FOOTPRINT_MARGIN = 0.005
 #: the camera's sideways shifts tried for another view of the floor (m; 8 directions each)
 SHIFTS = (0.07, 0.13)
@@ -194,9 +194,7 @@ def place(
     floor, at least `EDGE` from its edges; of those (``walls``: the floor's edges are walls,
     a tray's) the ones `WALL_MARGIN` farther inside (or as near it as any), then the largest
     clearance (the least of its points' `clearance`: farthest from everything to keep clear
-    of); when every footprint lies in part on cells not free, the one with the fewest
-    points on something kept clear of, then on floor no view saw; among equals the one
-    farthest inside the edges, and the first yaw. When no
+    of); among equals the one farthest inside the edges, and the first yaw. When no
     footprint fits inside, the one whose clearance or edge distance is least bad.
     ``unseen_bare``: `clearance`'s."""
     D = clearance(room, unseen_bare=unseen_bare)
@@ -212,24 +210,12 @@ def place(
         edge = (half - np.abs(pts - np.asarray(room.center))).min(axis=2).min(axis=1)
         clear = np.where(edge >= 0, D[i, j].min(axis=1), -RES)
         fits = edge >= EDGE
-        # a footprint on cells not free: the fewer on something kept clear of, then the
-        # fewer on floor no view saw (every such footprint's clearance is the same)
-        on_blocked = room.blocked[i, j].sum(axis=1)
-        on_unseen = 0 if unseen_bare else (~room.seen & ~room.blocked)[i, j].sum(axis=1)
-        # inside the edges first, then off the walls, then the clearance, the overlap, then
-        # the distance to the edges
+        # inside the edges first, then off the walls, then the clearance, then the
+        # distance to the edges
         off_walls = np.where(fits, np.minimum(edge - EDGE, WALL_MARGIN if walls else 0.0), 0.0)
         key = np.stack(
-            np.broadcast_arrays(
-                fits,
-                off_walls,
-                np.where(fits, clear, np.minimum(clear, edge)),
-                -on_blocked,
-                -on_unseen,
-                edge,
-            ),
-            axis=1,
-        ).astype(float)
+            [fits, off_walls, np.where(fits, clear, np.minimum(clear, edge)), edge], axis=1
+        )
         b = int(np.lexsort(-key.T[::-1])[0])  # the largest key; the first among equals
         if best_key is None or tuple(key[b]) > best_key:
             best_key = tuple(key[b])
