@@ -508,7 +508,9 @@ class Perception(LeafSystem):
     is declared); ``task_classes``: the classes a noisy detector may swap to (default: the
     oracle's classes); ``spans``: each class's length on the table (its footprint's
     diagonal), which bounds how far apart the tracker may take two views of one object to
-    be (`tamp.sim.core.tracks.regate_for`; a class without one: `REGATE`); ``stack``: the
+    be (`tamp.sim.core.tracks.regate_for`; a class without one: `REGATE`) and how long two
+    fragments of one object may be together (`tamp.sim.core.view_parts.joined_fragments`;
+    a class without one is never joined); ``stack``: the
     stack the cell builds, whose columns a learned detector's views of its workspace are
     read by height (`tamp.sim.core.stack_reading`)."""
 
