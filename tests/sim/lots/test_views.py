@@ -80,7 +80,8 @@ def test_a_place_keeps_away_from_hidden_objects():
 def test_a_hidden_long_object_blocks_where_it_was_seen_lying():
     """Example 1 with a person: the screwdriver in the tray, hidden behind the held hammer,
     blocked a 3 cm disc round its centre, and the hammer's head went down on its handle 6 cm
-    away. Its footprint, as last seen, is kept clear along its whole length."""
+    away. Its footprint, as last seen, is kept clear along its whole length (in that run
+    the tray then has no clear spot for the hammer at all: docs/results/lots_workcell.md)."""
     w = Workspace(name="B", center=(0.5, -0.25), size=(0.34, 0.34))
     occupied = np.zeros((180, 320), bool)
     xs = np.arange(0.40, 0.60, 0.01)  # a 20 cm bar along x through the middle
