@@ -22,6 +22,8 @@ CAUSES: dict[str, str] = {
     "collision": "a robot's chassis or lever touched something (refinement workcell)",
     "order_violated": "the measured event order breaks the program's ordering property",
     "task_failed": "the controller gave up with no skill failure to blame",
+    "sim_diverged": "the physics went non-finite (a contact the solver could not resolve); "
+    "the run stopped there",
     "crash": "the simulation raised an error (a campaign records it, the run's own code not)",
 }
 

@@ -10,6 +10,7 @@ between chunks is the workcell's (weld toggling, appearances: `tamp.sim.smp.runn
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -29,14 +30,20 @@ def make_simulator(diagram, *, realtime_rate: float = 0.0) -> Simulator:
     return simulator
 
 
+#: what Drake says when the physics has gone non-finite or the contact solver gave up
+_DIVERGED = re.compile(r"non-finite|\bNaN\b|failed to converge|did not converge")
+
+
 @dataclass(frozen=True)
 class ChunkedRun:
-    """Where a chunked run stopped (sim time, s) and what it cost (wall and process CPU, s)."""
+    """Where a chunked run stopped (sim time, s) and what it cost (wall and process CPU, s);
+    ``diverged``: why the physics stopped the run early (None: it did not)."""
 
     sim_time: float
     wall_time: float
     cpu_time: float
-    stopped: bool  # True: ``between`` asked to stop; False: the time limit was reached
+    stopped: bool  # True: ``between`` asked to stop or the physics diverged; False: time limit
+    diverged: str | None = None
 
 
 def run_in_chunks(
@@ -50,23 +57,34 @@ def run_in_chunks(
     ``between(t)`` after each step; stop early when it returns True.
 
     Chunk ends are computed as ``chunk * n`` (not summed), so they are the same sim times
-    in every run.
+    in every run. When the plant's state goes non-finite (Drake raises from `AdvanceTo`), the
+    run stops there with ``diverged`` saying when and what Drake said: a failure of the run
+    (cause ``sim_diverged``), not of the program. Any other error propagates.
     """
     simulator.Initialize()
     wall0 = time.perf_counter()
     cpu0 = time.process_time()
     t = simulator.get_context().get_time()
-    stopped = False
+    stopped, diverged = False, None
     n = 0
     # progress in sim seconds on stderr (tqdm turns itself off when stderr is no TTY)
     bar = tqdm(total=round(limit, 1), desc="simulating", unit=" sim s", disable=None, leave=False)
     while t < limit - 1e-9:
         n += 1
         t = min(chunk * n, limit)
-        simulator.AdvanceTo(t)
+        try:
+            simulator.AdvanceTo(t)
+        except RuntimeError as e:
+            if not _DIVERGED.search(str(e)):
+                raise
+            t = simulator.get_context().get_time()
+            diverged = f"the simulation diverged at {t:.2f} s ({str(e).split('.')[0]})"
+            stopped = True
+            break
         bar.update(round(t - bar.n, 1))
         if between(t):
             stopped = True
             break
     bar.close()
-    return ChunkedRun(t, time.perf_counter() - wall0, time.process_time() - cpu0, stopped)
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+    return ChunkedRun(t, wall, cpu, stopped, diverged)

@@ -486,10 +486,12 @@ def simulate_lots(
         why = f"the controller completed its round, but on the plant the {stack.describe()}"
     log = list(s.log)
     status, cause = lots_verdict(controller_status, satisfied, log)
+    if chunks.diverged is not None:  # the plant's last state is not a result
+        satisfied, status, cause, why = False, "FAILURE", "sim_diverged", chunks.diverged
     skills = cell.skills.state(cell.skills.GetMyContextFromRoot(context))
     perception = cell.perception.state(cell.perception.GetMyContextFromRoot(context))
     recording = None
-    if record:
+    if record and chunks.diverged is None:
         draw_cell_views(cell, context)
         recording = save_recording(cell.visualizer, meshcat, record)
     frames, stops = perception.frames, []

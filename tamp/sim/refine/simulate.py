@@ -77,7 +77,7 @@ def simulate(
     """Build the station of ``program`` in its scene (``scene``: already loaded, else
     `load_scene` of ``program.scene``) and run it to the end (module docstring);
     ``meshcat``: draw the run there (a live view), else only a recording makes a viewer."""
-    from tamp.sim.core.runner import ChunkedRun, make_simulator, run_in_chunks
+    from tamp.sim.core.runner import make_simulator, run_in_chunks
     from tamp.sim.refine.outcome import measure, start_heights
     from tamp.sim.refine.station import build_station
 
@@ -105,13 +105,7 @@ def simulate(
 
         start_recording(cell.visualizer)
     limit = max_sim_time if max_sim_time is not None else time_limit(program, architecture, tune)
-    diverged = None
-    try:
-        chunked = run_in_chunks(simulator, chunk=CHUNK, limit=limit, between=between)
-    except RuntimeError as e:  # the solver met NaN: the physics of this program diverged
-        t = root.get_time()
-        diverged = f"the simulation diverged at {t:.2f} s ({str(e).split('.')[0]})"
-        chunked = ChunkedRun(t, 0.0, 0.0, stopped=True)
+    chunked = run_in_chunks(simulator, chunk=CHUNK, limit=limit, between=between)
     recording = None
     if record is not None:
         from tamp.sim.core.recording import save_recording
@@ -128,7 +122,7 @@ def simulate(
         outcome,
     )
     run.touches = dict(contacts.touches)
-    run.diverged = diverged
+    run.diverged = chunked.diverged
     return run
 
 

@@ -398,6 +398,8 @@ class SimRunner:
             plant_disagrees=ex.result is Status.SUCCESS and bool(failures),
             disturbed=ex.result is Status.SUCCESS and bool(disturbed),
         )
+        if run.diverged is not None:  # the plant's last state is not a result
+            status, reason, cause = "FAILURE", run.diverged, "sim_diverged"
         return SimResult(
             scenario=s.scenario.name,
             status=status,
