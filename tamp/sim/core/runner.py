@@ -78,7 +78,8 @@ def run_in_chunks(
             if not _DIVERGED.search(str(e)):
                 raise
             t = simulator.get_context().get_time()
-            diverged = f"the simulation diverged at {t:.2f} s ({str(e).split('.')[0]})"
+            said = re.split(r"\.\s", str(e), maxsplit=1)[0]  # Drake's first sentence
+            diverged = f"the simulation diverged at {t:.2f} s ({said})"
             stopped = True
             break
         bar.update(round(t - bar.n, 1))
