@@ -62,26 +62,6 @@ def with_friction(sdf: str, mu: float) -> str:
     return sdf
 
 
-_COMPLIANT = re.compile(r"<drake:compliant_hydroelastic\s*/>")
-
-
-def with_hydroelastic_margin(sdf: str, margin: float) -> str:
-    """A model's SDF text with ``drake:hydroelastic_margin`` = ``margin`` (m) on every
-    compliant-hydroelastic collision that does not set its own. Drake then starts the contact
-    constraint while the surfaces are still ``margin`` apart (the pressure stays zero until
-    they touch), so a discrete step cannot carry a falling object through the surface first
-    and throw it back with a spurious spin (`tamp.sim.lots.plant.HYDROELASTIC_MARGIN`)."""
-    tag = f"<drake:hydroelastic_margin>{margin:g}</drake:hydroelastic_margin>"
-
-    def add(block: re.Match) -> str:
-        text = block.group(0)
-        if "drake:hydroelastic_margin" in text:
-            return text
-        return _COMPLIANT.sub(lambda m: m.group(0) + tag, text, count=1)
-
-    return re.sub(r"<collision\b.*?</collision>", add, sdf, flags=re.S)
-
-
 _MODEL_NAME = re.compile(r"""<model(\s+)name\s*=\s*(["'])[^"']*\2""")
 _URI = re.compile(r"<uri>\s*([^<]*?)\s*</uri>")
 

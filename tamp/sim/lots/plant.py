@@ -34,12 +34,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import PdControllerGains
 
-from tamp.sim.core.models import (
-    absolute_uris,
-    renamed_model,
-    with_friction,
-    with_hydroelastic_margin,
-)
+from tamp.sim.core.models import absolute_uris, renamed_model, with_friction
 from tamp.sim.core.plant import add_sap_plant
 from tamp.sim.lots.catalogue import (
     ARM,
@@ -55,14 +50,6 @@ from tamp.sim.lots.scenario import CellObject, CellScenario
 
 #: colours of the workspace mats (W^A green, W^B blue), drawn 1 mm above the table
 MAT_RGBA = {"A": (0.55, 0.75, 0.55, 1.0), "B": (0.55, 0.65, 0.85, 1.0)}
-
-#: every object's compliant surfaces start contact this far (m) before they touch
-#: (`with_hydroelastic_margin`). Without it, a 4 ms SAP step carried an object set down from
-#: a few millimetres 0.5 mm into the table before any contact existed, and the next step threw
-#: it back spinning (a toy car dropped flat from 1-4 mm: up to 30 rad/s, often turned on its
-#: side or roof; the person's car in one tower seed went non-finite). With 2 mm, the same
-#: drops of every class end flat at <= 0.01 rad/s (`tests/sim/lots/test_plant.py`).
-HYDROELASTIC_MARGIN = 0.002
 
 
 @dataclass
@@ -83,12 +70,11 @@ class CellPlant:
 def object_sdf(
     c: ObjectClass, uid: str, rgb: tuple[float, float, float], friction: float | None = None
 ) -> str:
-    """Class ``c``'s SDF text with the model renamed to ``uid``, its primary colour ``rgb``,
-    `HYDROELASTIC_MARGIN` on its compliant surfaces and, for a run with a drawn ``friction``
-    coefficient (``perturbation.friction``), that coefficient on every contact surface
-    (relative ``<uri>``s made absolute: the text is parsed without its folder)."""
+    """Class ``c``'s SDF text with the model renamed to ``uid``, its primary colour ``rgb``
+    and, for a run with a drawn ``friction`` coefficient (``perturbation.friction``), that
+    coefficient on every contact surface (relative ``<uri>``s made absolute: the text is
+    parsed without its folder)."""
     text = renamed_model(c.sdf.read_text(encoding="utf-8"), uid)
-    text = with_hydroelastic_margin(text, HYDROELASTIC_MARGIN)
     if friction is not None:
         text = with_friction(text, friction)
     if c.colour:
