@@ -129,12 +129,14 @@ class Seen:
     median of its pixels back-projected through their depth: about the middle of its top),
     and where it lay on the table: the world x, y of its points, one per square of
     `tamp.sim.core.perception.FOOTPRINT_CELL` (empty when not known), which a place keeps
-    clear of while it is hidden."""
+    clear of while it is hidden; ``misses``: the views of its workspace since then that
+    showed its place plainly without it (`tamp.sim.core.perception.FORGET_VIEWS`)."""
 
     track: int
     cls: str
     position: tuple[float, float, float]
     footprint: tuple[tuple[float, float], ...] = ()
+    misses: int = 0
 
 
 @dataclass(frozen=True)

@@ -55,6 +55,13 @@ neighbour's detection: `merged_into_others`); one whose point lies in plain view
 (`recall`). A track taken into the gripper is
 forgotten everywhere: it lies in no workspace.
 
+One view is not a fact. A detection is counted and remembered only once its track has been
+seen in `CONFIRM_VIEWS` views (tentative until then: a one-view false positive or class
+swap never enters the count or the memory), and a remembered instance whose place a view
+shows plainly without it is forgotten only after `FORGET_VIEWS` such views in a row (until
+then it is still counted, reported with the occluded ones). The LOTS arm's `LookAt` takes
+two views at its settled pose for this (`tamp.sim.lots.skills`).
+
 Rendering is the budget (~15-20 ms per image kind at 320x180 on 2 cores): the sensor renders
 only when an output port is evaluated, and `Perception` evaluates the image inputs only in
 its periodic update and only when a new `ViewRequest` id arrives; the colour image only when
@@ -105,6 +112,12 @@ SURFACE_TOLERANCE = 0.008
 UNKNOWN = "unknown"
 #: a remembered instance's footprint keeps one point per square this size (m)
 FOOTPRINT_CELL = 0.005
+#: a track is counted and remembered once it was seen in this many views (a look takes two):
+#: what one view alone shows (a detector's false positive, a class swap) is held tentative
+CONFIRM_VIEWS = 2
+#: a remembered instance is forgotten after this many views in a row showed its place
+#: plainly without it: one view's miss is not an absence
+FORGET_VIEWS = 2
 
 
 @dataclass(frozen=True)
@@ -389,6 +402,7 @@ def recall(
     merged: frozenset[int] = frozenset(),
     tolerance: float = OCCLUSION_TOLERANCE,
     window: float = OCCLUSION_WINDOW,
+    forget: int = FORGET_VIEWS,
 ) -> tuple[tuple[Seen, ...], tuple[Seen, ...]]:
     """(what to remember of the workspace in view now, the remembered instances kept as
     occluded) after one view of it.
@@ -398,21 +412,22 @@ def recall(
     gripper; ``merged``: remembered tracks seen inside another detection's mask
     (`merged_into_others`). Every detection is remembered where it is seen now. A
     remembered track not detected now is kept, as occluded, when its point is `hidden` or
-    it is ``merged`` (in view, but inside a neighbour's detection: not gone); it is gone when
-    its point is in plain view or when it is in the gripper.
+    it is ``merged`` (in view, but inside a neighbour's detection: not gone); when its
+    point is in plain view it is kept one view less than ``forget`` in a row (its
+    ``misses`` counted up), then gone; in the gripper it is gone at once.
     """
     seen = {d.track for d in now}
-    occluded = tuple(
-        m
-        for m in memory
-        if m.track not in seen
-        and m.track not in held
-        and (
-            m.track in merged
-            or hidden(m.position, depth, X_WC, intrinsics, tolerance=tolerance, window=window)
-        )
-    )
-    return now + occluded, occluded
+    occluded = []
+    for m in memory:
+        if m.track in seen or m.track in held:
+            continue
+        if m.track in merged or hidden(
+            m.position, depth, X_WC, intrinsics, tolerance=tolerance, window=window
+        ):
+            occluded.append(m)
+        elif m.misses + 1 < forget:  # not where it was: once may be the detector's miss
+            occluded.append(dataclasses.replace(m, misses=m.misses + 1))
+    return now + tuple(occluded), tuple(occluded)
 
 
 def merged_into_others(
@@ -705,10 +720,12 @@ class Perception(LeafSystem):
         memory, occluded = s.memory, ()
         if placed and req.side:
             with self.analysis:
+                # what this view shows of the workspace, of tracks seen often enough to count
+                sure = {k.id for k in tracks.tracks if k.hits >= CONFIRM_VIEWS}
                 now = tuple(
                     Seen(i, d.cls, tuple(float(x) for x in d.centroid), footprint(d.points))
                     for i, d, ok in zip(ids, raw, inside, strict=True)
-                    if ok
+                    if ok and i in sure
                 )
                 merged = merged_into_others(
                     s.memory.get(req.side, ()),

@@ -27,7 +27,10 @@ a track:
   one), not moved 10 cm to where a new detection appears;
 - a detection still left without a track starts a new one (a fresh id, never reused);
 - a track not associated for longer than ``lifetime`` seconds is dropped, unless the caller
-  keeps it (occlusion memory: an instance remembered as hidden keeps its track).
+  keeps it (occlusion memory: an instance remembered as hidden keeps its track);
+- each track counts the views it was associated in (``hits``): a consumer can hold a
+  track seen once as tentative (`tamp.sim.core.perception.CONFIRM_VIEWS`: a detector's
+  one-view false positive or class swap starts a track that is never seen again).
 
 The gate (`GATE`, 7 cm) is larger than a centroid's drift between views of one still object
 (a few centimetres: the visible part changes as the camera moves) and smaller than two
@@ -64,14 +67,16 @@ KEEP_POINTS = 300
 @dataclass(frozen=True)
 class Track:
     """One instance as the tracker knows it: its id, class, last world position (the
-    centroid of its last detection), the sim time of that detection, and a subsample of
-    that detection's world points (3 x N; None: none given)."""
+    centroid of its last detection), the sim time of that detection, a subsample of that
+    detection's world points (3 x N; None: none given), and the number of views it was
+    associated in."""
 
     id: int
     cls: str
     position: tuple[float, float, float]
     seen: float
     points: np.ndarray | None = field(default=None, compare=False, repr=False)
+    hits: int = 1
 
 
 @dataclass(frozen=True)
@@ -207,7 +212,7 @@ def update(
             ids.append(next_id)
             next_id += 1
         else:
-            moved[j] = Track(live[j].id, cls, position, time, pts)
+            moved[j] = Track(live[j].id, cls, position, time, pts, live[j].hits + 1)
             ids.append(live[j].id)
     tracks = tuple(moved.get(j, t) for j, t in enumerate(live)) + tuple(fresh)
     return Tracks(tracks, next_id), tuple(ids)

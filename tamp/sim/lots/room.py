@@ -267,10 +267,35 @@ def disc(radius: float = UNMEASURED_RADIUS, n: int = 16) -> np.ndarray:
     return np.vstack([[0.0, 0.0], radius * np.column_stack([np.cos(a), np.sin(a)])])
 
 
-def footprint(points: np.ndarray, yaw: float, most: int = 64):
+def footprint(points: np.ndarray, yaw: float, most: int = 64, length: float = 0.0):
     """The footprint ``shape`` of `place` from an object's top-view points round its centre
     (N x 2, world axes): in the frame of a hand at ``yaw``, thinned to at most ``most``
-    points (a deterministic stride)."""
+    points (a deterministic stride), at least ``length`` long (`to_length`)."""
     pts = np.asarray(points, float).reshape(-1, 2)
-    pts = pts[:: max(1, -(-len(pts) // most))]
+    pts = to_length(pts[:: max(1, -(-len(pts) // most))], length)
     return _rotated(pts, -yaw) if len(pts) else np.zeros((1, 2))
+
+
+#: points within this of a footprint's end (m, along its long axis) are that end's outline
+END_BAND = 0.005
+
+
+def to_length(points: np.ndarray, length: float) -> np.ndarray:
+    """Top-view points (N x 2) of an object measured shorter than its catalogue ``length``
+    (m) along their long axis, with each end's outline copied outwards by the shortfall.
+    A view loses a thin part (a screwdriver's shaft: 0.167 m of 0.2 m measured), and which
+    end it lost is not known: both ends are lengthened, so a place keeps the whole object
+    clear of its neighbours (the shaft's tip touched the hammer: one detection of both)."""
+    if len(points) < 3 or length <= 0.0:
+        return points
+    centred = points - points.mean(axis=0)
+    axis = np.linalg.svd(centred, full_matrices=False)[2][0]
+    along = centred @ axis
+    short = length - float(along.max() - along.min())
+    if short <= END_BAND / 5:  # measured whole (to a millimetre)
+        return points
+    ends = (
+        points[along <= along.min() + END_BAND] - short * axis,
+        points[along >= along.max() - END_BAND] + short * axis,
+    )
+    return np.vstack([points, *ends])

@@ -5,8 +5,10 @@ targets, view requests and a `SkillStatus` out (the same messages as the SMP-MRO
 
 Skills (arguments are strings, as in `tamp.world.actions.Action`):
 
-- ``LookAt(side)``: move the camera over W^side, settle, count what is in view; the status
-  detail lists the counts, e.g. ``hammer=1,saw=1``. While holding an object that covers more
+- ``LookAt(side)``: move the camera over W^side, settle, count what is in view (two views
+  at the settled pose: perception counts only what two views confirm,
+  `tamp.sim.core.perception.CONFIRM_VIEWS`); the status detail lists the counts, e.g.
+  ``hammer=1,saw=1``. While holding an object that covers more
   than `LOOK_AGAIN_COVER` of the image, a second view with the hand about half a turn round
   (the camera on the other side of the held object; perception's memory joins the two).
 - ``Pick(cls[, side])``: closed-loop multi-view grasp (Zhou et al. §IV-B, Fig. 6): a view at
@@ -90,6 +92,7 @@ from pydrake.systems.framework import BasicVector, EventStatus, LeafSystem
 from tamp.lots.cell import WASTE, lots_domain
 from tamp.sim.core.camera import backproject
 from tamp.sim.core.messages import Observation, SkillCommand, SkillStatus, ViewRequest
+from tamp.sim.core.perception import CONFIRM_VIEWS
 from tamp.sim.core.timing import Stopwatch
 from tamp.sim.lots.catalogue import ARM
 from tamp.sim.lots.descent import (
@@ -423,7 +426,7 @@ class PandaSkillController(LeafSystem):
             s.looked = None  # only the looks of the carry since the pick count
         if name == "LookAt" and len(args) == 1 and args[0] in sides:
             s.side = args[0]
-            s.steps = (*self._look(args[0]), Step("view", handler="counted"))
+            s.steps = (*self._look(args[0]), *self._views("counted"))
         elif name == "Pick" and 1 <= len(args) <= 2 and (len(args) == 1 or args[1] in sides):
             if s.held is not None:
                 return self._finish(s, t, Status.FAILURE, f"already holding {s.held}")
@@ -523,6 +526,14 @@ class PandaSkillController(LeafSystem):
 
     def _look(self, side: str) -> tuple[Step, ...]:
         return (self._move(self.look_pose(side)), Step("settle"))
+
+    @staticmethod
+    def _views(handler: str) -> tuple[Step, ...]:
+        """A look's views at its settled pose: `perception.CONFIRM_VIEWS` of them, the last
+        one read by ``handler``: what one view alone shows is not counted, one view's miss
+        does not forget (`tamp.sim.core.perception`)."""
+        first = tuple(Step("view", handler="seen") for _ in range(CONFIRM_VIEWS - 1))
+        return (*first, Step("view", handler=handler))
 
     def _begin_attempt(self, s: SkillState) -> None:
         self._reset_descent(s)
@@ -685,7 +696,7 @@ class PandaSkillController(LeafSystem):
             s.steps = (
                 self._move(pose, turn_speed=TURN_SPEED),
                 Step("settle"),
-                Step("view", handler="recounted"),
+                *self._views("recounted"),
             )
             return
         self._report_counts(s, t, obs)
@@ -961,7 +972,11 @@ class PandaSkillController(LeafSystem):
         c, w = math.cos(yaw), math.sin(yaw)  # the centre's offset from the TCP, hand frame
         dx, dy = centre[0] - g.x, centre[1] - g.y
         s.hold_offset = (c * dx + w * dy, -w * dx + c * dy)
-        s.hold_shape = footprint(s.target_shape, yaw)
+        # a view may lose a thin part: the held class's length comes from the catalogue
+        known = s.target_cls in self.scenario.class_names
+        f = self.scenario.object_class(s.target_cls).footprint if known else None
+        length = max(f.xmax - f.xmin, f.ymax - f.ymin) if f is not None else 0.0
+        s.hold_shape = footprint(s.target_shape, yaw, length=length)
 
     def _grasp_steps(
         self, x: float, y: float, z: float, yaw: float, side: str, close: bool = True

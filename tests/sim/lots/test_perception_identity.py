@@ -13,7 +13,7 @@ import pytest
 
 import tamp.sim.lots as lots
 from tamp.errors import InputError
-from tamp.sim.core.perception import DetectorNoise
+from tamp.sim.core.perception import CONFIRM_VIEWS, DetectorNoise
 from tamp.sim.lots.scenario import load_cell_scenario, perturbed
 from tamp.sim.lots.station import build_station, detector_noise
 from tests.sim.lots.helpers import BASE, write_scenario
@@ -127,7 +127,8 @@ def test_the_learned_detector_counts_the_packaged_scenes_looks(tmp_path):
         assert look.status is Status.SUCCESS and look.detail == want, name
         assert d.run("LookAt(B)").detail == ""
         p = station.perception
-        assert p.state(p.GetMyContextFromRoot(d.context)).render_kinds == 4  # colour + depth
+        # two looks of `CONFIRM_VIEWS` views, each rendering colour + depth
+        assert p.state(p.GetMyContextFromRoot(d.context)).render_kinds == 2 * CONFIRM_VIEWS * 2
 
 
 @pytest.mark.slow

@@ -6,13 +6,15 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from pydrake.math import RigidTransform
 
 from tamp.grasp.rect import GraspRect
 from tamp.sim.core.messages import Seen
 from tamp.sim.lots.grasping import dilate, on_mask, snap_to_mask
 from tamp.sim.lots.kinematics import down
-from tamp.sim.lots.room import empty_room, footprint, next_look, observed, place
+from tamp.sim.lots.room import empty_room, footprint, next_look, observed, place, to_length
 from tamp.sim.lots.scenario import Workspace
 
 K = (231.4, 231.4, 159.5, 89.5)
@@ -247,3 +249,26 @@ def test_a_place_starts_from_the_looks_taken_while_carrying():
     s.held = None
     skills._start(s, SkillCommand(id=4, name="LookAt", args=("A",)), 5.0)
     assert s.looked is None
+
+
+@given(
+    length=st.floats(0.05, 0.2),
+    share=st.floats(0.0, 0.5),
+    angle=st.floats(-np.pi, np.pi),
+)
+def test_a_footprint_measured_short_reaches_its_catalogue_length_at_both_ends(length, share, angle):
+    """A view that lost ``share`` of one end of a 2 cm wide object: the footprint spans at
+    least the catalogue ``length`` along the object's axis, beyond the measured outline at
+    both ends (which end was lost is not known); one measured whole is left as it is."""
+    u = np.array([np.cos(angle), np.sin(angle)])
+    v = np.array([-u[1], u[0]])
+    lost = share * length
+    across = np.linspace(-0.01, 0.01, 5)
+    a, b = np.meshgrid(np.linspace(-length / 2, length / 2 - lost, 30), across)
+    pts = a.reshape(-1, 1) * u + b.reshape(-1, 1) * v
+    out = to_length(pts, length)
+    along = out @ u
+    assert along.max() - along.min() >= length - 0.001
+    assert along.min() <= (pts @ u).min() + 1e-9 and along.max() >= (pts @ u).max() - 1e-9
+    whole = to_length(pts, float(np.ptp(pts @ u)))
+    assert whole.shape == pts.shape
