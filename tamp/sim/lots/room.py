@@ -283,9 +283,10 @@ END_BAND = 0.005
 def to_length(points: np.ndarray, length: float) -> np.ndarray:
     """Top-view points (N x 2) of an object measured shorter than its catalogue ``length``
     (m) along their long axis, with each end's outline copied outwards by the shortfall.
-    A view loses a thin part (a screwdriver's shaft: 0.167 m of 0.2 m measured), and which
-    end it lost is not known: both ends are lengthened, so a place keeps the whole object
-    clear of its neighbours (the shaft's tip touched the hammer: one detection of both)."""
+    A view can lose a thin part (the screwdriver's 8 mm shaft: 0.167 m of its 0.17 m
+    measured), and which end it lost is not known: both ends are lengthened, so a place
+    keeps the whole object clear of its neighbours. The catalogue's length is what a robot
+    knows of the classes it handles (`tamp.sim.lots.catalogue.Footprint`)."""
     if len(points) < 3 or length <= 0.0:
         return points
     centred = points - points.mean(axis=0)
